@@ -1,0 +1,151 @@
+// HandController: the grasp system of GRASPING.md for one hand, advanced one tick at a time.
+#pragma once
+
+#include "telegrasp/sim/hand_rig.h"
+#include "telegrasp/sim/ids.h"
+#include "telegrasp/sim/object_model.h"
+
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace telegrasp::sim {
+
+/// How a closing finger finds the surface.
+enum class ClosingMode {
+  kPrecise,   ///< Conservative advancement within each step: contact within the tolerance, no tunnelling.
+  kDiscrete,  ///< The paper's: move a whole step, then test overlap (may sink by up to one step).
+};
+
+/// How "nearest object" is measured for object selection.
+enum class SelectionMetric {
+  kSurface,  ///< Distance from the selection sphere's centre to the object's surface (default).
+  kOrigin,   ///< Distance to the object's origin (centre of mass), as in the paper.
+};
+
+/// Tunables of the grasp system (not of the hand: those live in the HandRig).
+struct GraspSettings {
+  ClosingMode mode = ClosingMode::kPrecise;
+  SelectionMetric selection = SelectionMetric::kSurface;
+  double contact_tolerance = 0.05e-3;  ///< Precise mode: a blocked capsule's gap lies in [0, this] (m).
+  double speed_scale = 1.0;            ///< Multiplies every joint's max speed.
+};
+
+/// One controller sample for one hand.
+struct ControllerInput {
+  Eigen::Isometry3d X_WorldPalm = Eigen::Isometry3d::Identity();
+  double trigger = 0;          ///< 0 open .. 1 closed.
+  std::vector<double> curls;   ///< Empty, or one value in [0, 1] per finger of the rig.
+  bool tracking_valid = true;  ///< False: keep the last pose, still apply trigger and curls.
+};
+
+/// Returns "" for a usable input, else the reason it is not (names the field).
+std::string validate_input(const ControllerInput& input, const HandRig& rig);
+
+/// A dynamic object as the grasp system sees it this tick.
+struct ObjectView {
+  ObjectId id;
+  Eigen::Isometry3d X_WorldObject = Eigen::Isometry3d::Identity();
+  const ObjectModel* model = nullptr;
+};
+
+/// The paper's ND for one capsule, and the exact signed distance of its volume.
+struct CapsuleMetric {
+  PhalanxId phalanx;
+  bool hit = false;             ///< The sweep found the object within its length.
+  double nd = 0;                ///< ND in metres (> 0 gap, < 0 penetration); meaningful only if hit.
+  double signed_distance = 0;   ///< Exact capsule-to-solid signed distance, metres.
+  bool blocked = false;
+};
+
+/// ND of every capsule and the HandError, taken on the tick of the grasp.
+struct GraspMetrics {
+  std::vector<CapsuleMetric> capsules;
+  double hand_error_mm = 0;     ///< Sum over fingers of mean |ND| over the finger's capsules (no-hit counts 0).
+};
+
+/// A contact between a blocked phalanx (or the palm) and the grasped object.
+struct Contact {
+  PhalanxId phalanx;            ///< Invalid for the palm.
+  Eigen::Vector3d p_WorldContact{0, 0, 0}, n_World{0, 0, 0};
+  Eigen::Vector3d p_ObjectContact{0, 0, 0}, n_Object{0, 0, 0};
+  double nd = 0;
+  bool nd_hit = false;
+};
+
+/// The mutable per-tick state of one hand.
+struct HandState {
+  Eigen::Isometry3d X_WorldPalm = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d v_WorldPalm{0, 0, 0};  ///< Linear velocity, m/s.
+  Eigen::Vector3d w_WorldPalm{0, 0, 0};  ///< Angular velocity, rad/s.
+  bool has_pose = false;
+  double trigger = 0;
+  std::vector<double> curls;
+  std::vector<double> q;                        ///< Joint angle per phalanx, rad.
+  std::vector<Eigen::Isometry3d> X_PalmPhalanx; ///< Forward kinematics of q.
+  std::vector<std::uint8_t> blocked;            ///< Per phalanx.
+  std::vector<double> blocked_angle;            ///< Joint angle when it blocked.
+  bool palm_contact = false;
+  ObjectId selected;
+  ObjectId grasped;
+  Eigen::Isometry3d X_PalmObject = Eigen::Isometry3d::Identity();  ///< While grasped.
+};
+
+/// What happened on a tick.
+struct HandTickEvents {
+  bool grasped = false;   ///< The grasp rule turned true: attach `state().grasped`.
+  bool released = false;  ///< The grasp rule turned false: hand `released_object` back to physics.
+  ObjectId released_object;
+};
+
+/// The four components (selection, interaction manager, finger movement, grasping logic)
+/// for one hand. Deterministic: equal inputs give bit-identical states.
+class HandController {
+ public:
+  HandController(std::shared_ptr<const HandRig> rig, GraspSettings settings);
+
+  /// Advances one tick of `dt` seconds. `input` must have passed validate_input. While an object
+  /// is grasped its pose is taken as X_WorldPalm * X_PalmObject, not from `objects`.
+  HandTickEvents tick(const ControllerInput& input, double dt, std::span<const ObjectView> objects);
+
+  /// Drops any grasp and blocking (e.g. the object was removed); returns the object released.
+  ObjectId release();
+
+  const HandState& state() const { return state_; }
+  const HandRig& rig() const { return *rig_; }
+  const GraspSettings& settings() const { return settings_; }
+  /// Metrics of the current grasp (taken on the grasp tick), if an object is grasped.
+  const std::optional<GraspMetrics>& grasp_metrics() const { return metrics_; }
+  /// Contacts of the current grasp at the object's current pose (recomputed in the object frame
+  /// only when the hand's shape changes while holding).
+  std::vector<Contact> contacts() const;
+  /// World pose of the grasped object, if any.
+  std::optional<Eigen::Isometry3d> grasped_object_pose() const;
+
+  /// ND and exact signed distances of every capsule against `object` (an analysis tool).
+  GraspMetrics measure(const ObjectView& object) const;
+
+ private:
+  struct Capsule;  // a capsule placed in the object frame
+  Capsule capsule_in_object(PhalanxId id, const Eigen::Isometry3d& X_ObjectPalm) const;
+  double capsule_gap(PhalanxId id, const Eigen::Isometry3d& X_ObjectPalm, const ObjectModel& model) const;
+  void select_object(std::span<const ObjectView> objects);
+  void step_finger(int finger, double u, double dt, const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm);
+  void refresh_contacts(const ObjectModel& model);
+
+  std::shared_ptr<const HandRig> rig_;
+  GraspSettings settings_;
+  HandState state_;
+  std::optional<GraspMetrics> metrics_;
+  std::vector<Contact> contacts_;     // object frame only; world fields filled by contacts()
+  std::vector<double> contacts_q_;  // joint angles the contacts were computed at
+  // reach_[k][m]: bound on the distance from joint k to any point of capsule m's segment.
+  std::vector<std::vector<double>> reach_;
+};
+
+}  // namespace telegrasp::sim

@@ -1,0 +1,50 @@
+// ObjectModel: an immutable graspable object (exact mesh, distance structure, mass).
+#pragma once
+
+#include "telegrasp/sim/mass_properties.h"
+#include "telegrasp/sim/mesh_distance.h"
+#include "telegrasp/sim/standin_objects.h"
+#include "telegrasp/sim/triangle_mesh.h"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace telegrasp::sim {
+
+/// An object's geometry and mass in its own frame, whose origin is the centre of mass.
+/// Fingers are tested against `distance` (the exact mesh); physics uses a convex hull of it.
+struct ObjectModel {
+  std::string name;           ///< e.g. "032_knife".
+  std::string source;         ///< File path, or "built-in stand-in".
+  TriangleMesh mesh;          ///< Recentred: the centre of mass is the origin.
+  MeshDistance distance;      ///< BVH over `mesh` for exact queries.
+  MassProperties mass_properties;
+  double mass_kg = 0;
+  Eigen::Vector3d p_ObjectMin{0, 0, 0}, p_ObjectMax{0, 0, 0};  ///< Bounds of `mesh`.
+  Eigen::Vector3d p_OriginalCenterOfMass{0, 0, 0};  ///< Where the origin was in the source file's frame.
+
+  /// Heap bytes held by this model (mesh and distance structure).
+  [[nodiscard]] std::size_t memory_bytes() const;
+};
+
+using ObjectModelPtr = std::shared_ptr<const ObjectModel>;
+
+/// Builds a model from a clean closed mesh: recentres it on its centre of mass and builds the
+/// distance structure. Mass is `mass_kg` if > 0, else volume x 500 kg/m^3.
+/// Throws MeshLoadError (naming `source`) if the mesh encloses no volume.
+ObjectModelPtr make_object_model(const std::string& name, const TriangleMesh& mesh, double mass_kg,
+                                 const std::string& source);
+
+/// Loads a mesh file as an object named after the file stem; a protocol object's name gives
+/// its real mass. Throws MeshLoadError naming the file.
+ObjectModelPtr load_object_model(const std::string& path);
+
+/// Every mesh file in `dir` (sorted by name); throws MeshLoadError if `dir` is not a folder,
+/// holds no mesh file, or a file fails to load.
+std::vector<ObjectModelPtr> load_object_dir(const std::string& dir);
+
+/// The built-in procedural stand-in of a protocol object.
+ObjectModelPtr make_standin_model(const ProtocolObject& object);
+
+}  // namespace telegrasp::sim

@@ -1,0 +1,33 @@
+// The 30 objects of the paper's protocol as procedural meshes, so the project runs with no files.
+#pragma once
+
+#include "telegrasp/sim/triangle_mesh.h"
+
+#include <Eigen/Core>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace telegrasp::sim {
+
+/// One object of the evaluation protocol (shared/data/ycb/README.md), in protocol order.
+struct ProtocolObject {
+  std::string id;          ///< "002", "072-a", ...
+  std::string name;        ///< YCB file stem, e.g. "002_master_chef_can".
+  Eigen::Vector3d extent;  ///< Bounding-box size in metres (x, y, z), as the YCB table gives it.
+  double mass_kg;          ///< Typical real mass, for dynamics.
+};
+
+/// All 30 protocol objects in the protocol's fixed order.
+const std::vector<ProtocolObject>& protocol_objects();
+
+/// The protocol object whose name or id matches (e.g. "032_knife", "032", "knife").
+std::optional<ProtocolObject> find_protocol_object(const std::string& name_or_id);
+
+/// A closed, outward-facing procedural stand-in for a protocol object: its shape class
+/// (cylinder, box, ellipsoid, handle + head, flat blade, ...) at the object's extent, resting
+/// on z = 0 and centred in x/y, with between 500 and 10000 triangles.
+TriangleMesh make_standin_mesh(const ProtocolObject& object);
+
+}  // namespace telegrasp::sim

@@ -1,0 +1,365 @@
+// The four components of the grasp system for one hand.
+#include "telegrasp/sim/hand_controller.h"
+
+#include "telegrasp/sim/grasp_rule.h"
+#include "telegrasp/sim/hand_kinematics.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <limits>
+
+namespace telegrasp::sim {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Precise mode gives up refining a contact after this many advancement steps in one tick; the
+// finger then stops short (free, not blocked) and continues next tick.
+constexpr int kMaxAdvancementSteps = 64;
+
+bool in_unit_interval(double v) { return std::isfinite(v) && v >= 0.0 && v <= 1.0; }
+
+}  // namespace
+
+std::string validate_input(const ControllerInput& input, const HandRig& rig) {
+  if (!input.X_WorldPalm.matrix().allFinite()) return "pose: non-finite value";
+  const Eigen::Matrix3d R = input.X_WorldPalm.linear();
+  if (!((R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-6) || R.determinant() < 0)
+    return "pose: rotation is not orthonormal (quaternion not unit?)";
+  if (!in_unit_interval(input.trigger)) return "trigger: must be a finite value in [0, 1]";
+  if (!input.curls.empty()) {
+    if (input.curls.size() != rig.fingers().size())
+      return "curls: expected " + std::to_string(rig.fingers().size()) + " values (one per finger), got " +
+             std::to_string(input.curls.size());
+    for (std::size_t i = 0; i < input.curls.size(); ++i)
+      if (!in_unit_interval(input.curls[i])) return "curls[" + std::to_string(i) + "]: must be a finite value in [0, 1]";
+  }
+  return "";
+}
+
+struct HandController::Capsule {
+  Eigen::Vector3d a, b;
+  double radius;
+};
+
+HandController::HandController(std::shared_ptr<const HandRig> rig, GraspSettings settings)
+    : rig_(std::move(rig)), settings_(settings) {
+  const std::size_t n = rig_->phalanges().size();
+  state_.q.resize(n);
+  for (std::size_t i = 0; i < n; ++i) state_.q[i] = rig_->phalanges()[i].open;
+  state_.blocked.assign(n, 0);
+  state_.blocked_angle.assign(n, 0.0);
+  forward_kinematics(*rig_, state_.q, &state_.X_PalmPhalanx);
+  // reach_[k][m] bounds |p - o_k| for any point p of capsule m's segment and the origin o_k of an
+  // ancestor joint k, in any configuration (triangle inequality along the chain).
+  reach_.assign(n, std::vector<double>(n, 0.0));
+  for (std::size_t m = 0; m < n; ++m) {
+    const auto& cap = rig_->phalanges()[m].capsule;
+    if (!cap) continue;
+    double r = std::max(cap->p_PhalanxA.norm(), cap->p_PhalanxB.norm());
+    for (int k = static_cast<int>(m); k >= 0; k = rig_->phalanges()[k].parent) {
+      reach_[k][m] = r;
+      r += rig_->phalanges()[k].X_ParentJoint.translation().norm();
+    }
+  }
+}
+
+HandController::Capsule HandController::capsule_in_object(PhalanxId id, const Eigen::Isometry3d& X_ObjectPalm) const {
+  const CapsuleSpec& c = *rig_->phalanges()[id.value].capsule;
+  const Eigen::Isometry3d X_ObjectPhalanx = X_ObjectPalm * state_.X_PalmPhalanx[id.value];
+  return {X_ObjectPhalanx * c.p_PhalanxA, X_ObjectPhalanx * c.p_PhalanxB, c.radius};
+}
+
+double HandController::capsule_gap(PhalanxId id, const Eigen::Isometry3d& X_ObjectPalm, const ObjectModel& model) const {
+  const Capsule c = capsule_in_object(id, X_ObjectPalm);
+  return model.distance.capsule_signed_distance(c.a, c.b, c.radius);
+}
+
+void HandController::select_object(std::span<const ObjectView> objects) {
+  const PalmSphere& sphere = rig_->selection_sphere();
+  const Eigen::Vector3d p_WorldCenter = state_.X_WorldPalm * sphere.p_PalmCenter;
+  double best = kInf;
+  ObjectId best_id;
+  for (const ObjectView& view : objects) {
+    const ObjectModel& model = *view.model;
+    const Eigen::Vector3d c = view.X_WorldObject.inverse() * p_WorldCenter;
+    // Cheap reject: the sphere misses the object's bounding box.
+    const Eigen::Vector3d excess = (c - c.cwiseMax(model.p_ObjectMin).cwiseMin(model.p_ObjectMax));
+    if (excess.norm() > sphere.radius) continue;
+    const PointQuery q = model.distance.closest_point(c, sphere.radius);
+    const bool inside = !q.found && model.distance.contains(c);
+    if (!q.found && !inside) continue;
+    double key = 0;
+    if (settings_.selection == SelectionMetric::kOrigin) key = c.norm();
+    else key = q.found ? q.signed_distance : -kInf;
+    if (key < best) { best = key; best_id = view.id; }
+  }
+  state_.selected = best_id;
+}
+
+void HandController::step_finger(int finger, double u, double dt, const ObjectView* object,
+                                 const Eigen::Isometry3d& X_ObjectPalm) {
+  const auto& chain = rig_->fingers()[finger].phalanges;
+  const auto& specs = rig_->phalanges();
+  const std::size_t n = chain.size();
+  const double tol = settings_.contact_tolerance;
+  const bool precise = settings_.mode == ClosingMode::kPrecise;
+  // A blocked capsule stays blocked while it touches: within the tolerance (precise, with 2x
+  // hysteresis against rounding) or overlapping (discrete).
+  const double release_gap = precise ? 2.0 * tol : 0.0;
+
+  auto closing_sign = [&](int k) { return specs[chain[k].value].closed >= specs[chain[k].value].open ? 1.0 : -1.0; };
+
+  // Interaction manager: unblock phalanges whose hand opened past them or whose overlap ended.
+  for (std::size_t k = 0; k < n; ++k) {
+    const int id = chain[k].value;
+    if (!state_.blocked[id]) continue;
+    const double target = target_angle(specs[id], u);
+    bool unblock = (target - state_.blocked_angle[id]) * closing_sign(k) < -1e-12 || object == nullptr;
+    if (!unblock && specs[id].capsule) unblock = capsule_gap(chain[k], X_ObjectPalm, *object->model) > release_gap;
+    if (unblock) state_.blocked[id] = 0;
+  }
+  int held = -1;  // the most distal blocked phalanx: it and every joint proximal to it hold
+  for (std::size_t k = 0; k < n; ++k)
+    if (state_.blocked[chain[k].value]) held = static_cast<int>(k);
+
+  // Finger movement: rate-limited steps toward the targets; held joints may only open.
+  std::vector<double> delta(n, 0.0);
+  bool moving = false, closing = false;
+  for (std::size_t k = 0; k < n; ++k) {
+    const PhalanxSpec& s = specs[chain[k].value];
+    const double max_step = s.max_speed * settings_.speed_scale * dt;
+    double d = std::clamp(target_angle(s, u) - state_.q[chain[k].value], -max_step, max_step);
+    if (static_cast<int>(k) <= held && d * closing_sign(k) > 0) d = 0;
+    delta[k] = d;
+    moving |= d != 0;
+    closing |= d * closing_sign(k) > 0;
+  }
+  if (!moving) return;
+
+  std::vector<double> q0(n);
+  for (std::size_t k = 0; k < n; ++k) q0[k] = state_.q[chain[k].value];
+  auto set_fraction = [&](double s) {
+    for (std::size_t k = 0; k < n; ++k) {
+      const int id = chain[k].value;
+      state_.q[id] = q0[k] + s * delta[k];
+      const int parent = specs[id].parent;
+      state_.X_PalmPhalanx[id] = phalanx_pose(specs[id], parent < 0 ? Eigen::Isometry3d::Identity() : state_.X_PalmPhalanx[parent], state_.q[id]);
+    }
+  };
+  // Free capsules this step can move into the object.
+  std::vector<std::size_t> affected;
+  for (std::size_t m = static_cast<std::size_t>(held + 1); m < n; ++m)
+    if (specs[chain[m].value].capsule && !state_.blocked[chain[m].value]) affected.push_back(m);
+
+  if (!closing || object == nullptr || affected.empty()) { set_fraction(1.0); return; }
+  const ObjectModel& model = *object->model;
+
+  auto block = [&](std::size_t m) {
+    const int id = chain[m].value;
+    state_.blocked[id] = 1;
+    state_.blocked_angle[id] = state_.q[id];
+  };
+
+  if (!precise) {  // the paper's discrete test: move, then test overlap
+    set_fraction(1.0);
+    for (std::size_t m : affected) {
+      const Capsule c = capsule_in_object(chain[m], X_ObjectPalm);
+      if (model.distance.capsule_overlaps(c.a, c.b, c.radius)) block(m);
+    }
+    return;
+  }
+
+  // Precise: conservative advancement along the step s in [0, 1]. A capsule point moves at most
+  // rate(m) per unit s, so advancing by (gap - tol/2) / rate never crosses the surface.
+  std::vector<double> rate(n, 0.0);
+  for (std::size_t m : affected)
+    for (std::size_t k = 0; k <= m; ++k) rate[m] += std::abs(delta[k]) * reach_[chain[k].value][chain[m].value];
+
+  double s = 0;
+  for (int iter = 0; iter < kMaxAdvancementSteps; ++iter) {
+    set_fraction(s);
+    double ds = kInf;
+    bool touched = false;
+    for (std::size_t m : affected) {
+      const Capsule c = capsule_in_object(chain[m], X_ObjectPalm);
+      const double horizon = rate[m] * (1.0 - s) + tol;  // beyond it, no contact this step
+      const SegmentQuery hit = model.distance.closest_to_segment(c.a, c.b, c.radius + horizon);
+      if (!hit.found) {
+        if (model.distance.contains(c.a)) { block(m); touched = true; }  // already deep inside
+        continue;
+      }
+      const bool inside = hit.distance == 0 || (hit.point_on_segment - hit.point_on_mesh).dot(hit.normal) < 0;
+      const double gap = inside ? -hit.distance - c.radius : hit.distance - c.radius;
+      if (gap <= tol) { block(m); touched = true; continue; }
+      ds = std::min(ds, (gap - 0.5 * tol) / rate[m]);
+    }
+    if (touched || s >= 1.0) return;
+    if (!std::isfinite(ds)) { set_fraction(1.0); return; }  // nothing reachable this step
+    s = std::min(1.0, s + ds);
+  }
+}
+
+HandTickEvents HandController::tick(const ControllerInput& input, double dt, std::span<const ObjectView> objects) {
+  assert(validate_input(input, *rig_).empty());
+  HandTickEvents events;
+  // Pose and hand velocity.
+  if (input.tracking_valid) {
+    if (state_.has_pose && dt > 0) {
+      state_.v_WorldPalm = (input.X_WorldPalm.translation() - state_.X_WorldPalm.translation()) / dt;
+      const Eigen::AngleAxisd dR(input.X_WorldPalm.linear() * state_.X_WorldPalm.linear().transpose());
+      state_.w_WorldPalm = dR.axis() * (dR.angle() / dt);
+    } else {
+      state_.v_WorldPalm.setZero();
+      state_.w_WorldPalm.setZero();
+    }
+    state_.X_WorldPalm = input.X_WorldPalm;
+    state_.has_pose = true;
+  } else {
+    state_.v_WorldPalm.setZero();
+    state_.w_WorldPalm.setZero();
+  }
+  state_.trigger = input.trigger;
+  state_.curls = input.curls;
+
+  // 1. Object selection (a grasped object stays selected).
+  const ObjectView* object = nullptr;
+  ObjectView held_view;
+  if (state_.grasped.valid()) {
+    auto it = std::find_if(objects.begin(), objects.end(), [&](const ObjectView& v) { return v.id == state_.grasped; });
+    if (it == objects.end()) {
+      events.released = true;
+      events.released_object = release();
+    } else {
+      held_view = *it;
+      held_view.X_WorldObject = state_.X_WorldPalm * state_.X_PalmObject;
+      object = &held_view;
+    }
+  }
+  if (!state_.grasped.valid()) {
+    select_object(objects);
+    if (state_.selected.valid())
+      object = &*std::find_if(objects.begin(), objects.end(), [&](const ObjectView& v) { return v.id == state_.selected; });
+  }
+  const Eigen::Isometry3d X_ObjectPalm = !object ? Eigen::Isometry3d::Identity()
+      : state_.grasped.valid() ? state_.X_PalmObject.inverse()
+      : object->X_WorldObject.inverse() * state_.X_WorldPalm;
+
+  // 2 + 3. Interaction manager and finger movement, finger by finger.
+  for (std::size_t f = 0; f < rig_->fingers().size(); ++f) {
+    const double u = input.curls.empty() ? input.trigger : input.curls[f];
+    step_finger(static_cast<int>(f), u, dt, object, X_ObjectPalm);
+  }
+
+  // 4. Grasping logic.
+  state_.palm_contact = false;
+  if (object) {
+    const PalmSphere& palm = rig_->palm_contact();
+    const Eigen::Vector3d c = X_ObjectPalm * palm.p_PalmCenter;
+    state_.palm_contact = object->model->distance.closest_point(c, palm.radius).found ||
+                          object->model->distance.contains(c);
+  }
+  const bool rule = object && evaluate_grasp_rule(rig_->grasp_rule(), state_.blocked, state_.palm_contact);
+  if (rule && !state_.grasped.valid()) {
+    state_.grasped = object->id;
+    state_.X_PalmObject = state_.X_WorldPalm.inverse() * object->X_WorldObject;
+    metrics_ = measure(*object);
+    refresh_contacts(*object->model);
+    events.grasped = true;
+  } else if (!rule && state_.grasped.valid()) {
+    events.released = true;
+    events.released_object = state_.grasped;
+    state_.grasped = ObjectId();
+    metrics_.reset();
+    contacts_.clear();
+  } else if (state_.grasped.valid() && contacts_q_ != state_.q) {
+    refresh_contacts(*object->model);
+  }
+  return events;
+}
+
+ObjectId HandController::release() {
+  const ObjectId released = state_.grasped;
+  state_.grasped = ObjectId();
+  state_.selected = ObjectId();
+  std::fill(state_.blocked.begin(), state_.blocked.end(), 0);
+  metrics_.reset();
+  contacts_.clear();
+  return released;
+}
+
+std::optional<Eigen::Isometry3d> HandController::grasped_object_pose() const {
+  if (!state_.grasped.valid()) return std::nullopt;
+  return state_.X_WorldPalm * state_.X_PalmObject;
+}
+
+GraspMetrics HandController::measure(const ObjectView& object) const {
+  GraspMetrics out;
+  const ObjectModel& model = *object.model;
+  const Eigen::Isometry3d X_ObjectPalm = object.X_WorldObject.inverse() * state_.X_WorldPalm;
+  std::vector<double> finger_sum(rig_->fingers().size(), 0.0);
+  std::vector<int> finger_count(rig_->fingers().size(), 0);
+  for (PhalanxId id : rig_->capsule_phalanges()) {
+    const PhalanxSpec& spec = rig_->phalanges()[id.value];
+    const CapsuleSpec& cap = *spec.capsule;
+    const Eigen::Isometry3d X_ObjectPhalanx = X_ObjectPalm * state_.X_PalmPhalanx[id.value];
+    const Eigen::Vector3d sp = X_ObjectPhalanx * cap.p_PhalanxSp;
+    const Eigen::Vector3d ctc = X_ObjectPhalanx * cap.p_PhalanxCTc;
+    const double length = (ctc - sp).norm();
+    const Eigen::Vector3d dir = (ctc - sp) / length;
+    CapsuleMetric m;
+    m.phalanx = id;
+    m.blocked = state_.blocked[id.value] != 0;
+    const SweepHit hit = model.distance.sphere_cast(sp, dir, rig_->nd_sweep_radius(), length + rig_->nd_sweep_beyond());
+    m.hit = hit.hit;
+    // ND = ((Ip - Sp) . (CTc - Sp)) / |CTc - Sp| - |CTc - Sp|
+    if (hit.hit) m.nd = (hit.point - sp).dot(dir) - length;
+    m.signed_distance = model.distance.capsule_signed_distance(X_ObjectPhalanx * cap.p_PhalanxA,
+                                                              X_ObjectPhalanx * cap.p_PhalanxB, cap.radius);
+    finger_count[spec.finger] += 1;
+    if (m.hit) finger_sum[spec.finger] += std::abs(m.nd);
+    out.capsules.push_back(m);
+  }
+  for (std::size_t f = 0; f < finger_sum.size(); ++f)
+    if (finger_count[f] > 0) out.hand_error_mm += 1000.0 * finger_sum[f] / finger_count[f];
+  return out;
+}
+
+void HandController::refresh_contacts(const ObjectModel& model) {
+  contacts_.clear();
+  contacts_q_ = state_.q;
+  const Eigen::Isometry3d X_ObjectPalm = state_.X_PalmObject.inverse();
+  auto add = [&](PhalanxId id, const Eigen::Vector3d& p_Object, const Eigen::Vector3d& n_Object) {
+    Contact c;
+    c.phalanx = id;
+    c.p_ObjectContact = p_Object;
+    c.n_Object = n_Object;
+    if (metrics_ && id.valid())
+      for (const CapsuleMetric& m : metrics_->capsules)
+        if (m.phalanx == id) { c.nd = m.nd; c.nd_hit = m.hit; }
+    contacts_.push_back(c);
+  };
+  for (PhalanxId id : rig_->capsule_phalanges()) {
+    if (!state_.blocked[id.value]) continue;
+    const Capsule c = capsule_in_object(id, X_ObjectPalm);
+    const SegmentQuery q = model.distance.closest_to_segment(c.a, c.b);
+    add(id, q.point_on_mesh, q.normal);
+  }
+  if (state_.palm_contact) {
+    const PointQuery q = model.distance.closest_point(X_ObjectPalm * rig_->palm_contact().p_PalmCenter);
+    add(PhalanxId(), q.point_on_mesh, q.normal);
+  }
+}
+
+std::vector<Contact> HandController::contacts() const {
+  std::vector<Contact> out = contacts_;
+  const auto X_WorldObject = grasped_object_pose();
+  if (!X_WorldObject) return {};
+  for (Contact& c : out) {
+    c.p_WorldContact = *X_WorldObject * c.p_ObjectContact;
+    c.n_World = X_WorldObject->linear() * c.n_Object;
+  }
+  return out;
+}
+
+}  // namespace telegrasp::sim

@@ -1,0 +1,32 @@
+// Forward kinematics of a hand rig.
+#include "telegrasp/sim/hand_kinematics.h"
+
+#include <algorithm>
+#include <cassert>
+
+namespace telegrasp::sim {
+
+Eigen::Isometry3d phalanx_pose(const PhalanxSpec& phalanx, const Eigen::Isometry3d& X_PalmParent, double q) {
+  Eigen::Isometry3d X = X_PalmParent * phalanx.X_ParentJoint;
+  X.linear() = X.linear() * Eigen::AngleAxisd(q, phalanx.axis).toRotationMatrix();
+  return X;
+}
+
+void forward_kinematics(const HandRig& rig, const std::vector<double>& q,
+                        std::vector<Eigen::Isometry3d>* X_PalmPhalanx) {
+  const auto& phalanges = rig.phalanges();
+  assert(q.size() == phalanges.size());
+  X_PalmPhalanx->resize(phalanges.size());
+  for (std::size_t i = 0; i < phalanges.size(); ++i) {
+    const int parent = phalanges[i].parent;
+    const Eigen::Isometry3d X_PalmParent =
+        parent < 0 ? Eigen::Isometry3d::Identity() : (*X_PalmPhalanx)[parent];
+    (*X_PalmPhalanx)[i] = phalanx_pose(phalanges[i], X_PalmParent, q[i]);
+  }
+}
+
+double target_angle(const PhalanxSpec& phalanx, double u) {
+  return std::clamp(phalanx.open + u * (phalanx.closed - phalanx.open), phalanx.min, phalanx.max);
+}
+
+}  // namespace telegrasp::sim

@@ -1,0 +1,59 @@
+// Building object models from meshes, files and the built-in stand-ins.
+#include "telegrasp/sim/object_model.h"
+
+#include "telegrasp/sim/mesh_loading.h"
+
+#include <algorithm>
+#include <filesystem>
+
+namespace telegrasp::sim {
+
+std::size_t ObjectModel::memory_bytes() const {
+  return sizeof(*this) + mesh.vertices.capacity() * sizeof(Eigen::Vector3d) +
+         mesh.triangles.capacity() * sizeof(mesh.triangles[0]) + distance.memory_bytes();
+}
+
+ObjectModelPtr make_object_model(const std::string& name, const TriangleMesh& mesh, double mass_kg,
+                                 const std::string& source) {
+  auto model = std::make_shared<ObjectModel>();
+  model->name = name;
+  model->source = source;
+  const MassProperties raw = compute_mass_properties(mesh);
+  if (!(raw.volume > 1e-12))
+    throw MeshLoadError(source + ": the mesh encloses no volume (" + std::to_string(raw.volume) +
+                        " m^3): it must be closed and outward-facing");
+  model->p_OriginalCenterOfMass = raw.centroid;
+  model->mesh = translated(mesh, -raw.centroid);
+  model->mass_properties = compute_mass_properties(model->mesh);
+  model->mass_kg = mass_kg > 0 ? mass_kg : model->mass_properties.volume * 500.0;
+  model->p_ObjectMin = model->mesh.min_corner();
+  model->p_ObjectMax = model->mesh.max_corner();
+  model->distance = MeshDistance(model->mesh);
+  return model;
+}
+
+ObjectModelPtr load_object_model(const std::string& path) {
+  const std::string stem = std::filesystem::path(path).stem().string();
+  const auto known = find_protocol_object(stem);
+  return make_object_model(stem, load_mesh_file(path), known ? known->mass_kg : 0.0, path);
+}
+
+std::vector<ObjectModelPtr> load_object_dir(const std::string& dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw MeshLoadError(dir + ": not a folder");
+  std::vector<std::string> files;
+  for (const auto& entry : fs::directory_iterator(dir, ec))
+    if (entry.is_regular_file() && is_mesh_file(entry.path().string())) files.push_back(entry.path().string());
+  if (files.empty()) throw MeshLoadError(dir + ": no mesh file (PLY, OBJ, STL, glTF, ...) in this folder");
+  std::sort(files.begin(), files.end());
+  std::vector<ObjectModelPtr> models;
+  for (const auto& f : files) models.push_back(load_object_model(f));
+  return models;
+}
+
+ObjectModelPtr make_standin_model(const ProtocolObject& object) {
+  return make_object_model(object.name, make_standin_mesh(object), object.mass_kg, "built-in stand-in");
+}
+
+}  // namespace telegrasp::sim

@@ -1,0 +1,226 @@
+// The scripted operator and its offline grasp planner.
+#include "telegrasp/sim/scripted_operator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+namespace telegrasp::sim {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+constexpr double kApproachDistance = 0.10;  // pre-grasp stand-off along the approach, m
+
+// Minimum-jerk time scaling of s in [0, 1].
+double min_jerk(double s) {
+  s = std::clamp(s, 0.0, 1.0);
+  return s * s * s * (10.0 - 15.0 * s + 6.0 * s * s);
+}
+
+Eigen::Isometry3d interpolate(const Eigen::Isometry3d& A, const Eigen::Isometry3d& B, double s) {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.translation() = (1.0 - s) * A.translation() + s * B.translation();
+  X.linear() = Eigen::Quaterniond(A.linear()).slerp(s, Eigen::Quaterniond(B.linear())).toRotationMatrix();
+  return X;
+}
+
+// Palm frame from the back of the hand (z) and the fingers' direction (x, made orthogonal to z).
+Eigen::Isometry3d palm_frame(const Eigen::Vector3d& x, const Eigen::Vector3d& z) {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.linear().col(2) = z.normalized();
+  X.linear().col(0) = (x - x.dot(X.linear().col(2)) * X.linear().col(2)).normalized();
+  X.linear().col(1) = X.linear().col(2).cross(X.linear().col(0));
+  return X;
+}
+
+struct Trial {
+  int blocked = 0;
+  bool grasped = false;
+};
+
+// Closes the hand at a fixed palm pose on a static object and reports what it grasped.
+Trial close_offline(const std::shared_ptr<const HandRig>& rig, const GraspSettings& settings,
+                    const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject,
+                    const Eigen::Isometry3d& X_WorldPalm, double dt) {
+  HandController hand(rig, settings);
+  const ObjectView view{ObjectId(0), X_WorldObject, &model};
+  ControllerInput input;
+  input.X_WorldPalm = X_WorldPalm;
+  const int ticks = static_cast<int>(std::ceil(0.5 / dt));
+  Trial out;
+  for (int i = 0; i <= ticks; ++i) {
+    input.trigger = std::min(1.0, static_cast<double>(i) / (0.7 * ticks));
+    hand.tick(input, dt, {&view, 1});
+    if (hand.state().grasped.valid()) out.grasped = true;
+  }
+  for (std::uint8_t b : hand.state().blocked) out.blocked += b;
+  return out;
+}
+
+}  // namespace
+
+OperatorSkill skill_profile(const std::string& name) {
+  if (name == "perfect") return {"perfect", 0.0, 0.0, 0.8, 0.0, 0.25};
+  if (name == "experienced") return {"experienced", 0.004, 3.0 * kDeg, 0.6, 0.25, 0.30};
+  if (name == "inexperienced") return {"inexperienced", 0.008, 6.0 * kDeg, 0.4, 0.40, 0.45};
+  throw std::invalid_argument("unknown operator skill '" + name + "' (expected perfect, experienced or inexperienced)");
+}
+
+GraspPlan plan_grasp(const HandRig& rig_ref, const GraspSettings& settings, const ObjectModel& model,
+                     const Eigen::Isometry3d& X_WorldObject, double dt) {
+  const auto rig = std::make_shared<const HandRig>(rig_ref);
+  const Eigen::Vector3d lo = model.p_ObjectMin, hi = model.p_ObjectMax;
+  const Eigen::Vector3d size = hi - lo;
+  const Eigen::Vector3d p_WorldCenter = X_WorldObject * (0.5 * (lo + hi));
+  const double top = (X_WorldObject * Eigen::Vector3d(0, 0, hi.z())).z();
+  // The object's horizontal axes in the world (objects rest upright, turned about +z).
+  const Eigen::Vector3d ax = (X_WorldObject.linear() * Eigen::Vector3d::UnitX());
+  const Eigen::Vector3d ay = (X_WorldObject.linear() * Eigen::Vector3d::UnitY());
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d& gc = rig->p_PalmGraspCenter();
+  const double palm_half_thickness = rig->palm_half_extent().z();
+
+  std::vector<GraspPlan> candidates;
+  // Top grasps: palm down, fingers along either horizontal axis, either way round; the grasp
+  // centre over the object's centre or shifted along the fingers; palm at or above the top.
+  for (const Eigen::Vector3d& fingers : {ax, ay, Eigen::Vector3d(-ax), Eigen::Vector3d(-ay)}) {
+    for (double shift : {0.0, -0.015, 0.015}) {
+      for (double clearance : {0.0, 0.01, 0.025}) {
+        GraspPlan plan;
+        plan.X_WorldPalm = palm_frame(fingers, up);
+        plan.approach_World = -up;
+        Eigen::Vector3d target = p_WorldCenter + shift * fingers.normalized();
+        plan.X_WorldPalm.translation() = target - plan.X_WorldPalm.linear() * gc;
+        // Never lower the palm into the object: its skin stays above the top plus the clearance.
+        const double palm_z = std::max(plan.X_WorldPalm.translation().z(), top + palm_half_thickness + clearance);
+        plan.X_WorldPalm.translation().z() = palm_z;
+        candidates.push_back(plan);
+      }
+    }
+  }
+  // Side grasps: palm facing the object horizontally, thumb up, fingers around the other axis.
+  for (const Eigen::Vector3d& toward : {ax, ay, Eigen::Vector3d(-ax), Eigen::Vector3d(-ay)}) {
+    const Eigen::Vector3d fingers = up.cross(toward).normalized();
+    for (double height : {0.5, 0.7}) {
+      GraspPlan plan;
+      plan.X_WorldPalm = palm_frame(fingers, -toward);
+      plan.approach_World = toward.normalized();
+      const double half = std::abs(toward.normalized().dot(X_WorldObject.linear() * size)) * 0.5;
+      Eigen::Vector3d target = p_WorldCenter;
+      target.z() = (X_WorldObject * lo).z() + height * size.z();
+      plan.X_WorldPalm.translation() = target - plan.X_WorldPalm.linear() * gc;
+      // Keep the palm outside the object along the approach.
+      const double along = (plan.X_WorldPalm.translation() - p_WorldCenter).dot(-toward.normalized());
+      const double min_along = half + palm_half_thickness;
+      if (along < min_along) plan.X_WorldPalm.translation() += (min_along - along) * -toward.normalized();
+      candidates.push_back(plan);
+    }
+  }
+
+  GraspPlan best = candidates.front();
+  int best_score = -1;
+  for (GraspPlan& plan : candidates) {
+    const Trial t = close_offline(rig, settings, model, X_WorldObject, plan.X_WorldPalm, dt);
+    plan.predicted_grasp = t.grasped;
+    plan.predicted_blocked = t.blocked;
+    const int score = (t.grasped ? 1000 : 0) + t.blocked;
+    if (score > best_score) { best_score = score; best = plan; }
+  }
+  return best;
+}
+
+ScriptedOperator::ScriptedOperator(std::shared_ptr<const HandRig> rig, OperatorSkill skill, std::uint64_t seed,
+                                   GraspSettings settings, double dt)
+    : rig_(std::move(rig)), skill_(std::move(skill)), settings_(settings), dt_(dt), rng_(seed) {}
+
+Eigen::Isometry3d ScriptedOperator::noisy(const Eigen::Isometry3d& X) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  Eigen::Isometry3d out = X;
+  out.translation() += skill_.position_error * Eigen::Vector3d(n(rng_), n(rng_), n(rng_));
+  const Eigen::Vector3d axis = Eigen::Vector3d(n(rng_), n(rng_), n(rng_));
+  const double angle = skill_.orientation_error * n(rng_);
+  if (axis.norm() > 1e-9) out.linear() = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix() * X.linear();
+  return out;
+}
+
+void ScriptedOperator::begin(const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject,
+                             const Eigen::Isometry3d& X_WorldPalm, double t0) {
+  plan_ = plan_grasp(*rig_, settings_, model, X_WorldObject, dt_);
+  X_last_ = X_WorldPalm;
+  attempts_ = 0;
+  held_after_lift_ = false;
+  trigger_ = 0;
+  phase_ = OperatorPhase::kReact;
+  t_phase_ = t0;
+  t_end_ = t0 + skill_.reaction_time;
+}
+
+void ScriptedOperator::start_attempt(double t) {
+  ++attempts_;
+  X_start_ = X_last_;
+  X_goal_ = noisy(plan_.X_WorldPalm);
+  X_pre_ = X_goal_;
+  X_pre_.translation() -= kApproachDistance * plan_.approach_World;
+  const double d1 = (X_pre_.translation() - X_start_.translation()).norm();
+  const double d2 = kApproachDistance;
+  phase_ = OperatorPhase::kReach;
+  t_phase_ = t;
+  t_via_ = t + std::max(0.15, 1.5 * d1 / skill_.reach_speed);  // min-jerk peaks at 1.875x mean speed
+  t_end_ = t_via_ + std::max(0.15, 1.5 * d2 / skill_.reach_speed);
+}
+
+ControllerInput ScriptedOperator::next(double t, bool grasped) {
+  switch (phase_) {
+    case OperatorPhase::kReact:
+      if (t >= t_end_) start_attempt(t);
+      break;
+    case OperatorPhase::kReach:
+      if (t < t_via_) {
+        X_last_ = interpolate(X_start_, X_pre_, min_jerk((t - t_phase_) / (t_via_ - t_phase_)));
+      } else {
+        X_last_ = interpolate(X_pre_, X_goal_, min_jerk((t - t_via_) / (t_end_ - t_via_)));
+        if (t >= t_end_) { phase_ = OperatorPhase::kSqueeze; t_phase_ = t; }
+      }
+      break;
+    case OperatorPhase::kSqueeze:
+      trigger_ = std::min(1.0, trigger_ + dt_ / skill_.squeeze_time);
+      if (grasped) {
+        phase_ = OperatorPhase::kLift;
+        t_phase_ = t;
+        X_start_ = X_last_;
+        X_lifted_ = X_last_;
+        X_lifted_.translation().z() += kLiftHeight;
+      } else if (t - t_phase_ > skill_.squeeze_time + 0.3) {
+        // Missed: open, back off and try again with a fresh attempt, or give up.
+        trigger_ = 0;
+        if (attempts_ >= kMaxAttempts) phase_ = OperatorPhase::kDone;
+        else start_attempt(t);
+      }
+      break;
+    case OperatorPhase::kLift: {
+      const double duration = std::max(0.2, 1.5 * kLiftHeight / skill_.reach_speed);
+      X_last_ = interpolate(X_start_, X_lifted_, min_jerk((t - t_phase_) / duration));
+      if (!grasped) { phase_ = OperatorPhase::kRelease; t_phase_ = t; }
+      else if (t - t_phase_ >= duration) { phase_ = OperatorPhase::kHold; t_phase_ = t; }
+      break;
+    }
+    case OperatorPhase::kHold:
+      if (!grasped) { phase_ = OperatorPhase::kRelease; t_phase_ = t; }
+      else if (t - t_phase_ >= kHoldTime) { held_after_lift_ = true; phase_ = OperatorPhase::kRelease; t_phase_ = t; }
+      break;
+    case OperatorPhase::kRelease:
+      trigger_ = std::max(0.0, trigger_ - dt_ / 0.2);
+      if (trigger_ <= 0 && !grasped) phase_ = OperatorPhase::kDone;
+      break;
+    case OperatorPhase::kDone:
+      trigger_ = 0;
+      break;
+  }
+  ControllerInput input;
+  input.X_WorldPalm = X_last_;
+  input.trigger = trigger_;
+  return input;
+}
+
+}  // namespace telegrasp::sim

@@ -1,0 +1,338 @@
+// telegrasp-eval: runs scripted grasps on objects in-process and reports success, time and ND.
+#include "telegrasp/sim/hand_rig.h"
+#include "telegrasp/sim/mesh_loading.h"
+#include "telegrasp/sim/object_model.h"
+#include "telegrasp/sim/scripted_operator.h"
+#include "telegrasp/sim/standin_objects.h"
+#include "telegrasp/sim/world.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <mutex>
+#include <numbers>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace {
+
+using namespace telegrasp::sim;
+using nlohmann::json;
+
+constexpr const char* kUsage = R"(Usage: telegrasp-eval [options]
+
+Grasps every object with a scripted operator, in-process (no network), and reports
+per-object success, time to grasp and the paper's ND error metric.
+
+Options:
+  --objects DIR       every mesh file in DIR (PLY, OBJ, STL, glTF, ...); default: the 30
+                      built-in stand-ins of the paper's protocol
+  --mode M            precise | discrete | both (default precise)
+  --speed-scale LIST  finger closing speed multipliers, comma separated (default 1)
+  --trials N          random orientations per object (default 5)
+  --seed S            random seed (default 1)
+  --skill NAME        perfect | experienced | inexperienced (default experienced)
+  --rig FILE          hand rig text file (default: built-in human_right)
+  --json FILE         write every grasp record and the summaries as JSON
+  --threads N         worker threads (default 2)
+  -h, --help          this text
+)";
+
+struct Options {
+  std::string objects_dir, rig_path, json_path, skill = "experienced";
+  std::vector<ClosingMode> modes{ClosingMode::kPrecise};
+  std::vector<double> speeds{1.0};
+  int trials = 5, threads = 2;
+  std::uint64_t seed = 1;
+};
+
+[[noreturn]] void usage_error(const std::string& what) {
+  std::cerr << "telegrasp-eval: " << what << "\n(see telegrasp-eval --help)\n";
+  std::exit(2);
+}
+
+long parse_int(const std::string& flag, const std::string& v, long lo, long hi) {
+  try {
+    std::size_t used = 0;
+    const long x = std::stol(v, &used);
+    if (used != v.size() || x < lo || x > hi) throw std::out_of_range("");
+    return x;
+  } catch (const std::exception&) {
+    usage_error(flag + " expects a whole number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
+  }
+}
+
+Options parse(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) usage_error(a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "-h" || a == "--help") { std::cout << kUsage; std::exit(0); }
+    else if (a == "--objects") o.objects_dir = value();
+    else if (a == "--rig") o.rig_path = value();
+    else if (a == "--json") o.json_path = value();
+    else if (a == "--skill") o.skill = value();
+    else if (a == "--trials") o.trials = static_cast<int>(parse_int(a, value(), 1, 100000));
+    else if (a == "--threads") o.threads = static_cast<int>(parse_int(a, value(), 1, 64));
+    else if (a == "--seed") o.seed = static_cast<std::uint64_t>(parse_int(a, value(), 0, 1L << 62));
+    else if (a == "--mode") {
+      const std::string m = value();
+      if (m == "precise") o.modes = {ClosingMode::kPrecise};
+      else if (m == "discrete") o.modes = {ClosingMode::kDiscrete};
+      else if (m == "both") o.modes = {ClosingMode::kPrecise, ClosingMode::kDiscrete};
+      else usage_error("--mode expects precise, discrete or both, got '" + m + "'");
+    } else if (a == "--speed-scale") {
+      o.speeds.clear();
+      std::stringstream ss(value());
+      for (std::string item; std::getline(ss, item, ',');) {
+        char* end = nullptr;
+        const double s = std::strtod(item.c_str(), &end);
+        if (item.empty() || *end != '\0' || !(s > 0) || !std::isfinite(s)) usage_error("--speed-scale expects positive numbers, got '" + item + "'");
+        o.speeds.push_back(s);
+      }
+    } else usage_error("unknown option '" + a + "'");
+  }
+  return o;
+}
+
+const char* mode_name(ClosingMode m) { return m == ClosingMode::kPrecise ? "precise" : "discrete"; }
+
+struct CapsuleRecord {
+  std::string phalanx;
+  bool hit = false, blocked = false;
+  double nd_mm = 0, signed_distance_mm = 0;
+};
+
+struct Record {
+  std::string object, mode;
+  double speed_scale = 1;
+  int trial = 0, attempts = 0;
+  bool grasped = false, held_after_lift = false;
+  double time_to_grasp_s = 0, hand_error_mm = 0;
+  std::vector<CapsuleRecord> capsules;
+};
+
+struct Config {
+  ClosingMode mode;
+  double speed;
+};
+
+// One grasp trial: the object rests at a random pose in front of the operator, who reaches,
+// grasps, lifts 10 cm, holds 1 s and releases.
+Record run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRig>& rig, const Options& opt,
+                 const Config& cfg, int trial, std::uint64_t seed) {
+  WorldSettings ws;
+  ws.grasp.mode = cfg.mode;
+  ws.grasp.speed_scale = cfg.speed;
+  World world(ws);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> ux(0.40, 0.50), uy(-0.08, 0.08), uyaw(0.0, 2.0 * std::numbers::pi);
+  const double x = ux(rng), y = uy(rng), yaw = uyaw(rng);
+  const ObjectId object = world.add_object(model, World::resting_pose(*model, x, y, yaw));
+  const HandId hand = world.add_hand(rig);
+  ControllerInput start;
+  start.X_WorldPalm.translation() = Eigen::Vector3d(0.15, -0.20, 0.30);
+  start.X_WorldPalm.linear() = Eigen::Matrix3d::Identity();
+  world.set_input(hand, start);
+  for (int i = 0; i < static_cast<int>(0.5 / ws.dt); ++i) world.step();  // let the object settle
+
+  ScriptedOperator op(rig, skill_profile(opt.skill), rng(), ws.grasp, ws.dt);
+  const double t0 = world.time();
+  const double z0 = world.object_pose(object).translation().z();
+  op.begin(*model, world.object_pose(object), start.X_WorldPalm, t0);
+  Record rec;
+  rec.object = model->name;
+  rec.mode = mode_name(cfg.mode);
+  rec.speed_scale = cfg.speed;
+  rec.trial = trial;
+  double z_held = -1e9;
+  while (!op.done() && world.time() - t0 < 30.0) {
+    const bool grasped = world.holder(object) == hand;
+    const ControllerInput in = op.next(world.time(), grasped);
+    world.set_input(hand, in);
+    world.step();
+    if (op.phase() == OperatorPhase::kHold) z_held = std::max(z_held, world.object_pose(object).translation().z());
+    for (const GraspEvent& e : world.events()) {
+      if (e.kind != GraspEvent::Kind::kGrasp || rec.grasped || !e.metrics) continue;
+      rec.grasped = true;
+      rec.time_to_grasp_s = e.time - t0;
+      rec.hand_error_mm = e.metrics->hand_error_mm;
+      for (const CapsuleMetric& m : e.metrics->capsules)
+        rec.capsules.push_back({rig->phalanges()[m.phalanx.value].name, m.hit, m.blocked, 1000 * m.nd, 1000 * m.signed_distance});
+    }
+  }
+  rec.attempts = op.attempts();
+  rec.held_after_lift = op.held_after_lift() && z_held - z0 > 0.8 * ScriptedOperator::kLiftHeight;
+  return rec;
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const double idx = p * static_cast<double>(v.size() - 1);
+  const std::size_t i = static_cast<std::size_t>(idx);
+  const double f = idx - static_cast<double>(i);
+  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
+}
+
+json summarize(const std::vector<const Record*>& recs) {
+  int grasped = 0, held = 0, capsules = 0, below = 0, blocked_count = 0;
+  double time_sum = 0, he_sum = 0, min_sd = 1e9;
+  std::vector<double> nd_abs;
+  for (const Record* r : recs) {
+    grasped += r->grasped;
+    held += r->held_after_lift;
+    if (!r->grasped) continue;
+    time_sum += r->time_to_grasp_s;
+    he_sum += r->hand_error_mm;
+    for (const auto& c : r->capsules) {
+      ++capsules;
+      if (c.hit) nd_abs.push_back(std::abs(c.nd_mm));
+      if (c.blocked) {
+        ++blocked_count;
+        min_sd = std::min(min_sd, c.signed_distance_mm);
+        below += c.signed_distance_mm < -0.1;
+      }
+    }
+  }
+  auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+  return {{"trials", recs.size()},
+          {"grasped", grasped},
+          {"held_after_lift", held},
+          {"held_rate", recs.empty() ? 0.0 : static_cast<double>(held) / static_cast<double>(recs.size())},
+          {"time_to_grasp_mean_s", num(grasped ? time_sum / grasped : NAN)},
+          {"hand_error_mean_mm", num(grasped ? he_sum / grasped : NAN)},
+          {"capsules", capsules},
+          {"capsules_hit", nd_abs.size()},
+          {"nd_abs_median_mm", num(percentile(nd_abs, 0.5))},
+          {"nd_abs_p95_mm", num(percentile(nd_abs, 0.95))},
+          {"blocked_capsules", blocked_count},
+          {"min_blocked_signed_distance_mm", num(blocked_count ? min_sd : NAN)},
+          {"blocked_below_minus_0_1mm", below}};
+}
+
+std::string fmt(double v, int prec = 2) {
+  if (!std::isfinite(v)) return "-";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.*f", prec, v);
+  return buf;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options opt = parse(argc, argv);
+  std::shared_ptr<const HandRig> rig;
+  std::vector<ObjectModelPtr> models;
+  try {
+    rig = std::make_shared<const HandRig>(HandRig::load(opt.rig_path.empty() ? HandRig::builtin_path("human_right") : opt.rig_path));
+    skill_profile(opt.skill);
+    if (opt.objects_dir.empty()) {
+      for (const auto& o : protocol_objects()) models.push_back(make_standin_model(o));
+    } else {
+      std::cerr << "loading meshes from " << opt.objects_dir << " ...\n";
+      models = load_object_dir(opt.objects_dir);
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "telegrasp-eval: " << e.what() << "\n";
+    return 1;
+  }
+  std::size_t max_bytes = 0;
+  for (const auto& m : models) max_bytes = std::max(max_bytes, m->memory_bytes());
+  std::cerr << models.size() << " objects (" << (opt.objects_dir.empty() ? "built-in stand-ins" : opt.objects_dir)
+            << "), largest model " << fmt(static_cast<double>(max_bytes) / 1e6, 2) << " MB; rig " << rig->name()
+            << "; skill " << opt.skill << "\n";
+
+  std::vector<Config> configs;
+  for (ClosingMode m : opt.modes)
+    for (double s : opt.speeds) configs.push_back({m, s});
+  struct Job { std::size_t config, object; int trial; };
+  std::vector<Job> jobs;
+  for (std::size_t c = 0; c < configs.size(); ++c)
+    for (std::size_t o = 0; o < models.size(); ++o)
+      for (int t = 0; t < opt.trials; ++t) jobs.push_back({c, o, t});
+  std::vector<Record> records(jobs.size());
+  std::atomic<std::size_t> next{0}, finished{0};
+  std::mutex log_mutex;
+  auto worker = [&] {
+    for (std::size_t j = next++; j < jobs.size(); j = next++) {
+      const Job& job = jobs[j];
+      // The trial's seed depends on the object and trial only, so modes and speeds see the same poses.
+      const std::uint64_t seed = opt.seed * 1000003ULL + job.object * 1009ULL + static_cast<std::uint64_t>(job.trial);
+      records[j] = run_trial(models[job.object], rig, opt, configs[job.config], job.trial, seed);
+      const std::size_t done = ++finished;
+      std::lock_guard lock(log_mutex);
+      std::cerr << "\r[" << done << "/" << jobs.size() << "] " << records[j].mode << " x" << configs[job.config].speed << " "
+                << records[j].object << " trial " << job.trial << (records[j].held_after_lift ? " held" : " NOT held") << "        " << std::flush;
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int i = 0; i < opt.threads; ++i) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+  std::cerr << "\n";
+
+  json summaries = json::array();
+  for (std::size_t c = 0; c < configs.size(); ++c) {
+    std::cout << "\n== mode " << mode_name(configs[c].mode) << ", closing speed x" << configs[c].speed << ", skill " << opt.skill << " ==\n";
+    std::printf("%-26s %6s %6s %8s %9s %9s %10s %9s\n", "object", "held", "grasp", "time_s", "|ND|med", "|ND|p95", "minSD_mm", "HErr_mm");
+    for (std::size_t o = 0; o < models.size(); ++o) {
+      std::vector<const Record*> recs;
+      for (std::size_t j = 0; j < jobs.size(); ++j)
+        if (jobs[j].config == c && jobs[j].object == o) recs.push_back(&records[j]);
+      const json s = summarize(recs);
+      auto get = [&](const char* k) { return s[k].is_null() ? NAN : s[k].get<double>(); };
+      std::printf("%-26s %3d/%-2d %3d/%-2d %8s %9s %9s %10s %9s\n", models[o]->name.c_str(), s["held_after_lift"].get<int>(),
+                  static_cast<int>(recs.size()), s["grasped"].get<int>(), static_cast<int>(recs.size()),
+                  fmt(get("time_to_grasp_mean_s")).c_str(), fmt(get("nd_abs_median_mm"), 3).c_str(), fmt(get("nd_abs_p95_mm"), 3).c_str(),
+                  fmt(get("min_blocked_signed_distance_mm"), 3).c_str(), fmt(get("hand_error_mean_mm")).c_str());
+    }
+    std::vector<const Record*> all;
+    for (std::size_t j = 0; j < jobs.size(); ++j)
+      if (jobs[j].config == c) all.push_back(&records[j]);
+    json s = summarize(all);
+    s["mode"] = mode_name(configs[c].mode);
+    s["speed_scale"] = configs[c].speed;
+    s["skill"] = opt.skill;
+    std::cout << "summary: " << s.dump() << "\n";
+    summaries.push_back(s);
+  }
+  if (configs.size() > 1) {
+    std::cout << "\n== side by side ==\n";
+    std::printf("%-9s %6s %7s %10s %10s %12s %10s\n", "mode", "speed", "held%", "|ND|med", "|ND|p95", "minSD_mm", "SD<-0.1");
+    for (const json& s : summaries) {
+      auto get = [&](const char* k) { return s[k].is_null() ? NAN : s[k].get<double>(); };
+      std::printf("%-9s %6s %7s %10s %10s %12s %10d\n", s["mode"].get<std::string>().c_str(), fmt(get("speed_scale"), 1).c_str(),
+                  fmt(100 * get("held_rate"), 1).c_str(), fmt(get("nd_abs_median_mm"), 3).c_str(), fmt(get("nd_abs_p95_mm"), 3).c_str(),
+                  fmt(get("min_blocked_signed_distance_mm"), 3).c_str(), s["blocked_below_minus_0_1mm"].get<int>());
+    }
+  }
+
+  if (!opt.json_path.empty()) {
+    json grasps = json::array();
+    for (const Record& r : records) {
+      json caps = json::array();
+      for (const auto& c : r.capsules)
+        caps.push_back({{"phalanx", c.phalanx}, {"hit", c.hit}, {"blocked", c.blocked},
+                        {"nd_mm", c.hit ? json(c.nd_mm) : json(nullptr)}, {"signed_distance_mm", c.signed_distance_mm}});
+      grasps.push_back({{"object", r.object}, {"trial", r.trial}, {"mode", r.mode}, {"speed_scale", r.speed_scale},
+                        {"grasped", r.grasped}, {"held_after_lift", r.held_after_lift}, {"attempts", r.attempts},
+                        {"time_to_grasp_s", r.grasped ? json(r.time_to_grasp_s) : json(nullptr)},
+                        {"hand_error_mm", r.grasped ? json(r.hand_error_mm) : json(nullptr)}, {"capsules", caps}});
+    }
+    std::ofstream out(opt.json_path);
+    out << json{{"grasps", grasps}, {"summary", summaries[0]}, {"summaries", summaries}}.dump(1) << "\n";
+    if (!out) { std::cerr << "telegrasp-eval: cannot write " << opt.json_path << "\n"; return 1; }
+    std::cerr << "wrote " << opt.json_path << "\n";
+  }
+  return 0;
+}

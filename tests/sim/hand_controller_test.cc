@@ -1,0 +1,360 @@
+// Tests HandController: the interaction manager, finger movement in both closing modes, the
+// grasping logic, object selection and the ND / signed-distance metrics on analytic geometry.
+#include "telegrasp/sim/hand_controller.h"
+
+#include "telegrasp/sim/hand_kinematics.h"
+#include "test_meshes.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace telegrasp::sim {
+namespace {
+
+using testing::box_mesh;
+constexpr double kDt = 1.0 / 90.0;
+constexpr double kDeg = std::numbers::pi / 180.0;
+constexpr double kTol = 0.05e-3;  // GraspSettings default contact tolerance
+
+// One finger along +x from (0.04, 0, 0) in the palm frame: proximal (no capsule), middle and
+// distal (capsules of radius 5 mm), all flexing about +y at 180 deg/s. Sp is on the axis and
+// CTc on the palmar skin (-z) at mid-length, so |CTc - Sp| = 5 mm.
+constexpr const char* kFingerRig = R"(
+name: "finger3"
+palm_selection_sphere { center { x: 0.07 } radius: 0.2 }
+palm_contact_volume { radius: 0.005 }
+palm_half_extent { x: 0.04 y: 0.04 z: 0.01 }
+default_max_speed_deg_s: 180
+nd_sweep_radius: 0.001
+nd_sweep_beyond: 0.01
+fingers {
+  name: "f"
+  phalanges { name: "f_prox" rest { translation { x: 0.04 } }
+    joint { axis { y: 1 } open_deg: 0 closed_deg: 90 min_deg: 0 max_deg: 90 } length: 0.03 }
+  phalanges { name: "f_mid" rest { translation { x: 0.03 } }
+    joint { axis { y: 1 } open_deg: 0 closed_deg: 90 min_deg: 0 max_deg: 90 } length: 0.025
+    capsule { a { } b { x: 0.025 } radius: 0.005 ctc { x: 0.0125 z: -0.005 } sp { x: 0.0125 } } }
+  phalanges { name: "f_dist" rest { translation { x: 0.025 } }
+    joint { axis { y: 1 } open_deg: 0 closed_deg: 70 min_deg: 0 max_deg: 70 } length: 0.02
+    capsule { a { } b { x: 0.015 } radius: 0.005 ctc { x: 0.0075 z: -0.005 } sp { x: 0.0075 } } }
+}
+grasp_rule { members: ["f_mid", "f_dist"] }
+)";
+
+std::shared_ptr<const HandRig> finger_rig() {
+  return std::make_shared<const HandRig>(HandRig::parse(kFingerRig, "finger3"));
+}
+
+// A box object with half extents h centred at p (palm frame = world frame: the hand stays at identity).
+struct BoxScene {
+  ObjectModelPtr model;
+  ObjectView view;
+  BoxScene(const Eigen::Vector3d& h, const Eigen::Vector3d& p)
+      : model(make_object_model("box", box_mesh(h), 1.0, "test")) {
+    view.id = ObjectId(7);
+    view.X_WorldObject = Eigen::Isometry3d(Eigen::Translation3d(p));
+    view.model = model.get();
+  }
+};
+
+ControllerInput at_identity(double trigger) {
+  ControllerInput in;
+  in.trigger = trigger;
+  return in;
+}
+
+// Exact gap between a capsule of `rig` and the bar whose x-z cross-section is the rectangle
+// [x0, x1] x [z0, z1] (the bar is long in y): 2D distance from the capsule axis, densely sampled.
+double gap_to_bar_2d(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r, double x0, double x1, double z0, double z1) {
+  double best = 1e9;
+  constexpr int kSamples = 200000;
+  for (int i = 0; i <= kSamples; ++i) {
+    const Eigen::Vector3d p = a + (b - a) * (static_cast<double>(i) / kSamples);
+    const double dx = std::max({x0 - p.x(), 0.0, p.x() - x1});
+    const double dz = std::max({z0 - p.z(), 0.0, p.z() - z1});
+    best = std::min(best, std::hypot(dx, dz));
+  }
+  return best - r;
+}
+
+// A bar under the middle phalanx only: the middle capsule blocks, then the distal joint keeps
+// closing while the proximal and middle joints hold.
+TEST(HandControllerTest, BlockedPhalanxHoldsProximalJoints) {
+  auto rig = finger_rig();
+  const double x0 = 0.075, x1 = 0.088, z0 = -0.1, z1 = -0.010;
+  BoxScene bar({(x1 - x0) / 2, 0.05, (z1 - z0) / 2}, {(x0 + x1) / 2, 0, (z0 + z1) / 2});
+  HandController hand(rig, {});
+  const int prox = 0, mid = 1, dist = 2;
+  int blocked_tick = -1;
+  double q_prox = 0, q_mid = 0;
+  for (int t = 0; t < 90; ++t) {
+    hand.tick(at_identity(1.0), kDt, {&bar.view, 1});
+    const HandState& s = hand.state();
+    if (blocked_tick < 0 && s.blocked[mid]) {
+      blocked_tick = t;
+      q_prox = s.q[prox];
+      q_mid = s.q[mid];
+    } else if (blocked_tick >= 0) {
+      // Held: the proximal and middle joints do not move once the middle phalanx is blocked.
+      ASSERT_EQ(s.q[prox], q_prox) << "tick " << t;
+      ASSERT_EQ(s.q[mid], q_mid) << "tick " << t;
+    }
+  }
+  ASSERT_GE(blocked_tick, 0) << "the middle capsule never touched the bar";
+  const HandState& s = hand.state();
+  EXPECT_TRUE(s.blocked[mid]);
+  EXPECT_FALSE(s.blocked[dist]);
+  EXPECT_EQ(s.q[dist], 70 * kDeg) << "the distal joint closes fully, past the bar";
+  EXPECT_GT(q_prox, 1 * kDeg);
+  // Precise mode: the blocked capsule touches within the tolerance, checked independently.
+  const auto& cap = *rig->phalanges()[mid].capsule;
+  const double gap = gap_to_bar_2d(s.X_PalmPhalanx[mid] * cap.p_PhalanxA, s.X_PalmPhalanx[mid] * cap.p_PhalanxB,
+                                   cap.radius, x0, x1, z0, z1);
+  EXPECT_GE(gap, -1e-6);
+  EXPECT_LE(gap, kTol + 1e-6);
+}
+
+// Gap of every blocked capsule against the object, exact.
+double min_blocked_gap(const HandController& hand, const ObjectView& view) {
+  double worst = 1e9;
+  const auto& rig = hand.rig();
+  for (PhalanxId id : rig.capsule_phalanges()) {
+    if (!hand.state().blocked[id.value]) continue;
+    const auto& c = *rig.phalanges()[id.value].capsule;
+    const Eigen::Isometry3d X = view.X_WorldObject.inverse() * hand.state().X_WorldPalm * hand.state().X_PalmPhalanx[id.value];
+    worst = std::min(worst, view.model->distance.capsule_signed_distance(X * c.p_PhalanxA, X * c.p_PhalanxB, c.radius));
+  }
+  return worst;
+}
+
+// Closes on a plate below the whole finger until something blocks; returns the worst gap.
+double close_on(const ObjectView& view, ClosingMode mode, double speed_scale, bool* blocked_any) {
+  GraspSettings settings;
+  settings.mode = mode;
+  settings.speed_scale = speed_scale;
+  HandController hand(finger_rig(), settings);
+  for (int t = 0; t < 200; ++t) hand.tick(at_identity(1.0), kDt, {&view, 1});
+  *blocked_any = false;
+  for (std::uint8_t b : hand.state().blocked) *blocked_any |= b != 0;
+  return min_blocked_gap(hand, view);
+}
+
+TEST(HandControllerTest, PreciseModeTouchesWithinToleranceAtAnySpeed) {
+  BoxScene plate({0.1, 0.1, 0.01}, {0.1, 0, -0.025});
+  for (double speed : {1.0, 4.0, 16.0, 64.0}) {
+    bool blocked = false;
+    const double gap = close_on(plate.view, ClosingMode::kPrecise, speed, &blocked);
+    ASSERT_TRUE(blocked) << "speed x" << speed;
+    EXPECT_GE(gap, -1e-9) << "speed x" << speed;
+    EXPECT_LE(gap, kTol) << "speed x" << speed;
+  }
+}
+
+TEST(HandControllerTest, DiscreteModeSinksMoreAtHigherSpeed) {
+  BoxScene plate({0.1, 0.1, 0.01}, {0.1, 0, -0.025});
+  bool blocked = false;
+  const double slow = close_on(plate.view, ClosingMode::kDiscrete, 1.0, &blocked);
+  ASSERT_TRUE(blocked);
+  const double fast = close_on(plate.view, ClosingMode::kDiscrete, 8.0, &blocked);
+  ASSERT_TRUE(blocked);
+  EXPECT_LT(slow, 0.0) << "discrete mode detects contact only once overlapping";
+  EXPECT_LT(fast, slow) << "a larger step sinks deeper";
+  EXPECT_LT(fast, -1e-3);
+}
+
+// A 1 mm plate across the distal phalanx's path, closed at 64x speed (the distal sweeps ~150 degrees
+// per tick): the paper's discrete test steps straight through it, precise mode blocks on it.
+TEST(HandControllerTest, FastCloseOnThinPlateDoesNotTunnel) {
+  BoxScene thin({0.0005, 0.1, 0.085}, {0.09, 0, -0.095});  // top edge 1 cm below the open finger
+  bool blocked = false;
+  const double gap = close_on(thin.view, ClosingMode::kPrecise, 64.0, &blocked);
+  ASSERT_TRUE(blocked);
+  EXPECT_GE(gap, -1e-9);
+  EXPECT_LE(gap, kTol);
+  const double discrete_gap = close_on(thin.view, ClosingMode::kDiscrete, 64.0, &blocked);
+  EXPECT_TRUE(!blocked || discrete_gap < -1e-3) << "discrete mode tunnels or sinks deep";
+}
+
+TEST(HandControllerTest, UnblocksWhenTheHandOpens) {
+  BoxScene plate({0.1, 0.1, 0.01}, {0.1, 0, -0.025});
+  HandController hand(finger_rig(), {});
+  for (int t = 0; t < 60; ++t) hand.tick(at_identity(1.0), kDt, {&plate.view, 1});
+  ASSERT_TRUE(hand.state().blocked[1] || hand.state().blocked[2]);
+  hand.tick(at_identity(0.0), kDt, {&plate.view, 1});
+  EXPECT_FALSE(hand.state().blocked[1]);
+  EXPECT_FALSE(hand.state().blocked[2]);
+  for (int t = 0; t < 90; ++t) hand.tick(at_identity(0.0), kDt, {&plate.view, 1});
+  EXPECT_EQ(hand.state().q[0], 0.0) << "the finger opens fully";
+}
+
+// A jump of the trigger from 0 to 1 is spread over ticks at max_speed * dt per joint.
+TEST(HandControllerTest, FingerMovementIsRateLimited) {
+  HandController hand(finger_rig(), {});
+  hand.tick(at_identity(1.0), kDt, {});
+  EXPECT_NEAR(hand.state().q[0], 180 * kDeg * kDt, 1e-15);
+  for (int t = 0; t < 100; ++t) hand.tick(at_identity(1.0), kDt, {});
+  EXPECT_EQ(hand.state().q[0], 90 * kDeg);
+  EXPECT_EQ(hand.state().q[2], 70 * kDeg);
+}
+
+TEST(HandControllerTest, PerFingerCurlsReplaceTheTrigger) {
+  auto rig = std::make_shared<const HandRig>(HandRig::load(HandRig::builtin_path("human_right")));
+  HandController hand(rig, {});
+  ControllerInput in;
+  in.trigger = 0.0;
+  in.curls = {0.0, 1.0, 0.0, 0.0, 0.5};  // thumb, index, middle, ring, little
+  ASSERT_EQ(validate_input(in, *rig), "");
+  for (int t = 0; t < 200; ++t) hand.tick(in, kDt, {});
+  const auto& q = hand.state().q;
+  EXPECT_EQ(q[rig->find("index_mid").value], target_angle(rig->phalanges()[rig->find("index_mid").value], 1.0));
+  EXPECT_EQ(q[rig->find("middle_mid").value], target_angle(rig->phalanges()[rig->find("middle_mid").value], 0.0));
+  EXPECT_EQ(q[rig->find("little_dist").value], target_angle(rig->phalanges()[rig->find("little_dist").value], 0.5));
+}
+
+TEST(HandControllerTest, ValidateInputNamesTheBadField) {
+  const HandRig rig = HandRig::parse(kFingerRig, "finger3");
+  ControllerInput in;
+  EXPECT_EQ(validate_input(in, rig), "");
+  in.trigger = 1.5;
+  EXPECT_NE(validate_input(in, rig).find("trigger"), std::string::npos);
+  in.trigger = std::nan("");
+  EXPECT_NE(validate_input(in, rig).find("trigger"), std::string::npos);
+  in.trigger = 0.5;
+  in.X_WorldPalm.translation().x() = std::numeric_limits<double>::infinity();
+  EXPECT_NE(validate_input(in, rig).find("pose"), std::string::npos);
+  in.X_WorldPalm = Eigen::Isometry3d::Identity();
+  in.X_WorldPalm.linear() *= 1.1;
+  EXPECT_NE(validate_input(in, rig).find("rotation"), std::string::npos);
+  in.X_WorldPalm = Eigen::Isometry3d::Identity();
+  in.curls = {0.5, 0.5};
+  EXPECT_NE(validate_input(in, rig).find("curls"), std::string::npos);
+  in.curls = {-0.1};
+  EXPECT_NE(validate_input(in, rig).find("curls[0]"), std::string::npos);
+}
+
+// Selection by surface distance prefers the big object whose surface is near the palm sphere's
+// centre; the paper's origin distance prefers the small object whose centre is nearer.
+TEST(HandControllerTest, SelectsNearestBySurfaceOrOrigin) {
+  auto rig = finger_rig();  // selection sphere centre at (0.07, 0, 0), radius 0.2
+  BoxScene big({0.1, 0.1, 0.1}, {0.07, 0, -0.12});   // surface 2 cm below the centre, origin 12 cm
+  BoxScene small({0.01, 0.01, 0.01}, {0.07, 0.1, 0}); // surface 9 cm away, origin 10 cm
+  big.view.id = ObjectId(1);
+  small.view.id = ObjectId(2);
+  const ObjectView views[] = {big.view, small.view};
+  GraspSettings surface;
+  HandController a(rig, surface);
+  a.tick(at_identity(0), kDt, views);
+  EXPECT_EQ(a.state().selected, ObjectId(1));
+  GraspSettings origin;
+  origin.selection = SelectionMetric::kOrigin;
+  HandController b(rig, origin);
+  b.tick(at_identity(0), kDt, views);
+  EXPECT_EQ(b.state().selected, ObjectId(2));
+}
+
+// Places the open finger so its capsules lie flat at `height` above z = 0 (palm frame turned
+// by nothing: the finger runs along +x).
+ControllerInput hovering(double capsule_axis_z, double y = 0) {
+  ControllerInput in;
+  in.X_WorldPalm.translation() = Eigen::Vector3d(0, y, capsule_axis_z);
+  return in;
+}
+
+// ND on a box top face: the finger hovers g above it, so ND = g exactly for both capsules,
+// the exact signed distance is g, and HandError = (|g| + |g|) / 2.
+TEST(HandControllerTest, NdOnBoxFaceIsTheGap) {
+  BoxScene box({0.2, 0.2, 0.02}, {0.1, 0, -0.02});  // top face at z = 0
+  for (double g : {0.003, 0.0005, -0.002}) {
+    HandController hand(finger_rig(), {});
+    hand.tick(hovering(0.005 + g), kDt, {});  // capsule radius 5 mm above the face
+    const GraspMetrics m = hand.measure(box.view);
+    ASSERT_EQ(m.capsules.size(), 2u);
+    for (const CapsuleMetric& c : m.capsules) {
+      EXPECT_TRUE(c.hit) << g;
+      EXPECT_NEAR(c.nd, g, 1e-9) << g;
+      EXPECT_NEAR(c.signed_distance, g, 1e-9) << g;
+    }
+    EXPECT_NEAR(m.hand_error_mm, 1000 * std::abs(g), 1e-6);
+  }
+}
+
+// Beyond the sweep (|CTc - Sp| + nd_sweep_beyond = 15 mm from Sp) there is no hit, kept apart from zero.
+TEST(HandControllerTest, NoHitIsNotZero) {
+  BoxScene box({0.2, 0.2, 0.02}, {0.1, 0, -0.02});
+  HandController hand(finger_rig(), {});
+  hand.tick(hovering(0.005 + 0.012), kDt, {});  // Sp 17 mm above: the 1 mm sphere would touch after 16 mm
+  const GraspMetrics m = hand.measure(box.view);
+  for (const CapsuleMetric& c : m.capsules) {
+    EXPECT_FALSE(c.hit);
+    EXPECT_NEAR(c.signed_distance, 0.012, 1e-9);
+  }
+  EXPECT_EQ(m.hand_error_mm, 0.0);
+}
+
+// ND on a sphere of radius R, off-axis by d: the 1 mm sweep sphere touches when its centre is at
+// |c| = R + rs, and the impact point is c R / (R + rs).
+TEST(HandControllerTest, NdOnSphereMatchesAnalyticSweep) {
+  const double R = 0.04, rs = 0.001, r = 0.005, g = 0.002, d = 0.01;
+  auto model = make_object_model("sphere", testing::uv_sphere_mesh(R, 180, 360), 1.0, "test");
+  // Tessellation: vertices on the sphere, so the surface lies within R (1 - cos(pi/180)) inside it.
+  const double kTessellation = R * (1 - std::cos(std::numbers::pi / 180)) * 2;
+  ObjectView view{ObjectId(1), Eigen::Isometry3d::Identity(), model.get()};
+  HandController hand(finger_rig(), {});
+  // Middle capsule's Sp at x = 0.04 + 0.03 + 0.0125 = 0.0825; put it over the sphere centre line at y = d.
+  ControllerInput in = hovering(R + g + r, d);
+  in.X_WorldPalm.translation().x() = -0.0825;
+  hand.tick(in, kDt, {});
+  const GraspMetrics m = hand.measure(view);
+  const double sp_z = R + g + r;
+  const double c_z = std::sqrt((R + rs) * (R + rs) - d * d);
+  const double ip_z = c_z * R / (R + rs);
+  const double expected = (sp_z - ip_z) - r;
+  ASSERT_TRUE(m.capsules[0].hit);
+  EXPECT_NEAR(m.capsules[0].nd, expected, kTessellation);
+}
+
+// ND on a cylinder lying along x, with the finger along its axis on top: ND = g.
+TEST(HandControllerTest, NdOnCylinderTopLineIsTheGap) {
+  const double R = 0.03, r = 0.005, g = 0.0015;
+  TriangleMesh cyl = testing::cylinder_mesh(R, 0.1, 64);
+  for (auto& v : cyl.vertices) v = Eigen::Vector3d(v.z(), v.y(), v.x());  // axis along x, a vertex line on top
+  for (auto& t : cyl.triangles) std::swap(t[1], t[2]);  // the axis swap mirrors: restore outward winding
+  auto model = make_object_model("cylinder", cyl, 1.0, "test");
+  ObjectView view{ObjectId(1), Eigen::Isometry3d::Identity(), model.get()};
+  HandController hand(finger_rig(), {});
+  ControllerInput in = hovering(R + g + r);
+  in.X_WorldPalm.translation().x() = -0.09;
+  hand.tick(in, kDt, {});
+  const GraspMetrics m = hand.measure(view);
+  for (const CapsuleMetric& c : m.capsules) {
+    ASSERT_TRUE(c.hit);
+    EXPECT_NEAR(c.nd, g, 1e-9);
+  }
+}
+
+// The grasp rule (f_mid | palm) & f_dist turns true once both capsules touch a plate; the
+// grasp tick records metrics and contacts, and opening the hand releases.
+TEST(HandControllerTest, GraspsAndReleases) {
+  BoxScene plate({0.1, 0.1, 0.01}, {0.1, 0, -0.025});
+  HandController hand(finger_rig(), {});
+  bool grasped = false;
+  for (int t = 0; t < 120 && !grasped; ++t) grasped = hand.tick(at_identity(1.0), kDt, {&plate.view, 1}).grasped;
+  ASSERT_TRUE(grasped);
+  EXPECT_EQ(hand.state().grasped, plate.view.id);
+  ASSERT_TRUE(hand.grasp_metrics().has_value());
+  ASSERT_FALSE(hand.contacts().empty());
+  for (const Contact& c : hand.contacts()) {
+    // Contacts lie on the plate's top face (z = -0.015), normal up.
+    EXPECT_NEAR(c.p_WorldContact.z(), -0.015, 1e-9);
+    EXPECT_NEAR(c.n_World.z(), 1.0, 1e-9);
+  }
+  const HandTickEvents ev = hand.tick(at_identity(0.0), kDt, {&plate.view, 1});
+  EXPECT_TRUE(ev.released);
+  EXPECT_EQ(ev.released_object, plate.view.id);
+  EXPECT_FALSE(hand.state().grasped.valid());
+}
+
+}  // namespace
+}  // namespace telegrasp::sim

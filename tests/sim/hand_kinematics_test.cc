@@ -1,0 +1,89 @@
+// Tests forward kinematics against hand-computed chains, and that the left hand mirrors the right.
+#include "telegrasp/sim/hand_kinematics.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace telegrasp::sim {
+namespace {
+
+constexpr double kExact = 1e-12;
+
+// A planar two-phalanx finger on the palm at (0.04, 0.01, 0), flexing about +y.
+constexpr const char* kTwoLinkRig = R"(
+name: "two_link"
+palm_selection_sphere { radius: 0.1 }
+palm_contact_volume { radius: 0.01 }
+palm_half_extent { x: 0.04 y: 0.04 z: 0.01 }
+default_max_speed_deg_s: 90
+nd_sweep_beyond: 0.01
+fingers {
+  name: "f"
+  phalanges { name: "f_mid" rest { translation { x: 0.04 y: 0.01 } }
+    joint { axis { y: 1 } open_deg: 0 closed_deg: 90 min_deg: 0 max_deg: 90 } length: 0.03
+    capsule { a { } b { x: 0.03 } radius: 0.005 ctc { x: 0.015 z: -0.005 } sp { x: 0.015 } } }
+  phalanges { name: "f_dist" rest { translation { x: 0.03 } }
+    joint { axis { y: 1 } open_deg: 0 closed_deg: 60 min_deg: 0 max_deg: 60 } length: 0.02
+    capsule { a { } b { x: 0.015 } radius: 0.005 ctc { x: 0.0075 z: -0.005 } sp { x: 0.0075 } } }
+}
+grasp_rule { members: ["f_mid"] }
+)";
+
+TEST(HandKinematicsTest, PlanarChainMatchesHandComputedTip) {
+  const HandRig rig = HandRig::parse(kTwoLinkRig, "inline");
+  for (double a : {0.0, 0.3, 1.1}) {
+    for (double b : {0.0, 0.5, 1.0}) {
+      std::vector<Eigen::Isometry3d> X;
+      forward_kinematics(rig, {a, b}, &X);
+      const Eigen::Vector3d tip = X[1] * Eigen::Vector3d(0.02, 0, 0);
+      // Flexion about +y turns +x toward -z.
+      const Eigen::Vector3d expected(0.04 + 0.03 * std::cos(a) + 0.02 * std::cos(a + b), 0.01,
+                                     -(0.03 * std::sin(a) + 0.02 * std::sin(a + b)));
+      EXPECT_LT((tip - expected).norm(), kExact) << a << " " << b;
+    }
+  }
+}
+
+TEST(HandKinematicsTest, TargetAngleInterpolatesAndClamps) {
+  const HandRig rig = HandRig::parse(kTwoLinkRig, "inline");
+  const PhalanxSpec& p = rig.phalanges()[0];
+  EXPECT_DOUBLE_EQ(target_angle(p, 0.0), 0.0);
+  EXPECT_DOUBLE_EQ(target_angle(p, 0.5), std::numbers::pi / 4);
+  EXPECT_DOUBLE_EQ(target_angle(p, 1.0), std::numbers::pi / 2);
+}
+
+// Left hand mirrors right: every phalanx frame of the shipped left hand is the reflection
+// M X M (M = diag(1, -1, 1)) of the right hand's at the same joint angles.
+TEST(HandKinematicsTest, LeftHandMirrorsRight) {
+  const HandRig right = HandRig::load(HandRig::builtin_path("human_right"));
+  const HandRig left = HandRig::load(HandRig::builtin_path("human_left"));
+  const HandRig mirrored = right.mirrored();
+  ASSERT_EQ(left.phalanges().size(), right.phalanges().size());
+  EXPECT_EQ(left.side(), HandSide::kLeft);
+  EXPECT_EQ(mirrored.side(), HandSide::kLeft);
+  const Eigen::Matrix4d M = Eigen::Vector4d(1, -1, 1, 1).asDiagonal();
+  for (double u : {0.0, 0.35, 0.8, 1.0}) {
+    std::vector<double> q;
+    for (const auto& p : right.phalanges()) q.push_back(target_angle(p, u));
+    std::vector<Eigen::Isometry3d> XR, XL, XM;
+    forward_kinematics(right, q, &XR);
+    forward_kinematics(left, q, &XL);
+    forward_kinematics(mirrored, q, &XM);
+    for (std::size_t i = 0; i < q.size(); ++i) {
+      const Eigen::Matrix4d expected = M * XR[i].matrix() * M;
+      EXPECT_LT((XL[i].matrix() - expected).cwiseAbs().maxCoeff(), 1e-9) << left.phalanges()[i].name << " u=" << u;
+      EXPECT_LT((XM[i].matrix() - expected).cwiseAbs().maxCoeff(), 1e-12) << left.phalanges()[i].name << " u=" << u;
+    }
+  }
+  // Capsules and metric points mirror too.
+  for (PhalanxId id : right.capsule_phalanges()) {
+    const auto& r = *right.phalanges()[id.value].capsule;
+    const auto& l = *left.phalanges()[id.value].capsule;
+    EXPECT_LT((l.p_PhalanxCTc - Eigen::Vector3d(r.p_PhalanxCTc.x(), -r.p_PhalanxCTc.y(), r.p_PhalanxCTc.z())).norm(), kExact);
+  }
+}
+
+}  // namespace
+}  // namespace telegrasp::sim

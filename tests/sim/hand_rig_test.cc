@@ -1,0 +1,95 @@
+// Tests HandRig: loading the shipped rigs, and errors that name the file and field.
+#include "telegrasp/sim/hand_rig.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+namespace telegrasp::sim {
+namespace {
+
+std::string read_builtin(const std::string& name) {
+  std::ifstream in(HandRig::builtin_path(name));
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// Replaces the first occurrence of `from` in `text`.
+std::string edit(std::string text, const std::string& from, const std::string& to) {
+  const auto pos = text.find(from);
+  EXPECT_NE(pos, std::string::npos) << "test setup: '" << from << "' not in the rig text";
+  if (pos != std::string::npos) text.replace(pos, from.size(), to);
+  return text;
+}
+
+std::string error_of(const std::string& text) {
+  try {
+    HandRig::parse(text, "bad.textproto");
+  } catch (const RigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(HandRigTest, LoadsHumanRightHand) {
+  const HandRig rig = HandRig::load(HandRig::builtin_path("human_right"));
+  EXPECT_EQ(rig.name(), "human_right");
+  EXPECT_EQ(rig.side(), HandSide::kRight);
+  ASSERT_EQ(rig.fingers().size(), 5u);
+  EXPECT_EQ(rig.phalanges().size(), 15u);
+  // Capsules on the middle and distal phalanx of every finger.
+  EXPECT_EQ(rig.capsule_phalanges().size(), 10u);
+  for (const auto& f : rig.fingers()) {
+    EXPECT_FALSE(rig.phalanges()[f.phalanges[0].value].capsule.has_value()) << f.name;
+    EXPECT_TRUE(rig.phalanges()[f.phalanges[1].value].capsule.has_value()) << f.name;
+    EXPECT_TRUE(rig.phalanges()[f.phalanges[2].value].capsule.has_value()) << f.name;
+  }
+  // The paper's rule: (thumb_mid | thumb_dist | palm) & (index_mid | index_dist | middle_mid | middle_dist).
+  ASSERT_EQ(rig.grasp_rule().size(), 2u);
+  EXPECT_EQ(rig.grasp_rule()[0].size(), 3u);
+  EXPECT_TRUE(rig.grasp_rule()[0][2].palm);
+  EXPECT_EQ(rig.grasp_rule()[1].size(), 4u);
+  EXPECT_EQ(rig.grasp_rule()[1][0].phalanx, rig.find("index_mid"));
+}
+
+TEST(HandRigTest, GripperStatesItsOwnGraspGroups) {
+  const HandRig rig = HandRig::load(HandRig::builtin_path("gripper3"));
+  EXPECT_EQ(rig.fingers().size(), 3u);
+  EXPECT_EQ(rig.capsule_phalanges().size(), 6u);
+  ASSERT_EQ(rig.grasp_rule().size(), 2u);
+  EXPECT_EQ(rig.grasp_rule()[0][0].phalanx, rig.find("a_mid"));
+  EXPECT_EQ(rig.grasp_rule()[1][3].phalanx, rig.find("c_dist"));
+}
+
+TEST(HandRigTest, MissingFileNamesThePath) {
+  try {
+    HandRig::load("/nonexistent/rig.textproto");
+    FAIL() << "expected RigError";
+  } catch (const RigError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/rig.textproto"), std::string::npos) << e.what();
+  }
+}
+
+TEST(HandRigTest, SyntaxErrorNamesTheLine) {
+  const std::string msg = error_of("name: \"x\"\nfingers { name: }\n");
+  EXPECT_NE(msg.find("bad.textproto"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("line 2"), std::string::npos) << msg;
+}
+
+TEST(HandRigTest, BadFieldsAreNamed) {
+  const std::string good = read_builtin("human_right");
+  ASSERT_EQ(error_of(good), "");
+  // The index finger is fingers[1]; its middle phalanx is phalanges[1].
+  EXPECT_NE(error_of(edit(good, "radius: 0.0085", "radius: 0")).find("fingers[1].phalanges[1].capsule.radius"), std::string::npos);
+  EXPECT_NE(error_of(edit(good, "\"index_dist\", \"middle_mid\"", "\"index_nail\", \"middle_mid\"")).find("unknown phalanx 'index_nail'"), std::string::npos);
+  EXPECT_NE(error_of(edit(good, "open_deg: 0 closed_deg: 45 min_deg: -10", "open_deg: -20 closed_deg: 45 min_deg: -10")).find("fingers[0].phalanges[0].joint.open_deg"), std::string::npos);
+  EXPECT_NE(error_of(edit(good, "name: \"human_right\"", "name: \"\"")).find("field 'name'"), std::string::npos);
+  EXPECT_NE(error_of(edit(good, "name: \"index_mid\"", "name: \"thumb_mid\"")).find("duplicate phalanx name 'thumb_mid'"), std::string::npos);
+  EXPECT_NE(error_of(edit(good, "palm_selection_sphere { center { x: 0.035 y: 0 z: -0.04 } radius: 0.09 }", "")).find("palm_selection_sphere.radius"), std::string::npos);
+  EXPECT_NE(error_of(edit(good, "joint { axis { x: 0 y: 1 z: 0 }", "joint { axis { x: 0 y: 0 z: 0 }")).find("joint.axis"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace telegrasp::sim

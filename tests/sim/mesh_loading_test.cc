@@ -1,0 +1,347 @@
+// Tests clean_mesh (welding, degenerate/duplicate removal, winding), load_mesh_file on small
+// OBJ/STL/PLY files and broken files, is_mesh_file, and loading a YCB scan when present.
+#include "telegrasp/sim/mesh_loading.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <string>
+#include <utility>
+
+namespace telegrasp::sim {
+namespace {
+
+namespace fs = std::filesystem;
+
+Eigen::Vector3d triangle_normal(const TriangleMesh& mesh, std::size_t t) {
+  const auto& tri = mesh.triangles[t];
+  return (mesh.vertices[tri[1]] - mesh.vertices[tri[0]])
+      .cross(mesh.vertices[tri[2]] - mesh.vertices[tri[0]]);
+}
+
+/// Every undirected edge is used by exactly two triangles, once in each direction.
+bool is_closed_and_consistent(const TriangleMesh& mesh) {
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
+  for (const auto& t : mesh.triangles) {
+    for (int k = 0; k < 3; ++k) ++directed[{t[k], t[(k + 1) % 3]}];
+  }
+  for (const auto& [edge, count] : directed) {
+    if (count != 1) return false;
+    const auto reverse = directed.find({edge.second, edge.first});
+    if (reverse == directed.end() || reverse->second != 1) return false;
+  }
+  return true;
+}
+
+/// A fresh directory under the system temp dir, removed when the fixture ends.
+class TempDir {
+ public:
+  TempDir() {
+    static std::atomic<int> counter{0};
+    std::random_device random;
+    path_ = fs::temp_directory_path() / ("telegrasp_mesh_loading_test_" + std::to_string(random()) +
+                                         "_" + std::to_string(counter++));
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  /// Writes `contents` to a file named `name` in the directory and returns its path.
+  std::string write(const std::string& name, const std::string& contents) const {
+    const fs::path file = path_ / name;
+    std::ofstream out(file, std::ios::binary);
+    out << contents;
+    return file.string();
+  }
+
+ private:
+  fs::path path_;
+};
+
+/// Expects load_mesh_file(path) to throw MeshLoadError naming the path (and `fragment`).
+void expect_load_error(const std::string& path, const std::string& fragment = "") {
+  try {
+    (void)load_mesh_file(path);
+    ADD_FAILURE() << "no MeshLoadError for " << path;
+  } catch (const MeshLoadError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find(path), std::string::npos) << message;
+    EXPECT_NE(message.find(fragment), std::string::npos) << message;
+  }
+}
+
+// ------------------------------------------------------------------ clean_mesh
+
+TEST(CleanMesh, WeldsCoincidentVertices) {
+  // Two triangles of a unit square, stored as a soup: the shared edge's corners are doubled.
+  TriangleMesh soup;
+  soup.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  soup.triangles = {{0, 1, 2}, {3, 4, 5}};
+  MeshCleanReport report;
+  const TriangleMesh cleaned = clean_mesh(soup, 1e-7, &report);
+  EXPECT_EQ(report.vertices_welded, 2u);
+  EXPECT_EQ(report.degenerate_dropped, 0u);
+  EXPECT_EQ(report.duplicate_dropped, 0u);
+  ASSERT_EQ(cleaned.vertices.size(), 4u);
+  ASSERT_EQ(cleaned.triangles.size(), 2u);
+  EXPECT_EQ(cleaned.triangles[1][0], cleaned.triangles[0][0]);
+  EXPECT_EQ(cleaned.triangles[1][1], cleaned.triangles[0][2]);
+}
+
+TEST(CleanMesh, WeldsWithinToleranceOnly) {
+  TriangleMesh mesh;
+  mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1e-8, 1e-8, 0}, {1, 0, 1e-6}, {0, 0, 1}};
+  mesh.triangles = {{0, 1, 2}, {3, 4, 5}};
+  MeshCleanReport report;
+  const TriangleMesh cleaned = clean_mesh(mesh, 1e-7, &report);
+  EXPECT_EQ(report.vertices_welded, 1u);  // 3 -> 0 (1.4e-8 away); 4 stays (1e-6 away from 1).
+  EXPECT_EQ(cleaned.vertices.size(), 5u);
+  EXPECT_EQ(cleaned.triangles.size(), 2u);
+}
+
+TEST(CleanMesh, TriangleCollapsingAfterWeldIsDropped) {
+  // Triangle 1 has two corners 1e-9 apart: welding makes it repeat an index.
+  TriangleMesh mesh;
+  mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1e-9, 0}, {0, 0, 1}};
+  mesh.triangles = {{0, 1, 2}, {1, 3, 4}};
+  MeshCleanReport report;
+  const TriangleMesh cleaned = clean_mesh(mesh, 1e-7, &report);
+  EXPECT_EQ(report.vertices_welded, 1u);
+  EXPECT_EQ(report.degenerate_dropped, 1u);
+  ASSERT_EQ(cleaned.triangles.size(), 1u);
+  EXPECT_EQ(cleaned.vertices.size(), 3u);  // Vertex 4 is no longer referenced.
+}
+
+TEST(CleanMesh, ZeroAreaTriangleIsDropped) {
+  TriangleMesh mesh;
+  mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 1, 0}};
+  mesh.triangles = {{0, 1, 2}, {0, 1, 3}};
+  MeshCleanReport report;
+  const TriangleMesh cleaned = clean_mesh(mesh, 1e-7, &report);
+  EXPECT_EQ(report.degenerate_dropped, 1u);
+  EXPECT_EQ(cleaned.triangles.size(), 1u);
+  EXPECT_EQ(cleaned.vertices.size(), 3u);
+}
+
+TEST(CleanMesh, DuplicateIsDropped) {
+  TriangleMesh mesh;
+  mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  mesh.triangles = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {0, 1, 3}};
+  MeshCleanReport report;
+  const TriangleMesh cleaned = clean_mesh(mesh, 1e-7, &report);
+  EXPECT_EQ(report.duplicate_dropped, 2u);  // Rotations of the first triangle (same winding).
+  EXPECT_EQ(report.degenerate_dropped, 0u);
+  ASSERT_EQ(cleaned.triangles.size(), 2u);
+  EXPECT_GT(triangle_normal(cleaned, 0).z(), 0);
+}
+
+TEST(CleanMesh, BackToBackFinFromWeldIsDropped) {
+  // Like the YCB scans where two sheets touch: after welding 4 onto 3, triangles (0,1,3) and
+  // (1,0,4) have the same corners with opposite winding, a zero-volume fin; both are dropped.
+  TriangleMesh mesh;
+  mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0.5, 1, 0}, {0.5, 1, 0}};
+  mesh.triangles = {{0, 2, 1}, {0, 1, 3}, {1, 0, 4}};
+  MeshCleanReport report;
+  const TriangleMesh cleaned = clean_mesh(mesh, 1e-7, &report);
+  EXPECT_EQ(report.vertices_welded, 1u);
+  EXPECT_EQ(report.degenerate_dropped, 2u);
+  EXPECT_EQ(report.duplicate_dropped, 0u);
+  ASSERT_EQ(cleaned.triangles.size(), 1u);
+  EXPECT_EQ(cleaned.vertices.size(), 3u);
+  EXPECT_GT(triangle_normal(cleaned, 0).z(), 0);  // The surviving triangle keeps its winding.
+}
+
+TEST(CleanMesh, KeepsWinding) {
+  // A tetrahedron soup (12 corners) welds to 4 vertices with every normal unchanged.
+  const std::vector<Eigen::Vector3d> corners{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  const std::vector<std::array<std::uint32_t, 3>> faces{{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  TriangleMesh soup;
+  for (const auto& f : faces) {
+    const auto base = static_cast<std::uint32_t>(soup.vertices.size());
+    for (std::uint32_t c : f) soup.vertices.push_back(corners[c]);
+    soup.triangles.push_back({base, base + 1, base + 2});
+  }
+  MeshCleanReport report;
+  const TriangleMesh cleaned = clean_mesh(soup, 1e-7, &report);
+  EXPECT_EQ(report.vertices_welded, 8u);
+  ASSERT_EQ(cleaned.vertices.size(), 4u);
+  ASSERT_EQ(cleaned.triangles.size(), 4u);
+  EXPECT_TRUE(is_closed_and_consistent(cleaned));
+  for (std::size_t t = 0; t < 4; ++t) {
+    EXPECT_TRUE(
+        triangle_normal(cleaned, t).normalized().isApprox(triangle_normal(soup, t).normalized()));
+  }
+}
+
+TEST(CleanMesh, LargeSoupWeldsQuickly) {
+  // 200 x 200 grid of quads as a soup (240k corners): a quadratic weld would take minutes.
+  const int n = 200;
+  TriangleMesh soup;
+  auto corner = [](int i, int j) { return Eigen::Vector3d(0.001 * i, 0.001 * j, 0); };
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      for (const auto& tri : {std::array{corner(i, j), corner(i + 1, j), corner(i + 1, j + 1)},
+                              std::array{corner(i, j), corner(i + 1, j + 1), corner(i, j + 1)}}) {
+        const auto base = static_cast<std::uint32_t>(soup.vertices.size());
+        for (const auto& p : tri) soup.vertices.push_back(p);
+        soup.triangles.push_back({base, base + 1, base + 2});
+      }
+    }
+  }
+  MeshCleanReport report;
+  const TriangleMesh cleaned = clean_mesh(soup, 1e-7, &report);
+  EXPECT_EQ(cleaned.vertices.size(), std::size_t((n + 1) * (n + 1)));
+  EXPECT_EQ(cleaned.triangles.size(), std::size_t(2 * n * n));
+  EXPECT_EQ(report.vertices_welded, soup.vertices.size() - cleaned.vertices.size());
+}
+
+// ------------------------------------------------------------------ load_mesh_file
+
+TEST(LoadMeshFile, ObjCubeWithQuads) {
+  TempDir dir;
+  const std::string path = dir.write("cube.obj",
+                                     "# unit cube\n"
+                                     "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                     "v 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                                     "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\n"
+                                     "f 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n");
+  const TriangleMesh mesh = load_mesh_file(path);
+  EXPECT_EQ(mesh.vertices.size(), 8u);
+  EXPECT_EQ(mesh.triangles.size(), 12u);
+  EXPECT_TRUE(is_closed_and_consistent(mesh));
+  EXPECT_TRUE(mesh.max_corner().isApprox(Eigen::Vector3d(1, 1, 1)));
+}
+
+TEST(LoadMeshFile, AsciiStlTetrahedron) {
+  TempDir dir;
+  auto facet = [](const char* a, const char* b, const char* c) {
+    return std::string("facet normal 0 0 0\nouter loop\nvertex ") + a + "\nvertex " + b +
+           "\nvertex " + c + "\nendloop\nendfacet\n";
+  };
+  const char *o = "0 0 0", *x = "0.1 0 0", *y = "0 0.1 0", *z = "0 0 0.1";
+  const std::string path =
+      dir.write("tet.stl", "solid tet\n" + facet(o, y, x) + facet(o, x, z) + facet(o, z, y) +
+                               facet(x, y, z) + "endsolid tet\n");
+  const TriangleMesh mesh = load_mesh_file(path);
+  EXPECT_EQ(mesh.vertices.size(), 4u);  // 12 corners in the file, welded by clean_mesh.
+  EXPECT_EQ(mesh.triangles.size(), 4u);
+  EXPECT_TRUE(is_closed_and_consistent(mesh));
+}
+
+TEST(LoadMeshFile, AsciiPlyPyramidWithQuadBase) {
+  TempDir dir;
+  const std::string path =
+      dir.write("pyramid.ply",
+                "ply\nformat ascii 1.0\nelement vertex 5\n"
+                "property float x\nproperty float y\nproperty float z\n"
+                "element face 5\nproperty list uchar int vertex_indices\nend_header\n"
+                "0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.5 1\n"
+                "4 0 3 2 1\n3 0 1 4\n3 1 2 4\n3 2 3 4\n3 3 0 4\n");
+  const TriangleMesh mesh = load_mesh_file(path);
+  EXPECT_EQ(mesh.vertices.size(), 5u);
+  EXPECT_EQ(mesh.triangles.size(), 6u);
+  EXPECT_TRUE(is_closed_and_consistent(mesh));
+}
+
+TEST(LoadMeshFile, ColladaNodeTransformsAreApplied) {
+  // One tetrahedron instanced by two nodes; the second node translates it by (2, 0, 0.5).
+  // Z_UP is kept as written (no conversion to assimp's Y-up).
+  TempDir dir;
+  const std::string path = dir.write("two_tets.dae", R"(<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><unit name="meter" meter="1"/><up_axis>Z_UP</up_axis></asset>
+  <library_geometries><geometry id="tet"><mesh>
+    <source id="pos">
+      <float_array id="pos-array" count="12">0 0 0 0.1 0 0 0 0.1 0 0 0 0.1</float_array>
+      <technique_common><accessor source="#pos-array" count="4" stride="3">
+        <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+      </accessor></technique_common>
+    </source>
+    <vertices id="vtx"><input semantic="POSITION" source="#pos"/></vertices>
+    <triangles count="4"><input semantic="VERTEX" source="#vtx" offset="0"/>
+      <p>0 2 1 0 1 3 0 3 2 1 2 3</p></triangles>
+  </mesh></geometry></library_geometries>
+  <library_visual_scenes><visual_scene id="scene">
+    <node id="a"><matrix>1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1</matrix><instance_geometry url="#tet"/></node>
+    <node id="b"><matrix>1 0 0 2 0 1 0 0 0 0 1 0.5 0 0 0 1</matrix><instance_geometry url="#tet"/></node>
+  </visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#scene"/></scene>
+</COLLADA>
+)");
+  const TriangleMesh mesh = load_mesh_file(path);
+  EXPECT_EQ(mesh.vertices.size(), 8u);
+  EXPECT_EQ(mesh.triangles.size(), 8u);
+  EXPECT_TRUE(is_closed_and_consistent(mesh));
+  EXPECT_LT((mesh.min_corner() - Eigen::Vector3d(0, 0, 0)).norm(), 1e-6);
+  EXPECT_LT((mesh.max_corner() - Eigen::Vector3d(2.1, 0.1, 0.6)).norm(), 1e-6);
+}
+
+TEST(LoadMeshFile, MissingFileNamesPath) {
+  TempDir dir;
+  const std::string path =
+      (fs::temp_directory_path() / "telegrasp_no_such_dir" / "missing.obj").string();
+  expect_load_error(path, "file not found");
+}
+
+TEST(LoadMeshFile, EmptyFileNamesPath) {
+  TempDir dir;
+  expect_load_error(dir.write("empty.obj", ""));
+  expect_load_error(dir.write("empty.stl", ""));
+}
+
+TEST(LoadMeshFile, PointsAndLinesOnlyHaveNoTriangleMesh) {
+  TempDir dir;
+  expect_load_error(dir.write("points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\np 1 2 3\n"), "no triangle");
+  expect_load_error(dir.write("lines.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2 3\n"), "no triangle");
+}
+
+TEST(LoadMeshFile, GarbageWithMeshExtensionNamesPath) {
+  TempDir dir;
+  const std::string garbage = "this is not a mesh\n\x01\x02 just some text { } ;;\n";
+  expect_load_error(dir.write("garbage.ply", garbage));
+  expect_load_error(dir.write("garbage.stl", garbage));
+  expect_load_error(dir.write("garbage.obj", garbage));
+}
+
+TEST(LoadMeshFile, NonFiniteCoordinateNamesPath) {
+  TempDir dir;
+  expect_load_error(dir.write("nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n"), "non-finite");
+}
+
+TEST(IsMeshFile, AsksAssimp) {
+  EXPECT_TRUE(is_mesh_file("/some/where/object.ply"));
+  EXPECT_TRUE(is_mesh_file("object.OBJ"));
+  EXPECT_TRUE(is_mesh_file("object.stl"));
+  EXPECT_FALSE(is_mesh_file("notes.txt"));
+  EXPECT_FALSE(is_mesh_file("README"));
+}
+
+TEST(LoadMeshFile, YcbTomatoSoupCan) {
+  const fs::path ycb_dir = TELEGRASP_YCB_DIR;
+  const fs::path file = ycb_dir / "005_tomato_soup_can.ply";
+  if (!fs::exists(file)) GTEST_SKIP() << "YCB meshes not found at " << ycb_dir << "; skipping";
+  const TriangleMesh mesh = load_mesh_file(file.string());
+  ASSERT_GT(mesh.triangles.size(), 9000u);
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const auto& tri = mesh.triangles[t];
+    ASSERT_TRUE(tri[0] != tri[1] && tri[1] != tri[2] && tri[2] != tri[0]) << "triangle " << t;
+    ASSERT_GE(0.5 * triangle_normal(mesh, t).norm(), 1e-14) << "triangle " << t;
+  }
+  EXPECT_TRUE(is_closed_and_consistent(mesh));
+  const Eigen::Vector3d size = mesh.max_corner() - mesh.min_corner();
+  EXPECT_NEAR(size.x(), 0.068, 0.002);
+  EXPECT_NEAR(size.y(), 0.068, 0.002);
+  EXPECT_NEAR(size.z(), 0.102, 0.002);
+}
+
+}  // namespace
+}  // namespace telegrasp::sim

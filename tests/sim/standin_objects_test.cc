@@ -1,0 +1,141 @@
+// Tests the protocol object table, find_protocol_object and the procedural stand-in meshes
+// (closed, consistently outward, sized to the table extent, resting on z = 0, centred in x/y).
+#include "telegrasp/sim/standin_objects.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cctype>
+#include <map>
+#include <set>
+#include <utility>
+
+#include "telegrasp/sim/mass_properties.h"
+#include "telegrasp/sim/mesh_loading.h"
+
+namespace telegrasp::sim {
+namespace {
+
+/// Every directed edge appears once and its reverse once (closed, consistently oriented).
+bool is_watertight_and_consistent(const TriangleMesh& mesh, std::string* problem) {
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
+  for (const auto& t : mesh.triangles) {
+    for (int k = 0; k < 3; ++k) ++directed[{t[k], t[(k + 1) % 3]}];
+  }
+  for (const auto& [edge, count] : directed) {
+    const auto reverse = directed.find({edge.second, edge.first});
+    if (count != 1 || reverse == directed.end() || reverse->second != 1) {
+      *problem = "edge " + std::to_string(edge.first) + "-" + std::to_string(edge.second) +
+                 " used " + std::to_string(count) + " times, reverse " +
+                 std::to_string(reverse == directed.end() ? 0 : reverse->second);
+      return false;
+    }
+  }
+  return true;
+}
+
+TEST(ProtocolObjects, ThirtyInProtocolOrder) {
+  const auto& objects = protocol_objects();
+  ASSERT_EQ(objects.size(), 30u);
+  EXPECT_EQ(objects.front().id, "002");
+  EXPECT_EQ(objects.front().name, "002_master_chef_can");
+  EXPECT_EQ(objects.back().id, "072-a");
+  EXPECT_EQ(objects.back().name, "072-a_toy_airplane");
+  EXPECT_EQ(objects[19].name, "032_knife");
+  EXPECT_TRUE(objects[5].extent.isApprox(Eigen::Vector3d(0.086, 0.086, 0.034)));  // 007 tuna
+  std::set<std::string> ids;
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const ProtocolObject& o = objects[i];
+    EXPECT_TRUE(ids.insert(o.id).second) << o.id;
+    EXPECT_EQ(o.name.rfind(o.id + "_", 0), 0u) << o.name;
+    if (i > 0) {
+      EXPECT_LT(objects[i - 1].id, o.id);  // Ids ascend in protocol order.
+    }
+    EXPECT_GT(o.mass_kg, 0.005) << o.name;
+    EXPECT_LT(o.mass_kg, 2.0) << o.name;
+    EXPECT_TRUE((o.extent.array() > 0.01).all() && (o.extent.array() < 0.4).all()) << o.name;
+  }
+}
+
+TEST(ProtocolObjects, FindByIdFullNameShortName) {
+  const auto by_id = find_protocol_object("032");
+  ASSERT_TRUE(by_id.has_value());
+  EXPECT_EQ(by_id->name, "032_knife");
+  const auto by_name = find_protocol_object("005_Tomato_Soup_Can");
+  ASSERT_TRUE(by_name.has_value());
+  EXPECT_EQ(by_name->id, "005");
+  const auto by_short = find_protocol_object("power_drill");
+  ASSERT_TRUE(by_short.has_value());
+  EXPECT_EQ(by_short->id, "035");
+  const auto airplane = find_protocol_object("072-A");
+  ASSERT_TRUE(airplane.has_value());
+  EXPECT_EQ(airplane->name, "072-a_toy_airplane");
+  EXPECT_EQ(find_protocol_object("knife")->id, "032");
+  EXPECT_FALSE(find_protocol_object("099_rubber_duck").has_value());
+  EXPECT_FALSE(find_protocol_object("").has_value());
+  EXPECT_FALSE(find_protocol_object("03").has_value());
+}
+
+class StandinMeshTest : public ::testing::TestWithParam<std::size_t> {};
+
+TEST_P(StandinMeshTest, ClosedOutwardAndSizedToExtent) {
+  const ProtocolObject& object = protocol_objects()[GetParam()];
+  const TriangleMesh mesh = make_standin_mesh(object);
+  SCOPED_TRACE(object.name);
+
+  EXPECT_GE(mesh.triangles.size(), 500u);
+  EXPECT_LE(mesh.triangles.size(), 10000u);
+  for (const auto& t : mesh.triangles) {
+    for (std::uint32_t v : t) ASSERT_LT(v, mesh.vertices.size());
+  }
+  std::string problem;
+  EXPECT_TRUE(is_watertight_and_consistent(mesh, &problem)) << problem;
+
+  // Nothing for clean_mesh to remove: no slivers below its area limit, no duplicates.
+  MeshCleanReport report;
+  const TriangleMesh cleaned = clean_mesh(mesh, 1e-9, &report);
+  EXPECT_EQ(report.vertices_welded, 0u);
+  EXPECT_EQ(report.degenerate_dropped, 0u);
+  EXPECT_EQ(report.duplicate_dropped, 0u);
+
+  const MassProperties props = compute_mass_properties(mesh);
+  EXPECT_GT(props.volume, 0.0);
+  EXPECT_LT(props.volume, object.extent.prod() * (1 + 1e-9));
+
+  const Eigen::Vector3d lo = mesh.min_corner(), hi = mesh.max_corner();
+  EXPECT_LT(((hi - lo) - object.extent).cwiseAbs().maxCoeff(), 1e-3);
+  EXPECT_NEAR(lo.z(), 0.0, 1e-12);
+  EXPECT_NEAR(0.5 * (lo.x() + hi.x()), 0.0, 1e-3);
+  EXPECT_NEAR(0.5 * (lo.y() + hi.y()), 0.0, 1e-3);
+  EXPECT_TRUE((props.centroid.array() > lo.array()).all() &&
+              (props.centroid.array() < hi.array()).all());
+}
+
+INSTANTIATE_TEST_SUITE_P(AllProtocolObjects, StandinMeshTest, ::testing::Range<std::size_t>(0, 30),
+                         [](const ::testing::TestParamInfo<std::size_t>& info) {
+                           std::string name = protocol_objects()[info.param].name;
+                           for (char& c : name) {
+                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+                           }
+                           return name;
+                         });
+
+TEST(StandinMesh, BoxFacesHaveShortEdges) {
+  const TriangleMesh mesh = make_standin_mesh(*find_protocol_object("cracker_box"));
+  double longest = 0;
+  for (const auto& t : mesh.triangles) {
+    for (int k = 0; k < 3; ++k)
+      longest = std::max(longest, (mesh.vertices[t[k]] - mesh.vertices[t[(k + 1) % 3]]).norm());
+  }
+  EXPECT_LE(longest, 0.0101);
+}
+
+TEST(StandinMesh, UnknownObjectGetsABoxOfItsExtent) {
+  const ProtocolObject custom{"900", "900_custom", {0.05, 0.04, 0.03}, 0.1};
+  const TriangleMesh mesh = make_standin_mesh(custom);
+  EXPECT_NEAR(compute_mass_properties(mesh).volume, 0.05 * 0.04 * 0.03, 1e-12);
+}
+
+}  // namespace
+}  // namespace telegrasp::sim

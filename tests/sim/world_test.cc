@@ -1,0 +1,163 @@
+// Tests World: objects resting under physics, attach on grasp, release with the hand's velocity,
+// frame-consistent contacts, input rejection and bit-identical reruns.
+#include "telegrasp/sim/world.h"
+
+#include "telegrasp/sim/scripted_operator.h"
+#include "test_meshes.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+namespace telegrasp::sim {
+namespace {
+
+std::shared_ptr<const HandRig> human_right() {
+  static auto rig = std::make_shared<const HandRig>(HandRig::load(HandRig::builtin_path("human_right")));
+  return rig;
+}
+
+ObjectModelPtr standin(const std::string& name) { return make_standin_model(*find_protocol_object(name)); }
+
+TEST(WorldTest, ObjectRestsOnTheTable) {
+  World world;
+  auto box = make_object_model("box", testing::box_mesh({0.03, 0.05, 0.08}), 0.4, "test");
+  const ObjectId id = world.add_object(box, World::resting_pose(*box, 0.4, 0.0, 0.3));
+  const double z0 = world.object_pose(id).translation().z();
+  for (int i = 0; i < 90; ++i) world.step();
+  EXPECT_NEAR(world.object_pose(id).translation().z(), 0.08, 1e-3) << "rests on its face on the table top z = 0";
+  EXPECT_NEAR(z0, 0.08, 1e-3);
+  EXPECT_LT(world.object_velocity(id).norm(), 1e-3);
+}
+
+// Drives the hand to the planned grasp pose of `id` and squeezes until the world reports a grasp.
+// Returns the grasp event.
+std::optional<GraspEvent> grasp(World& world, HandId hand, ObjectId id) {
+  const GraspPlan plan = plan_grasp(*human_right(), {}, world.object_model(id), world.object_pose(id), world.dt());
+  EXPECT_TRUE(plan.predicted_grasp);
+  ControllerInput in;
+  in.X_WorldPalm = plan.X_WorldPalm;
+  for (int t = 0; t < 90; ++t) {
+    in.trigger = std::min(1.0, t / 30.0);
+    EXPECT_EQ(world.set_input(hand, in), "");
+    world.step();
+    for (const GraspEvent& e : world.events())
+      if (e.kind == GraspEvent::Kind::kGrasp) return e;
+  }
+  return std::nullopt;
+}
+
+TEST(WorldTest, ReleaseCarriesTheHandVelocity) {
+  World world;
+  const ObjectId can = world.add_object(standin("005_tomato_soup_can"), World::resting_pose(*standin("005_tomato_soup_can"), 0.45, 0.0, 0.0));
+  const HandId hand = world.add_hand(human_right());
+  for (int i = 0; i < 30; ++i) world.step();
+  ASSERT_TRUE(grasp(world, hand, can).has_value());
+  EXPECT_EQ(world.holder(can), hand);
+  // Move the hand at a constant velocity (no rotation), then open it.
+  const Eigen::Vector3d v(0.3, -0.1, 0.5);
+  ControllerInput in;
+  in.X_WorldPalm = world.hand(hand).state().X_WorldPalm;
+  in.trigger = 1.0;
+  for (int t = 0; t < 10; ++t) {
+    in.X_WorldPalm.translation() += v * world.dt();
+    world.set_input(hand, in);
+    world.step();
+    ASSERT_EQ(world.holder(can), hand) << "held while moving";
+  }
+  const Eigen::Isometry3d held_pose = world.object_pose(can);
+  EXPECT_LT((held_pose.translation() - world.hand(hand).grasped_object_pose()->translation()).norm(), 1e-9) << "follows the hand exactly";
+  in.trigger = 0.0;
+  in.X_WorldPalm.translation() += v * world.dt();
+  world.set_input(hand, in);
+  world.step();
+  ASSERT_EQ(world.events().size(), 1u);
+  const GraspEvent& release = world.events()[0];
+  EXPECT_EQ(release.kind, GraspEvent::Kind::kRelease);
+  EXPECT_LT((release.v_WorldObject - v).norm(), 1e-9);
+  EXPECT_FALSE(world.holder(can).valid());
+  // After one physics step the object flies with that velocity plus one step of gravity.
+  const Eigen::Vector3d expected = v + Eigen::Vector3d(0, 0, -9.81) * world.dt();
+  EXPECT_LT((world.object_velocity(can) - expected).norm(), 1e-6);
+}
+
+// Object-local contacts, transformed by the object's pose, give the world contacts, and normals
+// are unit and point out of the object.
+TEST(WorldTest, ObjectLocalContactsMatchWorldContacts) {
+  World world;
+  auto model = standin("010_potted_meat_can");
+  const ObjectId id = world.add_object(model, World::resting_pose(*model, 0.42, 0.05, 1.234));
+  const HandId hand = world.add_hand(human_right());
+  for (int i = 0; i < 30; ++i) world.step();
+  const auto event = grasp(world, hand, id);
+  ASSERT_TRUE(event.has_value());
+  ASSERT_FALSE(event->contacts.empty());
+  const Eigen::Isometry3d X_WorldObject = *world.hand(hand).grasped_object_pose();
+  for (const Contact& c : event->contacts) {
+    EXPECT_LT((X_WorldObject * c.p_ObjectContact - c.p_WorldContact).norm(), 1e-12);
+    EXPECT_LT((X_WorldObject.linear() * c.n_Object - c.n_World).norm(), 1e-12);
+    EXPECT_NEAR(c.n_World.norm(), 1.0, 1e-9);
+    // The contact lies on the surface.
+    EXPECT_LT(std::abs(model->distance.signed_distance(c.p_ObjectContact)), 1e-9);
+  }
+  // Still consistent after the hand has carried the object somewhere else.
+  ControllerInput in;
+  in.X_WorldPalm = world.hand(hand).state().X_WorldPalm;
+  in.X_WorldPalm.translation() += Eigen::Vector3d(0.05, 0.02, 0.1);
+  in.X_WorldPalm.linear() = Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix() * in.X_WorldPalm.linear();
+  in.trigger = 1.0;
+  world.set_input(hand, in);
+  world.step();
+  const Eigen::Isometry3d moved = world.object_pose(id);
+  for (const Contact& c : world.hand(hand).contacts()) EXPECT_LT((moved * c.p_ObjectContact - c.p_WorldContact).norm(), 1e-9);
+}
+
+TEST(WorldTest, RejectsBadInputAndKeepsThePreviousOne) {
+  World world;
+  const HandId hand = world.add_hand(human_right());
+  ControllerInput good;
+  good.X_WorldPalm.translation() = Eigen::Vector3d(0.1, 0.2, 0.3);
+  good.trigger = 0.5;
+  ASSERT_EQ(world.set_input(hand, good), "");
+  ControllerInput bad = good;
+  bad.X_WorldPalm.translation().x() = std::nan("");
+  EXPECT_NE(world.set_input(hand, bad), "");
+  bad = good;
+  bad.trigger = 2.0;
+  EXPECT_NE(world.set_input(hand, bad).find("trigger"), std::string::npos);
+  world.step();
+  EXPECT_EQ(world.hand(hand).state().X_WorldPalm.translation(), good.X_WorldPalm.translation());
+  EXPECT_EQ(world.hand(hand).state().trigger, 0.5);
+  EXPECT_THROW(world.set_input(HandId(5), good), std::out_of_range);
+}
+
+// One scripted trial, recorded tick by tick.
+std::vector<double> run_recorded_trial() {
+  World world;
+  auto model = standin("006_mustard_bottle");
+  const ObjectId id = world.add_object(model, World::resting_pose(*model, 0.45, -0.03, 0.7));
+  const HandId hand = world.add_hand(human_right());
+  ScriptedOperator op(human_right(), skill_profile("inexperienced"), 42);
+  op.begin(*model, world.object_pose(id), Eigen::Isometry3d(Eigen::Translation3d(0.15, -0.2, 0.3)), world.time());
+  std::vector<double> trace;
+  while (!op.done() && world.time() < 15) {
+    world.set_input(hand, op.next(world.time(), world.holder(id) == hand));
+    world.step();
+    const auto& s = world.hand(hand).state();
+    trace.insert(trace.end(), s.q.begin(), s.q.end());
+    const Eigen::Isometry3d X = world.object_pose(id);
+    trace.insert(trace.end(), X.data(), X.data() + 16);
+  }
+  return trace;
+}
+
+TEST(WorldTest, EqualInputsGiveBitIdenticalRuns) {
+  const std::vector<double> a = run_recorded_trial();
+  const std::vector<double> b = run_recorded_trial();
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_GT(a.size(), 1000u);
+  EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)), 0);
+}
+
+}  // namespace
+}  // namespace telegrasp::sim
