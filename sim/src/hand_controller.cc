@@ -49,6 +49,7 @@ HandController::HandController(std::shared_ptr<const HandRig> rig, GraspSettings
   for (std::size_t i = 0; i < n; ++i) state_.q[i] = rig_->phalanges()[i].open;
   state_.blocked.assign(n, 0);
   state_.blocked_angle.assign(n, 0.0);
+  touch_cache_.assign(n, {});
   forward_kinematics(*rig_, state_.q, &state_.X_PalmPhalanx);
   // reach_[k][m] bounds |p - o_k| for any point p of capsule m's segment and the origin o_k of an
   // ancestor joint k, in any configuration (triangle inequality along the chain).
@@ -68,11 +69,6 @@ HandController::Capsule HandController::capsule_in_object(PhalanxId id, const Ei
   const CapsuleSpec& c = *rig_->phalanges()[id.value].capsule;
   const Eigen::Isometry3d X_ObjectPhalanx = X_ObjectPalm * state_.X_PalmPhalanx[id.value];
   return {X_ObjectPhalanx * c.p_PhalanxA, X_ObjectPhalanx * c.p_PhalanxB, c.radius};
-}
-
-double HandController::capsule_gap(PhalanxId id, const Eigen::Isometry3d& X_ObjectPalm, const ObjectModel& model) const {
-  const Capsule c = capsule_in_object(id, X_ObjectPalm);
-  return model.distance.capsule_signed_distance(c.a, c.b, c.radius);
 }
 
 void HandController::select_object(std::span<const ObjectView> objects) {
@@ -97,6 +93,56 @@ void HandController::select_object(std::span<const ObjectView> objects) {
   state_.selected = best_id;
 }
 
+bool HandController::depenetrate(int finger, const Eigen::Isometry3d& X_ObjectPalm, const ObjectView& object) {
+  const auto& chain = rig_->fingers()[finger].phalanges;
+  const auto& specs = rig_->phalanges();
+  const MeshDistance& mesh = object.model->distance;
+  const double tol = settings_.contact_tolerance;
+  std::vector<double> q0;
+  for (PhalanxId id : chain) q0.push_back(state_.q[id.value]);
+  // Extends the whole finger a fraction s of the way to its extension limit (past the open pose
+  // if need be, as a finger pressed onto a surface bends back).
+  auto set_opening = [&](double s) {
+    for (std::size_t k = 0; k < chain.size(); ++k) {
+      const int id = chain[k].value;
+      const double extended = specs[id].closed >= specs[id].open ? specs[id].min : specs[id].max;
+      state_.q[id] = q0[k] + s * (extended - q0[k]);
+      const int parent = specs[id].parent;
+      state_.X_PalmPhalanx[id] = phalanx_pose(specs[id], parent < 0 ? Eigen::Isometry3d::Identity() : state_.X_PalmPhalanx[parent], state_.q[id]);
+    }
+  };
+  auto penetrating = [&]() {
+    for (PhalanxId id : chain) {
+      if (!specs[id.value].capsule) continue;
+      const Capsule c = capsule_in_object(id, X_ObjectPalm);
+      if (mesh.capsule_overlaps(c.a, c.b, c.radius)) return true;
+    }
+    return false;
+  };
+  set_opening(1.0);
+  if (penetrating()) {  // the hand itself is in the object: extending the finger cannot help
+    set_opening(0.0);
+    return false;
+  }
+  double lo = 0.0, hi = 1.0;  // penetrating at lo, free at hi
+  for (int i = 0; i < 24; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    set_opening(mid);
+    (penetrating() ? lo : hi) = mid;
+  }
+  set_opening(hi);
+  // The capsules now resting on the surface are blocked there.
+  for (PhalanxId id : chain) {
+    if (!specs[id.value].capsule) continue;
+    const Capsule c = capsule_in_object(id, X_ObjectPalm);
+    const bool touching = mesh.capsule_overlaps(c.a, c.b, c.radius + tol);
+    state_.blocked[id.value] = touching;
+    state_.blocked_angle[id.value] = state_.q[id.value];
+    touch_cache_[id.value] = {touching ? object.id : ObjectId(), c.a, c.b};
+  }
+  return true;
+}
+
 void HandController::step_finger(int finger, double u, double dt, const ObjectView* object,
                                  const Eigen::Isometry3d& X_ObjectPalm) {
   const auto& chain = rig_->fingers()[finger].phalanges;
@@ -108,17 +154,31 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
   // hysteresis against rounding) or overlapping (discrete).
   const double release_gap = precise ? 2.0 * tol : 0.0;
 
-  auto closing_sign = [&](int k) { return specs[chain[k].value].closed >= specs[chain[k].value].open ? 1.0 : -1.0; };
+  auto closing_sign = [&](std::size_t k) { return specs[chain[k].value].closed >= specs[chain[k].value].open ? 1.0 : -1.0; };
 
-  // Interaction manager: unblock phalanges whose hand opened past them or whose overlap ended.
+  // Interaction manager: unblock phalanges whose hand opened past them or whose contact ended.
+  // A capsule whose pose in the object frame is bit-identical to its last check (e.g. while the
+  // object is held) is still touching and needs no query.
+  bool pushed_in = false;
   for (std::size_t k = 0; k < n; ++k) {
     const int id = chain[k].value;
     if (!state_.blocked[id]) continue;
     const double target = target_angle(specs[id], u);
     bool unblock = (target - state_.blocked_angle[id]) * closing_sign(k) < -1e-12 || object == nullptr;
-    if (!unblock && specs[id].capsule) unblock = capsule_gap(chain[k], X_ObjectPalm, *object->model) > release_gap;
+    if (!unblock && specs[id].capsule) {
+      const Capsule c = capsule_in_object(chain[k], X_ObjectPalm);
+      TouchCache& cache = touch_cache_[id];
+      if (cache.object == object->id && cache.a == c.a && cache.b == c.b) continue;
+      const MeshDistance& mesh = object->model->distance;
+      unblock = !mesh.capsule_overlaps(c.a, c.b, c.radius + release_gap);
+      cache = {unblock ? ObjectId() : object->id, c.a, c.b};
+      // Precise mode: the hand's own motion pushed this finger into the object.
+      if (!unblock && precise && mesh.capsule_overlaps(c.a, c.b, c.radius - tol)) pushed_in = true;
+    }
     if (unblock) state_.blocked[id] = 0;
   }
+  if (pushed_in && depenetrate(finger, X_ObjectPalm, *object)) return;
+
   int held = -1;  // the most distal blocked phalanx: it and every joint proximal to it hold
   for (std::size_t k = 0; k < n; ++k)
     if (state_.blocked[chain[k].value]) held = static_cast<int>(k);
@@ -153,19 +213,20 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
     if (specs[chain[m].value].capsule && !state_.blocked[chain[m].value]) affected.push_back(m);
 
   if (!closing || object == nullptr || affected.empty()) { set_fraction(1.0); return; }
-  const ObjectModel& model = *object->model;
+  const MeshDistance& mesh = object->model->distance;
 
   auto block = [&](std::size_t m) {
     const int id = chain[m].value;
     state_.blocked[id] = 1;
     state_.blocked_angle[id] = state_.q[id];
+    touch_cache_[id].object = ObjectId();  // checked afresh next tick
   };
 
   if (!precise) {  // the paper's discrete test: move, then test overlap
     set_fraction(1.0);
     for (std::size_t m : affected) {
       const Capsule c = capsule_in_object(chain[m], X_ObjectPalm);
-      if (model.distance.capsule_overlaps(c.a, c.b, c.radius)) block(m);
+      if (mesh.capsule_overlaps(c.a, c.b, c.radius)) block(m);
     }
     return;
   }
@@ -184,13 +245,17 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
     for (std::size_t m : affected) {
       const Capsule c = capsule_in_object(chain[m], X_ObjectPalm);
       const double horizon = rate[m] * (1.0 - s) + tol;  // beyond it, no contact this step
-      const SegmentQuery hit = model.distance.closest_to_segment(c.a, c.b, c.radius + horizon);
-      if (!hit.found) {
-        if (model.distance.contains(c.a)) { block(m); touched = true; }  // already deep inside
+      if (!mesh.capsule_overlaps(c.a, c.b, c.radius + horizon)) continue;  // free for the rest of the step
+      const SegmentQuery hit = mesh.closest_to_segment(c.a, c.b, c.radius + horizon);
+      const bool inside = !hit.found || hit.distance == 0 || (hit.point_on_segment - hit.point_on_mesh).dot(hit.normal) < 0;
+      const double gap = inside ? -c.radius - (hit.found ? hit.distance : kInf) : hit.distance - c.radius;
+      if (s == 0 && gap < -tol) {  // pushed in by the hand's motion before the fingers moved
+        set_fraction(0.0);
+        if (depenetrate(finger, X_ObjectPalm, *object)) return;
+        block(m);
+        touched = true;
         continue;
       }
-      const bool inside = hit.distance == 0 || (hit.point_on_segment - hit.point_on_mesh).dot(hit.normal) < 0;
-      const double gap = inside ? -hit.distance - c.radius : hit.distance - c.radius;
       if (gap <= tol) { block(m); touched = true; continue; }
       ds = std::min(ds, (gap - 0.5 * tol) / rate[m]);
     }
@@ -256,24 +321,25 @@ HandTickEvents HandController::tick(const ControllerInput& input, double dt, std
   if (object) {
     const PalmSphere& palm = rig_->palm_contact();
     const Eigen::Vector3d c = X_ObjectPalm * palm.p_PalmCenter;
-    state_.palm_contact = object->model->distance.closest_point(c, palm.radius).found ||
-                          object->model->distance.contains(c);
+    const ObjectModel& model = *object->model;
+    const bool near_box = (c - c.cwiseMax(model.p_ObjectMin).cwiseMin(model.p_ObjectMax)).norm() <= palm.radius;
+    state_.palm_contact = near_box && (model.distance.closest_point(c, palm.radius).found || model.distance.contains(c));
   }
   const bool rule = object && evaluate_grasp_rule(rig_->grasp_rule(), state_.blocked, state_.palm_contact);
   if (rule && !state_.grasped.valid()) {
     state_.grasped = object->id;
     state_.X_PalmObject = state_.X_WorldPalm.inverse() * object->X_WorldObject;
+    held_model_ = object->model;
     metrics_ = measure(*object);
-    refresh_contacts(*object->model);
+    hold_metrics_ = metrics_;
+    hold_metrics_q_ = state_.q;
+    refresh_contacts();
     events.grasped = true;
   } else if (!rule && state_.grasped.valid()) {
     events.released = true;
     events.released_object = state_.grasped;
     state_.grasped = ObjectId();
     metrics_.reset();
-    contacts_.clear();
-  } else if (state_.grasped.valid() && contacts_q_ != state_.q) {
-    refresh_contacts(*object->model);
   }
   return events;
 }
@@ -284,8 +350,17 @@ ObjectId HandController::release() {
   state_.selected = ObjectId();
   std::fill(state_.blocked.begin(), state_.blocked.end(), 0);
   metrics_.reset();
-  contacts_.clear();
   return released;
+}
+
+std::optional<GraspMetrics> HandController::hold_metrics() const {
+  const auto X_WorldObject = grasped_object_pose();
+  if (!X_WorldObject) return std::nullopt;
+  if (hold_metrics_q_ != state_.q) {
+    hold_metrics_ = measure({state_.grasped, *X_WorldObject, held_model_});
+    hold_metrics_q_ = state_.q;
+  }
+  return hold_metrics_;
 }
 
 std::optional<Eigen::Isometry3d> HandController::grasped_object_pose() const {
@@ -325,17 +400,19 @@ GraspMetrics HandController::measure(const ObjectView& object) const {
   return out;
 }
 
-void HandController::refresh_contacts(const ObjectModel& model) {
+void HandController::refresh_contacts() const {
+  const ObjectModel& model = *held_model_;
   contacts_.clear();
   contacts_q_ = state_.q;
   const Eigen::Isometry3d X_ObjectPalm = state_.X_PalmObject.inverse();
+  const auto metrics = hold_metrics();
   auto add = [&](PhalanxId id, const Eigen::Vector3d& p_Object, const Eigen::Vector3d& n_Object) {
     Contact c;
     c.phalanx = id;
     c.p_ObjectContact = p_Object;
     c.n_Object = n_Object;
-    if (metrics_ && id.valid())
-      for (const CapsuleMetric& m : metrics_->capsules)
+    if (metrics && id.valid())
+      for (const CapsuleMetric& m : metrics->capsules)
         if (m.phalanx == id) { c.nd = m.nd; c.nd_hit = m.hit; }
     contacts_.push_back(c);
   };
@@ -352,9 +429,10 @@ void HandController::refresh_contacts(const ObjectModel& model) {
 }
 
 std::vector<Contact> HandController::contacts() const {
-  std::vector<Contact> out = contacts_;
   const auto X_WorldObject = grasped_object_pose();
   if (!X_WorldObject) return {};
+  if (contacts_q_ != state_.q) refresh_contacts();
+  std::vector<Contact> out = contacts_;
   for (Contact& c : out) {
     c.p_WorldContact = *X_WorldObject * c.p_ObjectContact;
     c.n_World = X_WorldObject->linear() * c.n_Object;

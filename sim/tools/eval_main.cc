@@ -118,9 +118,19 @@ struct Record {
   double speed_scale = 1;
   int trial = 0, attempts = 0;
   bool grasped = false, held_after_lift = false;
-  double time_to_grasp_s = 0, hand_error_mm = 0;
+  double time_to_grasp_s = 0;
+  double hand_error_mm = 0;               // the settled hand while held (end of the hold)
   std::vector<CapsuleRecord> capsules;
+  double grasp_tick_hand_error_mm = 0;    // the tick the grasp rule turned true
+  std::vector<CapsuleRecord> grasp_tick_capsules;
 };
+
+std::vector<CapsuleRecord> capsule_records(const GraspMetrics& metrics, const HandRig& rig) {
+  std::vector<CapsuleRecord> out;
+  for (const CapsuleMetric& m : metrics.capsules)
+    out.push_back({rig.phalanges()[m.phalanx.value].name, m.hit, m.blocked, 1000 * m.nd, 1000 * m.signed_distance});
+  return out;
+}
 
 struct Config {
   ClosingMode mode;
@@ -161,19 +171,34 @@ Record run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRi
     const ControllerInput in = op.next(world.time(), grasped);
     world.set_input(hand, in);
     world.step();
-    if (op.phase() == OperatorPhase::kHold) z_held = std::max(z_held, world.object_pose(object).translation().z());
+    if (op.phase() == OperatorPhase::kHold) {
+      z_held = std::max(z_held, world.object_pose(object).translation().z());
+      if (const auto held = world.hand(hand).hold_metrics()) {
+        rec.hand_error_mm = held->hand_error_mm;
+        rec.capsules = capsule_records(*held, *rig);
+      }
+    }
     for (const GraspEvent& e : world.events()) {
       if (e.kind != GraspEvent::Kind::kGrasp || rec.grasped || !e.metrics) continue;
       rec.grasped = true;
       rec.time_to_grasp_s = e.time - t0;
-      rec.hand_error_mm = e.metrics->hand_error_mm;
-      for (const CapsuleMetric& m : e.metrics->capsules)
-        rec.capsules.push_back({rig->phalanges()[m.phalanx.value].name, m.hit, m.blocked, 1000 * m.nd, 1000 * m.signed_distance});
+      rec.grasp_tick_hand_error_mm = e.metrics->hand_error_mm;
+      rec.grasp_tick_capsules = capsule_records(*e.metrics, *rig);
+      rec.hand_error_mm = rec.grasp_tick_hand_error_mm;
+      rec.capsules = rec.grasp_tick_capsules;
     }
   }
   rec.attempts = op.attempts();
   rec.held_after_lift = op.held_after_lift() && z_held - z0 > 0.8 * ScriptedOperator::kLiftHeight;
   return rec;
+}
+
+json capsule_json(const std::vector<CapsuleRecord>& capsules) {
+  json out = json::array();
+  for (const auto& c : capsules)
+    out.push_back({{"phalanx", c.phalanx}, {"hit", c.hit}, {"blocked", c.blocked},
+                   {"nd_mm", c.hit ? json(c.nd_mm) : json(nullptr)}, {"signed_distance_mm", c.signed_distance_mm}});
+  return out;
 }
 
 double percentile(std::vector<double> v, double p) {
@@ -187,14 +212,17 @@ double percentile(std::vector<double> v, double p) {
 
 json summarize(const std::vector<const Record*>& recs) {
   int grasped = 0, held = 0, capsules = 0, below = 0, blocked_count = 0;
-  double time_sum = 0, he_sum = 0, min_sd = 1e9;
-  std::vector<double> nd_abs;
+  double time_sum = 0, he_sum = 0, he_tick_sum = 0, min_sd = 1e9;
+  std::vector<double> nd_abs, nd_abs_tick;
   for (const Record* r : recs) {
     grasped += r->grasped;
     held += r->held_after_lift;
     if (!r->grasped) continue;
     time_sum += r->time_to_grasp_s;
     he_sum += r->hand_error_mm;
+    he_tick_sum += r->grasp_tick_hand_error_mm;
+    for (const auto& c : r->grasp_tick_capsules)
+      if (c.hit) nd_abs_tick.push_back(std::abs(c.nd_mm));
     for (const auto& c : r->capsules) {
       ++capsules;
       if (c.hit) nd_abs.push_back(std::abs(c.nd_mm));
@@ -218,7 +246,10 @@ json summarize(const std::vector<const Record*>& recs) {
           {"nd_abs_p95_mm", num(percentile(nd_abs, 0.95))},
           {"blocked_capsules", blocked_count},
           {"min_blocked_signed_distance_mm", num(blocked_count ? min_sd : NAN)},
-          {"blocked_below_minus_0_1mm", below}};
+          {"blocked_below_minus_0_1mm", below},
+          {"grasp_tick_hand_error_mean_mm", num(grasped ? he_tick_sum / grasped : NAN)},
+          {"grasp_tick_nd_abs_median_mm", num(percentile(nd_abs_tick, 0.5))},
+          {"grasp_tick_nd_abs_p95_mm", num(percentile(nd_abs_tick, 0.95))}};
 }
 
 std::string fmt(double v, int prec = 2) {
@@ -320,14 +351,13 @@ int main(int argc, char** argv) {
   if (!opt.json_path.empty()) {
     json grasps = json::array();
     for (const Record& r : records) {
-      json caps = json::array();
-      for (const auto& c : r.capsules)
-        caps.push_back({{"phalanx", c.phalanx}, {"hit", c.hit}, {"blocked", c.blocked},
-                        {"nd_mm", c.hit ? json(c.nd_mm) : json(nullptr)}, {"signed_distance_mm", c.signed_distance_mm}});
+      const json caps = capsule_json(r.capsules);
       grasps.push_back({{"object", r.object}, {"trial", r.trial}, {"mode", r.mode}, {"speed_scale", r.speed_scale},
                         {"grasped", r.grasped}, {"held_after_lift", r.held_after_lift}, {"attempts", r.attempts},
                         {"time_to_grasp_s", r.grasped ? json(r.time_to_grasp_s) : json(nullptr)},
-                        {"hand_error_mm", r.grasped ? json(r.hand_error_mm) : json(nullptr)}, {"capsules", caps}});
+                        {"hand_error_mm", r.grasped ? json(r.hand_error_mm) : json(nullptr)}, {"capsules", caps},
+                        {"grasp_tick", {{"hand_error_mm", r.grasped ? json(r.grasp_tick_hand_error_mm) : json(nullptr)},
+                                        {"capsules", capsule_json(r.grasp_tick_capsules)}}}});
     }
     std::ofstream out(opt.json_path);
     out << json{{"grasps", grasps}, {"summary", summaries[0]}, {"summaries", summaries}}.dump(1) << "\n";

@@ -122,8 +122,11 @@ class HandController {
   /// Metrics of the current grasp (taken on the grasp tick), if an object is grasped.
   const std::optional<GraspMetrics>& grasp_metrics() const { return metrics_; }
   /// Contacts of the current grasp at the object's current pose (recomputed in the object frame
-  /// only when the hand's shape changes while holding).
+  /// only when asked after the hand's shape changed while holding).
   std::vector<Contact> contacts() const;
+  /// ND and signed distances of the hand as it is now while holding (the statistics kept while
+  /// the object is held; the grasp tick's are in grasp_metrics()); empty when not holding.
+  std::optional<GraspMetrics> hold_metrics() const;
   /// World pose of the grasped object, if any.
   std::optional<Eigen::Isometry3d> grasped_object_pose() const;
 
@@ -133,19 +136,31 @@ class HandController {
  private:
   struct Capsule;  // a capsule placed in the object frame
   Capsule capsule_in_object(PhalanxId id, const Eigen::Isometry3d& X_ObjectPalm) const;
-  double capsule_gap(PhalanxId id, const Eigen::Isometry3d& X_ObjectPalm, const ObjectModel& model) const;
   void select_object(std::span<const ObjectView> objects);
   void step_finger(int finger, double u, double dt, const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm);
-  void refresh_contacts(const ObjectModel& model);
+  void refresh_contacts() const;
+  // Precise mode: extends a finger the hand pushed into the object until it rests on the surface;
+  // false if even the fully extended finger penetrates (the hand itself is inside).
+  bool depenetrate(int finger, const Eigen::Isometry3d& X_ObjectPalm, const ObjectView& object);
 
   std::shared_ptr<const HandRig> rig_;
   GraspSettings settings_;
   HandState state_;
   std::optional<GraspMetrics> metrics_;
-  std::vector<Contact> contacts_;     // object frame only; world fields filled by contacts()
-  std::vector<double> contacts_q_;  // joint angles the contacts were computed at
+  const ObjectModel* held_model_ = nullptr;
+  // Caches keyed on the joint angles (the hand-object pose is fixed while holding).
+  mutable std::vector<Contact> contacts_;  // object frame only; world fields filled by contacts()
+  mutable std::vector<double> contacts_q_;
+  mutable std::optional<GraspMetrics> hold_metrics_;
+  mutable std::vector<double> hold_metrics_q_;
   // reach_[k][m]: bound on the distance from joint k to any point of capsule m's segment.
   std::vector<std::vector<double>> reach_;
+  // Where each blocked capsule was last found touching (object frame); an identical pose skips the query.
+  struct TouchCache {
+    ObjectId object;
+    Eigen::Vector3d a{0, 0, 0}, b{0, 0, 0};
+  };
+  std::vector<TouchCache> touch_cache_;
 };
 
 }  // namespace telegrasp::sim
