@@ -50,6 +50,7 @@ HandController::HandController(std::shared_ptr<const HandRig> rig, GraspSettings
   state_.blocked.assign(n, 0);
   state_.blocked_angle.assign(n, 0.0);
   touch_cache_.assign(n, {});
+  hint_.assign(n, MeshDistance::kNoHint);
   forward_kinematics(*rig_, state_.q, &state_.X_PalmPhalanx);
   // reach_[k][m] bounds |p - o_k| for any point p of capsule m's segment and the origin o_k of an
   // ancestor joint k, in any configuration (triangle inequality along the chain).
@@ -115,7 +116,7 @@ bool HandController::depenetrate(int finger, const Eigen::Isometry3d& X_ObjectPa
     for (PhalanxId id : chain) {
       if (!specs[id.value].capsule) continue;
       const Capsule c = capsule_in_object(id, X_ObjectPalm);
-      if (mesh.capsule_overlaps(c.a, c.b, c.radius)) return true;
+      if (mesh.capsule_overlaps(c.a, c.b, c.radius, hint_[id.value])) return true;
     }
     return false;
   };
@@ -135,7 +136,7 @@ bool HandController::depenetrate(int finger, const Eigen::Isometry3d& X_ObjectPa
   for (PhalanxId id : chain) {
     if (!specs[id.value].capsule) continue;
     const Capsule c = capsule_in_object(id, X_ObjectPalm);
-    const bool touching = mesh.capsule_overlaps(c.a, c.b, c.radius + tol);
+    const bool touching = mesh.capsule_overlaps(c.a, c.b, c.radius + tol, hint_[id.value]);
     state_.blocked[id.value] = touching;
     state_.blocked_angle[id.value] = state_.q[id.value];
     touch_cache_[id.value] = {touching ? object.id : ObjectId(), c.a, c.b};
@@ -170,10 +171,10 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
       TouchCache& cache = touch_cache_[id];
       if (cache.object == object->id && cache.a == c.a && cache.b == c.b) continue;
       const MeshDistance& mesh = object->model->distance;
-      unblock = !mesh.capsule_overlaps(c.a, c.b, c.radius + release_gap);
+      unblock = !mesh.capsule_overlaps(c.a, c.b, c.radius + release_gap, hint_[id]);
       cache = {unblock ? ObjectId() : object->id, c.a, c.b};
       // Precise mode: the hand's own motion pushed this finger into the object.
-      if (!unblock && precise && mesh.capsule_overlaps(c.a, c.b, c.radius - tol)) pushed_in = true;
+      if (!unblock && precise && mesh.capsule_overlaps(c.a, c.b, c.radius - tol, hint_[id])) pushed_in = true;
     }
     if (unblock) state_.blocked[id] = 0;
   }
@@ -226,7 +227,7 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
     set_fraction(1.0);
     for (std::size_t m : affected) {
       const Capsule c = capsule_in_object(chain[m], X_ObjectPalm);
-      if (mesh.capsule_overlaps(c.a, c.b, c.radius)) block(m);
+      if (mesh.capsule_overlaps(c.a, c.b, c.radius, hint_[chain[m].value])) block(m);
     }
     return;
   }
@@ -245,8 +246,10 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
     for (std::size_t m : affected) {
       const Capsule c = capsule_in_object(chain[m], X_ObjectPalm);
       const double horizon = rate[m] * (1.0 - s) + tol;  // beyond it, no contact this step
-      if (!mesh.capsule_overlaps(c.a, c.b, c.radius + horizon)) continue;  // free for the rest of the step
-      const SegmentQuery hit = mesh.closest_to_segment(c.a, c.b, c.radius + horizon);
+      std::uint32_t& hint = hint_[chain[m].value];
+      if (!mesh.capsule_overlaps(c.a, c.b, c.radius + horizon, hint)) continue;  // free for the rest of the step
+      const SegmentQuery hit = mesh.closest_to_segment(c.a, c.b, c.radius + horizon, hint);
+      if (hit.found) hint = hit.triangle;
       const bool inside = !hit.found || hit.distance == 0 || (hit.point_on_segment - hit.point_on_mesh).dot(hit.normal) < 0;
       const double gap = inside ? -c.radius - (hit.found ? hit.distance : kInf) : hit.distance - c.radius;
       if (s == 0 && gap < -tol) {  // pushed in by the hand's motion before the fingers moved

@@ -649,6 +649,8 @@ MeshDistance::MeshDistance(const TriangleMesh& mesh) {
 
   // ---- Per-triangle data in leaf order. ----
   triangle_ids_ = order;
+  slot_of_triangle_.assign(order.size(), 0);
+  for (std::uint32_t s = 0; s < order.size(); ++s) slot_of_triangle_[order[s]] = s;
   triangles_.resize(nt);
   corners_.resize(nt);
   face_normals_.resize(nt);
@@ -715,6 +717,7 @@ std::size_t MeshDistance::memory_bytes() const {
          triangles_.capacity() * sizeof(triangles_[0]) + face_normals_.capacity() * sizeof(Eigen::Vector3d) +
          vertex_normals_.capacity() * sizeof(Eigen::Vector3d) + edge_normals_.capacity() * sizeof(edge_normals_[0]) +
          corners_.capacity() * sizeof(corners_[0]) + triangle_ids_.capacity() * sizeof(std::uint32_t) +
+         slot_of_triangle_.capacity() * sizeof(std::uint32_t) +
          bounding_spheres_.capacity() * sizeof(bounding_spheres_[0]);
 }
 
@@ -821,12 +824,22 @@ bool MeshDistance::contains(const Eigen::Vector3d& p) const {
 }
 
 MeshDistance::Candidate MeshDistance::nearest_to_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                                         double max_distance) const {
+                                                         double max_distance, std::uint32_t hint) const {
   Candidate best;
   if (nodes_.empty() || !(max_distance >= 0)) return best;
   best.distance_sq = max_distance * max_distance;
   double best_d = max_distance;
   const SegmentProbe seg(a, b);
+  if (hint < slot_of_triangle_.size()) {  // a near triangle first: a tight bound prunes the tree
+    const std::uint32_t s = slot_of_triangle_[hint];
+    double t = 0;
+    Vector3d q;
+    const double d2 = segment_triangle_sq(a, b, seg.d, seg.dd, corners_[s], face_normals_[s], best.distance_sq, t, q);
+    if (d2 <= best.distance_sq) {
+      best = {d2, t, q, s, true};
+      best_d = std::sqrt(d2);
+    }
+  }
   std::uint32_t stack[kStackSize];
   int top = 0;
   std::uint32_t node = 0;
@@ -885,9 +898,9 @@ MeshDistance::Candidate MeshDistance::nearest_to_segment(const Eigen::Vector3d& 
 }
 
 SegmentQuery MeshDistance::closest_to_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                              double max_distance) const {
+                                              double max_distance, std::uint32_t hint) const {
   SegmentQuery out;
-  const Candidate c = nearest_to_segment(a, b, max_distance);
+  const Candidate c = nearest_to_segment(a, b, max_distance, hint);
   if (!c.found) return out;
   out.found = true;
   out.distance = std::sqrt(c.distance_sq);
@@ -900,11 +913,18 @@ SegmentQuery MeshDistance::closest_to_segment(const Eigen::Vector3d& a, const Ei
   return out;
 }
 
-bool MeshDistance::capsule_overlaps(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius) const {
+bool MeshDistance::capsule_overlaps(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius,
+                                    std::uint32_t hint) const {
   if (nodes_.empty()) return false;
   const double r = std::max(radius, 0.0);
   const double r2 = r * r;
   const SegmentProbe seg(a, b);
+  if (hint < slot_of_triangle_.size()) {
+    const std::uint32_t s = slot_of_triangle_[hint];
+    double t = 0;
+    Vector3d q;
+    if (segment_triangle_sq(a, b, seg.d, seg.dd, corners_[s], face_normals_[s], r2, t, q) <= r2) return true;
+  }
   std::uint32_t stack[kStackSize];
   int top = 0;
   std::uint32_t node = 0;

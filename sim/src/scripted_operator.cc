@@ -199,6 +199,7 @@ ControllerInput ScriptedOperator::next(double t, bool grasped) {
       }
       break;
     case OperatorPhase::kLift: {
+      trigger_ = std::min(1.0, trigger_ + dt_ / skill_.squeeze_time);  // firm up the grip
       const double duration = std::max(0.2, 1.5 * kLiftHeight / skill_.reach_speed);
       X_last_ = interpolate(X_start_, X_lifted_, min_jerk((t - t_phase_) / duration));
       if (!grasped) { phase_ = OperatorPhase::kRelease; t_phase_ = t; }
@@ -206,6 +207,7 @@ ControllerInput ScriptedOperator::next(double t, bool grasped) {
       break;
     }
     case OperatorPhase::kHold:
+      trigger_ = std::min(1.0, trigger_ + dt_ / skill_.squeeze_time);
       if (!grasped) { phase_ = OperatorPhase::kRelease; t_phase_ = t; }
       else if (t - t_phase_ >= kHoldTime) { held_after_lift_ = true; phase_ = OperatorPhase::kRelease; t_phase_ = t; }
       break;

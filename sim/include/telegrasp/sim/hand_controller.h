@@ -161,6 +161,8 @@ class HandController {
     Eigen::Vector3d a{0, 0, 0}, b{0, 0, 0};
   };
   std::vector<TouchCache> touch_cache_;
+  // Per phalanx, the triangle last found nearest to its capsule: a search hint (speed only).
+  std::vector<std::uint32_t> hint_;
 };
 
 }  // namespace telegrasp::sim

@@ -58,13 +58,19 @@ class MeshDistance {
   /// Signed distance from `p` to the surface (negative inside).
   [[nodiscard]] double signed_distance(const Eigen::Vector3d& p) const;
 
+  /// "No hint" for the queries below that take a triangle hint.
+  static constexpr std::uint32_t kNoHint = std::numeric_limits<std::uint32_t>::max();
+
   /// Closest pair between segment [a, b] and the surface, searching only within `max_distance`.
+  /// `hint` names a triangle likely to be near (e.g. the previous answer's `triangle`): it only
+  /// tightens the search's first bound, so it changes the speed, never the distance.
   [[nodiscard]] SegmentQuery closest_to_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-      double max_distance = std::numeric_limits<double>::infinity()) const;
+      double max_distance = std::numeric_limits<double>::infinity(), std::uint32_t hint = kNoHint) const;
 
   /// True when the segment [a, b] comes within `radius` of the surface or lies inside the mesh
-  /// (the capsule overlaps the solid). Early-outs; cheaper than closest_to_segment.
-  [[nodiscard]] bool capsule_overlaps(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius) const;
+  /// (the capsule overlaps the solid). Early-outs, trying the `hint` triangle first.
+  [[nodiscard]] bool capsule_overlaps(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius,
+                                      std::uint32_t hint = kNoHint) const;
 
   /// Exact signed distance between the capsule (segment [a, b], `radius`) and the solid:
   /// min over segment points of signed_distance, minus radius. Positive = gap, negative = depth.
@@ -107,7 +113,7 @@ class MeshDistance {
 
   [[nodiscard]] Candidate nearest_to_point(const Eigen::Vector3d& p, double max_distance) const;
   [[nodiscard]] Candidate nearest_to_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                             double max_distance) const;
+                                             double max_distance, std::uint32_t hint = kNoHint) const;
   [[nodiscard]] Eigen::Vector3d feature_normal(std::uint32_t slot, int feature) const;
   [[nodiscard]] bool sweep_forward(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double radius,
                                    double max_length, double& t, std::uint32_t& slot) const;
@@ -127,6 +133,7 @@ class MeshDistance {
   // leaf order; triangle_ids_ maps a slot back to the input triangle index.
   std::vector<std::array<Eigen::Vector3d, 3>> corners_;  // triangle corner positions
   std::vector<std::uint32_t> triangle_ids_;
+  std::vector<std::uint32_t> slot_of_triangle_;  // inverse of triangle_ids_
   std::vector<std::array<double, 4>> bounding_spheres_;  // per triangle: centroid and radius
 };
 

@@ -48,7 +48,8 @@ GraspPlan plan_grasp(const HandRig& rig, const GraspSettings& settings, const Ob
                      const Eigen::Isometry3d& X_WorldObject, double dt);
 
 /// Produces controller inputs for one trial: react, reach to a planned grasp pose with the skill's
-/// pose error, squeeze until grasped (retrying up to 3 times), lift 10 cm, hold 1 s, release.
+/// pose error, squeeze until grasped (retrying up to 3 times), lift 10 cm while squeezing fully,
+/// hold 1 s, release.
 /// Seeded and deterministic; it sees only the object's pose and model and the grasp state.
 class ScriptedOperator {
  public:
