@@ -211,6 +211,29 @@ inline bool solve_quadratic(double A, double B, double C, double& t0, double& t1
   return true;
 }
 
+/// Interval [t0, t1] of the line o + t d (d unit) inside the cylinder of radius sqrt(r2) around
+/// the edge from p to p + e, between the planes through its end points; false if none.
+inline bool line_edge_cylinder(const Vector3d& o, const Vector3d& d, const Vector3d& p, const Vector3d& e, double r2,
+                               double& t0, double& t1) {
+  const double ee = e.squaredNorm();
+  if (!(ee > 0)) return false;
+  const Vector3d m = o - p;
+  const double md = m.dot(e);
+  const double nd = d.dot(e);
+  const double A = ee - nd * nd;
+  if (!(A > 1e-14 * ee)) return false;  // parallel to the edge: the vertex spheres bound the interval
+  if (!solve_quadratic(A, ee * m.dot(d) - nd * md, ee * (m.squaredNorm() - r2) - md * md, t0, t1)) return false;
+  if (nd != 0) {
+    double u0 = -md / nd;
+    double u1 = (ee - md) / nd;
+    if (u0 > u1) std::swap(u0, u1);
+    t0 = std::max(t0, u0);
+    t1 = std::min(t1, u1);
+    return t0 <= t1;
+  }
+  return md >= 0 && md <= ee;
+}
+
 /// Interval [t0, t1] of the line o + t d (d unit) inside the Minkowski sum of the triangle and
 /// a ball of radius r (face slab inside the triangle's prism, edge cylinders, vertex spheres).
 bool line_triangle_minkowski(const Vector3d& o, const Vector3d& d, const Corners& v, const Vector3d& n, double r,
@@ -231,26 +254,9 @@ bool line_triangle_minkowski(const Vector3d& o, const Vector3d& d, const Corners
     if (solve_quadratic(1.0, m.dot(d), m.squaredNorm() - r2, x, y)) add(x, y);
   }
   for (int k = 0; k < 3; ++k) {
-    const Vector3d& p = v[k];
-    const Vector3d e = v[(k + 1) % 3] - p;
-    const double ee = e.squaredNorm();
-    if (!(ee > 0)) continue;
-    const Vector3d m = o - p;
-    const double md = m.dot(e);
-    const double nd = d.dot(e);
-    const double A = ee - nd * nd;
-    if (!(A > 1e-14 * ee)) continue;  // parallel to the edge: the vertex spheres bound the interval
     double x = 0;
     double y = 0;
-    if (!solve_quadratic(A, ee * m.dot(d) - nd * md, ee * (m.squaredNorm() - r2) - md * md, x, y)) continue;
-    if (nd != 0) {
-      double u0 = -md / nd;
-      double u1 = (ee - md) / nd;
-      if (u0 > u1) std::swap(u0, u1);
-      add(std::max(x, u0), std::min(y, u1));
-    } else if (md >= 0 && md <= ee) {
-      add(x, y);
-    }
+    if (line_edge_cylinder(o, d, v[k], v[(k + 1) % 3] - v[k], r2, x, y)) add(x, y);
   }
   if (n.squaredNorm() > 0) {
     const double s0 = n.dot(o - v[0]);
@@ -334,28 +340,9 @@ inline bool sweep_triangle(const Vector3d& o, const Vector3d& d, const Corners& 
     take(c / (-b + std::sqrt(disc)));
   }
   for (int k = 0; k < 3; ++k) {
-    const Vector3d& p = v[k];
-    const Vector3d e = v[(k + 1) % 3] - p;
-    const double ee = e.squaredNorm();
-    if (!(ee > 0)) continue;
-    const Vector3d m = o - p;
-    const double md = m.dot(e);
-    const double nd = d.dot(e);
-    const double A = ee - nd * nd;
-    if (!(A > 1e-14 * ee)) continue;  // parallel to the edge: the vertex spheres are hit first
     double ta = 0;
     double tb = 0;
-    if (!solve_quadratic(A, ee * m.dot(d) - nd * md, ee * (m.squaredNorm() - r2) - md * md, ta, tb)) continue;
-    if (nd != 0) {
-      double u0 = -md / nd;
-      double u1 = (ee - md) / nd;
-      if (u0 > u1) std::swap(u0, u1);
-      ta = std::max(ta, u0);
-      tb = std::min(tb, u1);
-    } else if (md < 0 || md > ee) {
-      continue;
-    }
-    if (ta <= tb && tb >= 0) take(ta);
+    if (line_edge_cylinder(o, d, v[k], v[(k + 1) % 3] - v[k], r2, ta, tb) && tb >= 0) take(ta);
   }
   if (found) t_out = best;
   return found;

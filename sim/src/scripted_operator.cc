@@ -37,6 +37,8 @@ Eigen::Isometry3d palm_frame(const Eigen::Vector3d& x, const Eigen::Vector3d& z)
 struct Trial {
   int blocked = 0;
   bool grasped = false;
+  bool penetrating = false;  // a blocked capsule ended inside the object (the hand started in it)
+  double hand_error_mm = 0;
 };
 
 // Closes the hand at a fixed palm pose on a static object and reports what it grasped.
@@ -55,6 +57,9 @@ Trial close_offline(const std::shared_ptr<const HandRig>& rig, const GraspSettin
     if (hand.state().grasped.valid()) out.grasped = true;
   }
   for (std::uint8_t b : hand.state().blocked) out.blocked += b;
+  const GraspMetrics m = hand.measure(view);
+  out.hand_error_mm = m.hand_error_mm;
+  for (const CapsuleMetric& c : m.capsules) out.penetrating |= c.blocked && c.signed_distance < -0.1e-3;
   return out;
 }
 
@@ -86,7 +91,7 @@ GraspPlan plan_grasp(const HandRig& rig_ref, const GraspSettings& settings, cons
   // centre over the object's centre or shifted along the fingers; palm at or above the top.
   for (const Eigen::Vector3d& fingers : {ax, ay, Eigen::Vector3d(-ax), Eigen::Vector3d(-ay)}) {
     for (double shift : {0.0, -0.015, 0.015}) {
-      for (double clearance : {0.0, 0.01, 0.025}) {
+      for (double clearance : {0.0, 0.01, 0.025, 0.05, 0.08}) {
         GraspPlan plan;
         plan.X_WorldPalm = palm_frame(fingers, up);
         plan.approach_World = -up;
@@ -119,12 +124,13 @@ GraspPlan plan_grasp(const HandRig& rig_ref, const GraspSettings& settings, cons
   }
 
   GraspPlan best = candidates.front();
-  int best_score = -1;
+  double best_score = -1e300;
   for (GraspPlan& plan : candidates) {
     const Trial t = close_offline(rig, settings, model, X_WorldObject, plan.X_WorldPalm, dt);
-    plan.predicted_grasp = t.grasped;
+    plan.predicted_grasp = t.grasped && !t.penetrating;
     plan.predicted_blocked = t.blocked;
-    const int score = (t.grasped ? 1000 : 0) + t.blocked;
+    // A clean grasp first, then the most capsules in contact, then the smallest HandError.
+    const double score = (plan.predicted_grasp ? 1e6 : 0) + (t.penetrating ? 0 : 1e4) + 100.0 * t.blocked - t.hand_error_mm;
     if (score > best_score) { best_score = score; best = plan; }
   }
   return best;

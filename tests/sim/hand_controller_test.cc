@@ -47,6 +47,14 @@ std::shared_ptr<const HandRig> finger_rig() {
   return std::make_shared<const HandRig>(HandRig::parse(kFingerRig, "finger3"));
 }
 
+// The same finger with a grasp rule that only the palm satisfies, so it never attaches the object.
+std::shared_ptr<const HandRig> finger_rig_without_grasp() {
+  std::string text = kFingerRig;
+  const std::string rule = R"(grasp_rule { members: ["f_mid", "f_dist"] })";
+  text.replace(text.find(rule), rule.size(), R"(grasp_rule { members: ["palm"] })");
+  return std::make_shared<const HandRig>(HandRig::parse(text, "finger3_without_grasp"));
+}
+
 // A box object with half extents h centred at p (palm frame = world frame: the hand stays at identity).
 struct BoxScene {
   ObjectModelPtr model;
@@ -187,6 +195,33 @@ TEST(HandControllerTest, UnblocksWhenTheHandOpens) {
   EXPECT_FALSE(hand.state().blocked[2]);
   for (int t = 0; t < 90; ++t) hand.tick(at_identity(0.0), kDt, {&plate.view, 1});
   EXPECT_EQ(hand.state().q[0], 0.0) << "the finger opens fully";
+}
+
+// The hand moves 3 mm further down onto the plate after the finger blocked on it (no grasp, so
+// the plate stays): precise mode bends the finger back so it rests on the surface instead of
+// sinking in; discrete mode sinks.
+TEST(HandControllerTest, FingerPushedIntoObjectBendsBackInPreciseMode) {
+  BoxScene plate({0.1, 0.1, 0.01}, {0.1, 0, -0.025});
+  for (ClosingMode mode : {ClosingMode::kPrecise, ClosingMode::kDiscrete}) {
+    GraspSettings settings;
+    settings.mode = mode;
+    HandController hand(finger_rig_without_grasp(), settings);
+    for (int t = 0; t < 60; ++t) hand.tick(at_identity(1.0), kDt, {&plate.view, 1});
+    ASSERT_TRUE(hand.state().blocked[2]) << "the distal capsule rests on the plate";
+    const double q_before = hand.state().q[0];
+    ControllerInput pushed = at_identity(1.0);
+    pushed.X_WorldPalm.translation().z() = -0.003;
+    hand.tick(pushed, kDt, {&plate.view, 1});
+    const double gap = min_blocked_gap(hand, plate.view);
+    if (mode == ClosingMode::kPrecise) {
+      EXPECT_GE(gap, -1e-9);
+      EXPECT_LE(gap, kTol);
+      EXPECT_LT(hand.state().q[0], q_before) << "the finger extended";
+      EXPECT_TRUE(hand.state().blocked[2]);
+    } else {
+      EXPECT_LT(gap, -1e-3) << "discrete mode leaves the finger sunk by the hand's motion";
+    }
+  }
 }
 
 // A jump of the trigger from 0 to 1 is spread over ticks at max_speed * dt per joint.

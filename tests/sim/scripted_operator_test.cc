@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 namespace telegrasp::sim {
 namespace {
 
@@ -73,11 +75,27 @@ TEST(ScriptedOperatorTest, PerfectOperatorLiftsACan) { EXPECT_TRUE(trial("human_
 TEST(ScriptedOperatorTest, LeftHandLiftsABox) { EXPECT_TRUE(trial("human_left", "004_sugar_box", "perfect")); }
 TEST(ScriptedOperatorTest, GripperLiftsABall) { EXPECT_TRUE(trial("gripper3", "055_baseball", "perfect")); }
 
-// A fast close on the knife (10x the rig's finger speed) grasps it without any blocked phalanx
-// sinking into the blade.
+void fast_close_on(const ObjectModelPtr& knife);
+
+// The built-in knife, and the YCB scan when ../shared/data/ycb is present.
+std::vector<ObjectModelPtr> knives() {
+  std::vector<ObjectModelPtr> out{standin("032_knife")};
+  const std::string scan = std::string(TELEGRASP_YCB_DIR) + "/032_knife.ply";
+  if (std::ifstream(scan).good()) out.push_back(load_object_model(scan));
+  return out;
+}
+
+// A fast close on the knife (10x the rig's finger speed, the trigger jumping to 1) grasps it
+// without any blocked phalanx sinking into the blade.
 TEST(ScriptedOperatorTest, FastCloseOnKnifeDoesNotTunnel) {
+  for (const ObjectModelPtr& knife : knives()) {
+    SCOPED_TRACE(knife->source);
+    fast_close_on(knife);
+  }
+}
+
+void fast_close_on(const ObjectModelPtr& knife) {
   auto hand_rig = rig("human_right");
-  auto knife = standin("032_knife");
   const Eigen::Isometry3d X_WorldObject = World::resting_pose(*knife, 0.45, 0.0, 0.9);
   GraspSettings fast;
   fast.speed_scale = 10.0;

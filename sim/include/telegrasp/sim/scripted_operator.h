@@ -38,12 +38,13 @@ struct GraspPlan {
   Eigen::Isometry3d X_WorldPalm = Eigen::Isometry3d::Identity();  ///< Palm pose when closing.
   Eigen::Vector3d approach_World{0, 0, -1};  ///< Unit direction of the final approach.
   int predicted_blocked = 0;                 ///< Capsules blocked in the offline closing.
-  bool predicted_grasp = false;
+  bool predicted_grasp = false;              ///< The offline closing grasped, with no penetration.
 };
 
 /// Plans a grasp by closing the hand offline (no physics) at candidate poses around the object
-/// (top and side approaches, both axes, offsets) and keeping the best: grasped, most capsules
-/// blocked. Deterministic.
+/// (top and side approaches, both axes, offsets, heights) and keeping the best: a grasp with no
+/// capsule ending inside the object, then the most capsules blocked, then the least HandError.
+/// Deterministic.
 GraspPlan plan_grasp(const HandRig& rig, const GraspSettings& settings, const ObjectModel& model,
                      const Eigen::Isometry3d& X_WorldObject, double dt);
 
