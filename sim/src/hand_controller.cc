@@ -75,6 +75,12 @@ HandController::Capsule HandController::capsule_in_object(PhalanxId id, const Ei
 void HandController::select_object(std::span<const ObjectView> objects) {
   const PalmSphere& sphere = rig_->selection_sphere();
   const Eigen::Vector3d p_WorldCenter = state_.X_WorldPalm * sphere.p_PalmCenter;
+  struct Candidate {
+    ObjectId id;
+    const ObjectModel* model;
+    Eigen::Vector3d p_ObjectCenter;
+  };
+  std::vector<Candidate> candidates;
   double best = kInf;
   ObjectId best_id;
   for (const ObjectView& view : objects) {
@@ -83,13 +89,18 @@ void HandController::select_object(std::span<const ObjectView> objects) {
     // Cheap reject: the sphere misses the object's bounding box.
     const Eigen::Vector3d excess = (c - c.cwiseMax(model.p_ObjectMin).cwiseMin(model.p_ObjectMax));
     if (excess.norm() > sphere.radius) continue;
-    const PointQuery q = model.distance.closest_point(c, sphere.radius);
-    const bool inside = !q.found && model.distance.contains(c);
-    if (!q.found && !inside) continue;
-    double key = 0;
-    if (settings_.selection == SelectionMetric::kOrigin) key = c.norm();
-    else key = q.found ? q.signed_distance : -kInf;
-    if (key < best) { best = key; best_id = view.id; }
+    // Early-out overlap test (a point is a zero-length capsule); distances only to rank.
+    if (!model.distance.capsule_overlaps(c, c, sphere.radius)) continue;
+    candidates.push_back({view.id, &model, c});
+  }
+  if (candidates.size() == 1) {
+    state_.selected = candidates.front().id;
+    return;
+  }
+  for (const Candidate& cand : candidates) {
+    const double key = settings_.selection == SelectionMetric::kOrigin ? cand.p_ObjectCenter.norm()
+                                                                       : cand.model->distance.signed_distance(cand.p_ObjectCenter);
+    if (key < best) { best = key; best_id = cand.id; }
   }
   state_.selected = best_id;
 }
@@ -326,7 +337,7 @@ HandTickEvents HandController::tick(const ControllerInput& input, double dt, std
     const Eigen::Vector3d c = X_ObjectPalm * palm.p_PalmCenter;
     const ObjectModel& model = *object->model;
     const bool near_box = (c - c.cwiseMax(model.p_ObjectMin).cwiseMin(model.p_ObjectMax)).norm() <= palm.radius;
-    state_.palm_contact = near_box && (model.distance.closest_point(c, palm.radius).found || model.distance.contains(c));
+    state_.palm_contact = near_box && model.distance.capsule_overlaps(c, c, palm.radius);
   }
   const bool rule = object && evaluate_grasp_rule(rig_->grasp_rule(), state_.blocked, state_.palm_contact);
   if (rule && !state_.grasped.valid()) {
@@ -393,7 +404,7 @@ GraspMetrics HandController::measure(const ObjectView& object) const {
     // ND = ((Ip - Sp) . (CTc - Sp)) / |CTc - Sp| - |CTc - Sp|
     if (hit.hit) m.nd = (hit.point - sp).dot(dir) - length;
     m.signed_distance = model.distance.capsule_signed_distance(X_ObjectPhalanx * cap.p_PhalanxA,
-                                                              X_ObjectPhalanx * cap.p_PhalanxB, cap.radius);
+                                                              X_ObjectPhalanx * cap.p_PhalanxB, cap.radius, hint_[id.value]);
     finger_count[spec.finger] += 1;
     if (m.hit) finger_sum[spec.finger] += std::abs(m.nd);
     out.capsules.push_back(m);
@@ -422,7 +433,7 @@ void HandController::refresh_contacts() const {
   for (PhalanxId id : rig_->capsule_phalanges()) {
     if (!state_.blocked[id.value]) continue;
     const Capsule c = capsule_in_object(id, X_ObjectPalm);
-    const SegmentQuery q = model.distance.closest_to_segment(c.a, c.b);
+    const SegmentQuery q = model.distance.closest_to_segment(c.a, c.b, kInf, hint_[id.value]);
     add(id, q.point_on_mesh, q.normal);
   }
   if (state_.palm_contact) {

@@ -1072,12 +1072,14 @@ double MeshDistance::min_signed_distance_on_segment(const Eigen::Vector3d& a, co
   return std::min({best_f, f1, f2});
 }
 
-double MeshDistance::capsule_signed_distance(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                             double radius) const {
+double MeshDistance::capsule_signed_distance(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius,
+                                             std::uint32_t hint) const {
   if (nodes_.empty()) return kInf;
-  const Candidate c = nearest_to_segment(a, b, kInf);
-  if (c.distance_sq > 0 && !contains(a)) return std::sqrt(c.distance_sq) - radius;
-  return min_signed_distance_on_segment(a, b, c.segment_t) - radius;
+  const SegmentQuery q = closest_to_segment(a, b, kInf, hint);
+  // A segment that does not touch the surface lies wholly outside or wholly inside; the
+  // pseudo-normal at the closest point tells which.
+  if (q.distance > 0 && (q.point_on_segment - q.point_on_mesh).dot(q.normal) > 0) return q.distance - radius;
+  return min_signed_distance_on_segment(a, b, q.segment_t) - radius;
 }
 
 bool MeshDistance::sweep_forward(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double radius,

@@ -742,6 +742,26 @@ TEST_F(IcosphereBruteForce, CapsuleOverlapsMatchesBruteForce) {
   EXPECT_LT(overlaps, 1800);
 }
 
+// A zero-length capsule is a ball: it overlaps when the point is within r of the surface or
+// inside. A hint triangle (here a random one) changes the speed, never the answer.
+TEST_F(IcosphereBruteForce, PointCapsulesAndHintsGiveTheSameAnswers) {
+  std::uniform_real_distribution<double> len(0.0, 0.03);
+  std::uniform_real_distribution<double> rad(0.0, 0.01);
+  std::uniform_int_distribution<std::uint32_t> tri(0, static_cast<std::uint32_t>(mesh_.triangles.size() - 1));
+  for (int i = 0; i < 2000; ++i) {
+    const Vector3d p = random_point();
+    const double r = rad(rng_);
+    const PointQuery q = md_.closest_point(p);
+    if (std::abs(q.distance - r) < 1e-9) continue;
+    EXPECT_EQ(md_.capsule_overlaps(p, p, r), q.distance <= r || q.signed_distance < 0) << i;
+    const Vector3d b = p + len(rng_) * random_unit(rng_);
+    const std::uint32_t hint = tri(rng_);
+    EXPECT_EQ(md_.closest_to_segment(p, b, std::numeric_limits<double>::infinity(), hint).distance, md_.closest_to_segment(p, b).distance) << i;
+    EXPECT_EQ(md_.capsule_overlaps(p, b, r, hint), md_.capsule_overlaps(p, b, r)) << i;
+    EXPECT_EQ(md_.capsule_signed_distance(p, b, r, hint), md_.capsule_signed_distance(p, b, r)) << i;
+  }
+}
+
 TEST_F(IcosphereBruteForce, SphereCastIsFirstContact) {
   std::uniform_real_distribution<double> rad(0.001, 0.01);
   int hits = 0;

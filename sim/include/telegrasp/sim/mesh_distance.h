@@ -75,7 +75,7 @@ class MeshDistance {
   /// Exact signed distance between the capsule (segment [a, b], `radius`) and the solid:
   /// min over segment points of signed_distance, minus radius. Positive = gap, negative = depth.
   [[nodiscard]] double capsule_signed_distance(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                               double radius) const;
+                                               double radius, std::uint32_t hint = kNoHint) const;
 
   /// Sweeps a sphere of `radius` from `origin` along unit `direction` for at most `max_length`
   /// and returns the first contact with the surface. If `origin` starts inside the solid, the
