@@ -51,6 +51,7 @@ HandController::HandController(std::shared_ptr<const HandRig> rig, GraspSettings
   state_.blocked_angle.assign(n, 0.0);
   touch_cache_.assign(n, {});
   hint_.assign(n, MeshDistance::kNoHint);
+  gap_bound_.assign(n, -kInf);
   forward_kinematics(*rig_, state_.q, &state_.X_PalmPhalanx);
   // reach_[k][m] bounds |p - o_k| for any point p of capsule m's segment and the origin o_k of an
   // ancestor joint k, in any configuration (triangle inequality along the chain).
@@ -63,6 +64,13 @@ HandController::HandController(std::shared_ptr<const HandRig> rig, GraspSettings
       reach_[k][m] = r;
       r += rig_->phalanges()[k].X_ParentJoint.translation().norm();
     }
+  }
+  palm_reach_.assign(n, 0.0);
+  for (std::size_t m = 0; m < n; ++m) {
+    if (!rig_->phalanges()[m].capsule) continue;
+    int root = static_cast<int>(m);
+    while (rig_->phalanges()[root].parent >= 0) root = rig_->phalanges()[root].parent;
+    palm_reach_[m] = reach_[root][m] + rig_->phalanges()[root].X_ParentJoint.translation().norm();
   }
 }
 
@@ -189,7 +197,13 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
     }
     if (unblock) state_.blocked[id] = 0;
   }
-  if (pushed_in && depenetrate(finger, X_ObjectPalm, *object)) return;
+  auto forget_bounds = [&] {
+    for (PhalanxId id : chain) gap_bound_[id.value] = -kInf;
+  };
+  if (pushed_in && depenetrate(finger, X_ObjectPalm, *object)) {
+    forget_bounds();
+    return;
+  }
 
   int held = -1;  // the most distal blocked phalanx: it and every joint proximal to it hold
   for (std::size_t k = 0; k < n; ++k)
@@ -224,7 +238,14 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
   for (std::size_t m = static_cast<std::size_t>(held + 1); m < n; ++m)
     if (specs[chain[m].value].capsule && !state_.blocked[chain[m].value]) affected.push_back(m);
 
-  if (!closing || object == nullptr || affected.empty()) { set_fraction(1.0); return; }
+  if (!closing || object == nullptr || affected.empty()) {
+    set_fraction(1.0);
+    forget_bounds();
+    return;
+  }
+  // Capsules that move but are not advanced below (a held joint opening) lose their bounds.
+  for (std::size_t m = 0; m < n; ++m)
+    if (std::find(affected.begin(), affected.end(), m) == affected.end()) gap_bound_[chain[m].value] = -kInf;
   const MeshDistance& mesh = object->model->distance;
 
   auto block = [&](std::size_t m) {
@@ -236,6 +257,7 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
 
   if (!precise) {  // the paper's discrete test: move, then test overlap
     set_fraction(1.0);
+    forget_bounds();
     for (std::size_t m : affected) {
       const Capsule c = capsule_in_object(chain[m], X_ObjectPalm);
       if (mesh.capsule_overlaps(c.a, c.b, c.radius, hint_[chain[m].value])) block(m);
@@ -249,22 +271,36 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
   for (std::size_t m : affected)
     for (std::size_t k = 0; k <= m; ++k) rate[m] += std::abs(delta[k]) * reach_[chain[k].value][chain[m].value];
 
+  // Each affected capsule carries a lower bound on its gap (from earlier ticks, or from its last
+  // exact query this step, minus its motion since): while the bound exceeds the tolerance it
+  // replaces the query.
   double s = 0;
   for (int iter = 0; iter < kMaxAdvancementSteps; ++iter) {
     set_fraction(s);
     double ds = kInf;
     bool touched = false;
     for (std::size_t m : affected) {
-      const Capsule c = capsule_in_object(chain[m], X_ObjectPalm);
+      double& bound = gap_bound_[chain[m].value];
       const double horizon = rate[m] * (1.0 - s) + tol;  // beyond it, no contact this step
+      if (bound > horizon) continue;                   // free for the rest of the step
+      if (bound > tol) {
+        ds = std::min(ds, (bound - 0.5 * tol) / rate[m]);
+        continue;
+      }
+      const Capsule c = capsule_in_object(chain[m], X_ObjectPalm);
       std::uint32_t& hint = hint_[chain[m].value];
-      if (!mesh.capsule_overlaps(c.a, c.b, c.radius + horizon, hint)) continue;  // free for the rest of the step
+      if (!mesh.capsule_overlaps(c.a, c.b, c.radius + horizon, hint)) {  // free for the rest of the step
+        bound = horizon;
+        continue;
+      }
       const SegmentQuery hit = mesh.closest_to_segment(c.a, c.b, c.radius + horizon, hint);
       if (hit.found) hint = hit.triangle;
       const bool inside = !hit.found || hit.distance == 0 || (hit.point_on_segment - hit.point_on_mesh).dot(hit.normal) < 0;
       const double gap = inside ? -c.radius - (hit.found ? hit.distance : kInf) : hit.distance - c.radius;
+      bound = gap;
       if (s == 0 && gap < -tol) {  // pushed in by the hand's motion before the fingers moved
         set_fraction(0.0);
+        forget_bounds();
         if (depenetrate(finger, X_ObjectPalm, *object)) return;
         block(m);
         touched = true;
@@ -274,8 +310,13 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
       ds = std::min(ds, (gap - 0.5 * tol) / rate[m]);
     }
     if (touched || s >= 1.0) return;
-    if (!std::isfinite(ds)) { set_fraction(1.0); return; }  // nothing reachable this step
-    s = std::min(1.0, s + ds);
+    const double advance = std::isfinite(ds) ? std::min(1.0 - s, ds) : 1.0 - s;  // all free: to the end
+    for (std::size_t m : affected) gap_bound_[chain[m].value] -= rate[m] * advance;
+    s += advance;
+    if (s >= 1.0) {
+      set_fraction(1.0);
+      return;
+    }
   }
 }
 
@@ -323,6 +364,19 @@ HandTickEvents HandController::tick(const ControllerInput& input, double dt, std
   const Eigen::Isometry3d X_ObjectPalm = !object ? Eigen::Isometry3d::Identity()
       : state_.grasped.valid() ? state_.X_PalmObject.inverse()
       : object->X_WorldObject.inverse() * state_.X_WorldPalm;
+
+  // Gap bounds carried over from the last tick shrink by how far the hand moved relative to the
+  // object: a capsule point p (palm frame) moves at most |dt| + angle(dR) |p|.
+  if (!object || object->id != bound_object_) {
+    std::fill(gap_bound_.begin(), gap_bound_.end(), -kInf);
+  } else {
+    const double shift = (X_ObjectPalm.translation() - bound_X_ObjectPalm_.translation()).norm();
+    const double turn = Eigen::AngleAxisd(X_ObjectPalm.linear() * bound_X_ObjectPalm_.linear().transpose()).angle();
+    if (shift > 0 || turn > 0)
+      for (std::size_t m = 0; m < gap_bound_.size(); ++m) gap_bound_[m] -= shift + turn * palm_reach_[m];
+  }
+  bound_object_ = object ? object->id : ObjectId();
+  bound_X_ObjectPalm_ = X_ObjectPalm;
 
   // 2 + 3. Interaction manager and finger movement, finger by finger.
   for (std::size_t f = 0; f < rig_->fingers().size(); ++f) {

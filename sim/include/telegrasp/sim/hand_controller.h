@@ -163,6 +163,12 @@ class HandController {
   std::vector<TouchCache> touch_cache_;
   // Per phalanx, the triangle last found nearest to its capsule: a search hint (speed only).
   std::vector<std::uint32_t> hint_;
+  // Per phalanx, a lower bound on its capsule's gap to bound_object_ (-inf: unknown), kept
+  // across ticks and shrunk by every motion, so far-away capsules need no query.
+  std::vector<double> gap_bound_;
+  std::vector<double> palm_reach_;  // bound on |p| over the capsule's segment, palm frame
+  ObjectId bound_object_;
+  Eigen::Isometry3d bound_X_ObjectPalm_ = Eigen::Isometry3d::Identity();
 };
 
 }  // namespace telegrasp::sim
