@@ -38,13 +38,14 @@ struct Trial {
   int blocked = 0;
   bool grasped = false;
   bool penetrating = false;  // a blocked capsule ended inside the object (the hand started in it)
+  bool below_table = false;  // a capsule ended under the table top
   double hand_error_mm = 0;
 };
 
 // Closes the hand at a fixed palm pose on a static object and reports what it grasped.
 Trial close_offline(const std::shared_ptr<const HandRig>& rig, const GraspSettings& settings,
                     const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject,
-                    const Eigen::Isometry3d& X_WorldPalm, double dt) {
+                    const Eigen::Isometry3d& X_WorldPalm, double dt, double table_height) {
   HandController hand(rig, settings);
   const ObjectView view{ObjectId(0), X_WorldObject, &model};
   ControllerInput input;
@@ -60,6 +61,12 @@ Trial close_offline(const std::shared_ptr<const HandRig>& rig, const GraspSettin
   const GraspMetrics m = hand.measure(view);
   out.hand_error_mm = m.hand_error_mm;
   for (const CapsuleMetric& c : m.capsules) out.penetrating |= c.blocked && c.signed_distance < -0.1e-3;
+  for (PhalanxId id : rig->capsule_phalanges()) {
+    const CapsuleSpec& c = *rig->phalanges()[id.value].capsule;
+    const Eigen::Isometry3d X = X_WorldPalm * hand.state().X_PalmPhalanx[id.value];
+    const double lowest = std::min((X * c.p_PhalanxA).z(), (X * c.p_PhalanxB).z()) - c.radius;
+    out.below_table |= lowest < table_height - 1e-3;
+  }
   return out;
 }
 
@@ -73,7 +80,7 @@ OperatorSkill skill_profile(const std::string& name) {
 }
 
 GraspPlan plan_grasp(const HandRig& rig_ref, const GraspSettings& settings, const ObjectModel& model,
-                     const Eigen::Isometry3d& X_WorldObject, double dt) {
+                     const Eigen::Isometry3d& X_WorldObject, double dt, double table_height) {
   const auto rig = std::make_shared<const HandRig>(rig_ref);
   const Eigen::Vector3d lo = model.p_ObjectMin, hi = model.p_ObjectMax;
   const Eigen::Vector3d size = hi - lo;
@@ -104,9 +111,10 @@ GraspPlan plan_grasp(const HandRig& rig_ref, const GraspSettings& settings, cons
       }
     }
   }
-  // Side grasps: palm facing the object horizontally, thumb up, fingers around the other axis.
-  for (const Eigen::Vector3d& toward : {ax, ay, Eigen::Vector3d(-ax), Eigen::Vector3d(-ay)}) {
-    const Eigen::Vector3d fingers = up.cross(toward).normalized();
+  // Side grasps: palm facing the object horizontally, fingers around it either way (the thumb
+  // up for one hand, down for the other), at two heights.
+  for (const Eigen::Vector3d& toward : {ax, ay, Eigen::Vector3d(-ax), Eigen::Vector3d(-ay)})
+  for (const Eigen::Vector3d& fingers : {Eigen::Vector3d(toward.cross(up).normalized()), Eigen::Vector3d(up.cross(toward).normalized())}) {
     for (double height : {0.5, 0.7}) {
       GraspPlan plan;
       plan.X_WorldPalm = palm_frame(fingers, -toward);
@@ -126,11 +134,13 @@ GraspPlan plan_grasp(const HandRig& rig_ref, const GraspSettings& settings, cons
   GraspPlan best = candidates.front();
   double best_score = -1e300;
   for (GraspPlan& plan : candidates) {
-    const Trial t = close_offline(rig, settings, model, X_WorldObject, plan.X_WorldPalm, dt);
+    const Trial t = close_offline(rig, settings, model, X_WorldObject, plan.X_WorldPalm, dt, table_height);
     plan.predicted_grasp = t.grasped && !t.penetrating;
     plan.predicted_blocked = t.blocked;
-    // A clean grasp first, then the most capsules in contact, then the smallest HandError.
-    const double score = (plan.predicted_grasp ? 1e6 : 0) + (t.penetrating ? 0 : 1e4) + 100.0 * t.blocked - t.hand_error_mm;
+    // A clean grasp first (no capsule in the object), then one clear of the table, then the
+    // most capsules in contact, then the smallest HandError.
+    const double score = (plan.predicted_grasp ? 1e6 : 0) + (t.penetrating ? 0 : 1e5) + (t.below_table ? 0 : 1e4) +
+                         100.0 * t.blocked - t.hand_error_mm;
     if (score > best_score) { best_score = score; best = plan; }
   }
   return best;
@@ -152,7 +162,7 @@ Eigen::Isometry3d ScriptedOperator::noisy(const Eigen::Isometry3d& X) {
 
 void ScriptedOperator::begin(const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject,
                              const Eigen::Isometry3d& X_WorldPalm, double t0) {
-  plan_ = plan_grasp(*rig_, settings_, model, X_WorldObject, dt_);
+  plan_ = plan_grasp(*rig_, settings_, model, X_WorldObject, dt_, 0.0);
   X_last_ = X_WorldPalm;
   attempts_ = 0;
   held_after_lift_ = false;

@@ -1,4 +1,5 @@
 // telegrasp-eval: runs scripted grasps on objects in-process and reports success, time and ND.
+#include "grasp_svg.h"
 #include "telegrasp/sim/hand_rig.h"
 #include "telegrasp/sim/mesh_loading.h"
 #include "telegrasp/sim/object_model.h"
@@ -12,6 +13,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <mutex>
@@ -40,15 +42,18 @@ Options:
   --trials N          random orientations per object (default 5)
   --seed S            random seed (default 1)
   --skill NAME        perfect | experienced | inexperienced (default experienced)
+  --selection M       surface | origin: how the palm sphere ranks objects (default surface)
   --rig FILE          hand rig text file (default: built-in human_right)
   --json FILE         write every grasp record and the summaries as JSON
+  --svg DIR           draw each object's first held grasp (three views) as DIR/<object>_<mode>.svg
   --threads N         worker threads (default 2)
   -h, --help          this text
 )";
 
 struct Options {
-  std::string objects_dir, rig_path, json_path, skill = "experienced";
+  std::string objects_dir, rig_path, json_path, svg_dir, skill = "experienced";
   std::vector<ClosingMode> modes{ClosingMode::kPrecise};
+  SelectionMetric selection = SelectionMetric::kSurface;
   std::vector<double> speeds{1.0};
   int trials = 5, threads = 2;
   std::uint64_t seed = 1;
@@ -82,7 +87,14 @@ Options parse(int argc, char** argv) {
     else if (a == "--objects") o.objects_dir = value();
     else if (a == "--rig") o.rig_path = value();
     else if (a == "--json") o.json_path = value();
+    else if (a == "--svg") o.svg_dir = value();
     else if (a == "--skill") o.skill = value();
+    else if (a == "--selection") {
+      const std::string m = value();
+      if (m == "surface") o.selection = SelectionMetric::kSurface;
+      else if (m == "origin") o.selection = SelectionMetric::kOrigin;
+      else usage_error("--selection expects surface or origin, got '" + m + "'");
+    }
     else if (a == "--trials") o.trials = static_cast<int>(parse_int(a, value(), 1, 100000));
     else if (a == "--threads") o.threads = static_cast<int>(parse_int(a, value(), 1, 64));
     else if (a == "--seed") o.seed = static_cast<std::uint64_t>(parse_int(a, value(), 0, 1L << 62));
@@ -124,6 +136,7 @@ struct Record {
   std::vector<CapsuleRecord> capsules;
   double grasp_tick_hand_error_mm = 0;    // the tick the grasp rule turned true
   std::vector<CapsuleRecord> grasp_tick_capsules;
+  std::string svg;                        // picture of the settled hold, if asked for
 };
 
 std::vector<CapsuleRecord> capsule_records(const GraspMetrics& metrics, const HandRig& rig) {
@@ -141,10 +154,11 @@ struct Config {
 // One grasp trial: the object rests at a random pose in front of the operator, who reaches,
 // grasps, lifts 10 cm, holds 1 s and releases.
 Record run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRig>& rig, const Options& opt,
-                 const Config& cfg, int trial, std::uint64_t seed) {
+                 const Config& cfg, int trial, std::uint64_t seed, bool draw) {
   WorldSettings ws;
   ws.grasp.mode = cfg.mode;
   ws.grasp.speed_scale = cfg.speed;
+  ws.grasp.selection = opt.selection;
   World world(ws);
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> ux(0.40, 0.50), uy(-0.08, 0.08), uyaw(0.0, 2.0 * std::numbers::pi);
@@ -180,6 +194,13 @@ Record run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRi
       if (const auto held = world.hand(hand).hold_metrics()) {
         rec.hand_error_mm = held->hand_error_mm;
         rec.capsules = capsule_records(*held, *rig);
+        if (draw) {
+          const ObjectView view{object, world.object_pose(object), model.get()};
+          char title[160];
+          std::snprintf(title, sizeof title, "%s, %s mode x%g, trial %d: HandError %.1f mm", model->name.c_str(),
+                        rec.mode.c_str(), cfg.speed, trial, held->hand_error_mm);
+          rec.svg = render_svg(snapshot(world.hand(hand), view, title));
+        }
       }
     }
     for (const GraspEvent& e : world.events()) {
@@ -282,6 +303,23 @@ int main(int argc, char** argv) {
     std::cerr << "telegrasp-eval: " << e.what() << "\n";
     return 1;
   }
+  // Fail before a long run, not after it, if the output cannot be written.
+  if (!opt.svg_dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(opt.svg_dir, ec);
+    if (!std::filesystem::is_directory(opt.svg_dir)) {
+      std::cerr << "telegrasp-eval: cannot create --svg folder " << opt.svg_dir << "\n";
+      return 1;
+    }
+  }
+  std::ofstream json_out;
+  if (!opt.json_path.empty()) {
+    json_out.open(opt.json_path);
+    if (!json_out) {
+      std::cerr << "telegrasp-eval: cannot write --json file " << opt.json_path << "\n";
+      return 1;
+    }
+  }
   std::size_t max_bytes = 0;
   for (const auto& m : models) max_bytes = std::max(max_bytes, m->memory_bytes());
   std::cerr << models.size() << " objects (" << (opt.objects_dir.empty() ? "built-in stand-ins" : opt.objects_dir)
@@ -304,7 +342,8 @@ int main(int argc, char** argv) {
       const Job& job = jobs[j];
       // The trial's seed depends on the object and trial only, so modes and speeds see the same poses.
       const std::uint64_t seed = opt.seed * 1000003ULL + job.object * 1009ULL + static_cast<std::uint64_t>(job.trial);
-      records[j] = run_trial(models[job.object], rig, opt, configs[job.config], job.trial, seed);
+      const bool draw = !opt.svg_dir.empty() && job.trial == 0;
+      records[j] = run_trial(models[job.object], rig, opt, configs[job.config], job.trial, seed, draw);
       const std::size_t done = ++finished;
       std::lock_guard lock(log_mutex);
       std::cerr << "\r[" << done << "/" << jobs.size() << "] " << records[j].mode << " x" << configs[job.config].speed << " "
@@ -352,6 +391,18 @@ int main(int argc, char** argv) {
     }
   }
 
+  if (!opt.svg_dir.empty()) {
+    int written = 0;
+    for (const Record& r : records) {
+      if (r.svg.empty()) continue;
+      char name[256];
+      std::snprintf(name, sizeof name, "%s_%s_x%g.svg", r.object.c_str(), r.mode.c_str(), r.speed_scale);
+      std::ofstream(std::filesystem::path(opt.svg_dir) / name) << r.svg;
+      ++written;
+    }
+    std::cerr << "wrote " << written << " pictures to " << opt.svg_dir << "\n";
+  }
+
   if (!opt.json_path.empty()) {
     json grasps = json::array();
     for (const Record& r : records) {
@@ -363,9 +414,8 @@ int main(int argc, char** argv) {
                         {"grasp_tick", {{"hand_error_mm", r.grasped ? json(r.grasp_tick_hand_error_mm) : json(nullptr)},
                                         {"capsules", capsule_json(r.grasp_tick_capsules)}}}});
     }
-    std::ofstream out(opt.json_path);
-    out << json{{"grasps", grasps}, {"summary", summaries[0]}, {"summaries", summaries}}.dump(1) << "\n";
-    if (!out) { std::cerr << "telegrasp-eval: cannot write " << opt.json_path << "\n"; return 1; }
+    json_out << json{{"grasps", grasps}, {"summary", summaries[0]}, {"summaries", summaries}}.dump(1) << "\n";
+    if (!json_out.flush()) { std::cerr << "telegrasp-eval: cannot write " << opt.json_path << "\n"; return 1; }
     std::cerr << "wrote " << opt.json_path << "\n";
   }
   return 0;

@@ -43,10 +43,11 @@ struct GraspPlan {
 
 /// Plans a grasp by closing the hand offline (no physics) at candidate poses around the object
 /// (top and side approaches, both axes, offsets, heights) and keeping the best: a grasp with no
-/// capsule ending inside the object, then the most capsules blocked, then the least HandError.
+/// capsule ending inside the object, then one whose fingers stay above the table top at
+/// `table_height` (the World's is 0), then the most capsules blocked, then the least HandError.
 /// Deterministic.
 GraspPlan plan_grasp(const HandRig& rig, const GraspSettings& settings, const ObjectModel& model,
-                     const Eigen::Isometry3d& X_WorldObject, double dt);
+                     const Eigen::Isometry3d& X_WorldObject, double dt, double table_height = 0.0);
 
 /// Produces controller inputs for one trial: react, reach to a planned grasp pose with the skill's
 /// pose error, squeeze until grasped (retrying up to 3 times), lift 10 cm while squeezing fully,
