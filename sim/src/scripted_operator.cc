@@ -39,6 +39,7 @@ struct Trial {
   bool grasped = false;
   bool penetrating = false;  // a blocked capsule ended inside the object (the hand started in it)
   bool below_table = false;  // a capsule ended under the table top
+  bool opposed = false;      // two contact normals oppose (n_i . n_j < -0.5): the object is pinched, not pressed
   double hand_error_mm = 0;
 };
 
@@ -61,6 +62,9 @@ Trial close_offline(const std::shared_ptr<const HandRig>& rig, const GraspSettin
   const GraspMetrics m = hand.measure(view);
   out.hand_error_mm = m.hand_error_mm;
   for (const CapsuleMetric& c : m.capsules) out.penetrating |= c.blocked && c.signed_distance < -0.1e-3;
+  const std::vector<Contact> contacts = hand.contacts();
+  for (std::size_t i = 0; i < contacts.size(); ++i)
+    for (std::size_t j = i + 1; j < contacts.size(); ++j) out.opposed |= contacts[i].n_World.dot(contacts[j].n_World) < -0.5;
   for (PhalanxId id : rig->capsule_phalanges()) {
     const CapsuleSpec& c = *rig->phalanges()[id.value].capsule;
     const Eigen::Isometry3d X = X_WorldPalm * hand.state().X_PalmPhalanx[id.value];
@@ -82,6 +86,9 @@ OperatorSkill skill_profile(const std::string& name) {
 GraspPlan plan_grasp(const HandRig& rig_ref, const GraspSettings& settings, const ObjectModel& model,
                      const Eigen::Isometry3d& X_WorldObject, double dt, double table_height) {
   const auto rig = std::make_shared<const HandRig>(rig_ref);
+  // The operator aims for where a precise hand would close well, whatever the simulated mode.
+  GraspSettings planning = settings;
+  planning.mode = ClosingMode::kPrecise;
   const Eigen::Vector3d lo = model.p_ObjectMin, hi = model.p_ObjectMax;
   const Eigen::Vector3d size = hi - lo;
   const Eigen::Vector3d p_WorldCenter = X_WorldObject * (0.5 * (lo + hi));
@@ -134,13 +141,14 @@ GraspPlan plan_grasp(const HandRig& rig_ref, const GraspSettings& settings, cons
   GraspPlan best = candidates.front();
   double best_score = -1e300;
   for (GraspPlan& plan : candidates) {
-    const Trial t = close_offline(rig, settings, model, X_WorldObject, plan.X_WorldPalm, dt, table_height);
+    const Trial t = close_offline(rig, planning, model, X_WorldObject, plan.X_WorldPalm, dt, table_height);
     plan.predicted_grasp = t.grasped && !t.penetrating;
     plan.predicted_blocked = t.blocked;
-    // A clean grasp first (no capsule in the object), then one clear of the table, then the
-    // most capsules in contact, then the smallest HandError.
-    const double score = (plan.predicted_grasp ? 1e6 : 0) + (t.penetrating ? 0 : 1e5) + (t.below_table ? 0 : 1e4) +
-                         100.0 * t.blocked - t.hand_error_mm;
+    // A clean grasp first (no capsule in the object), then opposing contacts (a pinch or wrap
+    // rather than a press), then clear of the table, then the most capsules in contact, then
+    // the smallest HandError.
+    const double score = (plan.predicted_grasp ? 1e6 : 0) + (t.opposed ? 1e5 : 0) + (t.penetrating ? 0 : 5e4) +
+                         (t.below_table ? 0 : 1e4) + 100.0 * t.blocked - t.hand_error_mm;
     if (score > best_score) { best_score = score; best = plan; }
   }
   return best;

@@ -42,10 +42,10 @@ struct GraspPlan {
 };
 
 /// Plans a grasp by closing the hand offline (no physics) at candidate poses around the object
-/// (top and side approaches, both axes, offsets, heights) and keeping the best: a grasp with no
-/// capsule ending inside the object, then one whose fingers stay above the table top at
-/// `table_height` (the World's is 0), then the most capsules blocked, then the least HandError.
-/// Deterministic.
+/// (top and side approaches, both axes, offsets, heights) with precise closing, and keeping the
+/// best: a grasp with no capsule ending inside the object, then opposing contact normals (a pinch
+/// or wrap, not a press), then fingers above the table top at `table_height` (the World's is 0),
+/// then the most capsules blocked, then the least HandError. Deterministic.
 GraspPlan plan_grasp(const HandRig& rig, const GraspSettings& settings, const ObjectModel& model,
                      const Eigen::Isometry3d& X_WorldObject, double dt, double table_height = 0.0);
 
