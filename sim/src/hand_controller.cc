@@ -19,6 +19,21 @@ constexpr int kMaxAdvancementSteps = 64;
 
 bool in_unit_interval(double v) { return std::isfinite(v) && v >= 0.0 && v <= 1.0; }
 
+// Blocked capsules lie within the contact tolerance (plus hysteresis) of the surface; searches
+// for their closest point need look no farther than this beyond the radius.
+constexpr double kTouchReach = 1e-3;
+
+// Exact capsule signed distance; for a capsule known to touch, a bounded search finds the closest
+// point fast, and only a capsule overlapping the solid needs the full computation.
+double capsule_signed_distance(const MeshDistance& mesh, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                               double radius, bool touching, std::uint32_t hint) {
+  if (touching) {
+    const SegmentQuery q = mesh.closest_to_segment(a, b, radius + kTouchReach, hint);
+    if (q.found && q.distance > 0 && (q.point_on_segment - q.point_on_mesh).dot(q.normal) > 0) return q.distance - radius;
+  }
+  return mesh.capsule_signed_distance(a, b, radius, hint);
+}
+
 }  // namespace
 
 std::string validate_input(const ControllerInput& input, const HandRig& rig) {
@@ -144,11 +159,25 @@ bool HandController::depenetrate(int finger, const Eigen::Isometry3d& X_ObjectPa
     set_opening(0.0);
     return false;
   }
+  auto touching = [&]() {
+    for (PhalanxId id : chain) {
+      if (!specs[id.value].capsule) continue;
+      const Capsule c = capsule_in_object(id, X_ObjectPalm);
+      if (mesh.capsule_overlaps(c.a, c.b, c.radius + tol, hint_[id.value])) return true;
+    }
+    return false;
+  };
+  // Bisection until the free end rests on the surface (within the tolerance).
   double lo = 0.0, hi = 1.0;  // penetrating at lo, free at hi
-  for (int i = 0; i < 24; ++i) {
+  for (int i = 0; i < 40; ++i) {
     const double mid = 0.5 * (lo + hi);
     set_opening(mid);
-    (penetrating() ? lo : hi) = mid;
+    if (penetrating()) {
+      lo = mid;
+    } else {
+      hi = mid;
+      if (touching()) break;
+    }
   }
   set_opening(hi);
   // The capsules now resting on the surface are blocked there.
@@ -457,8 +486,8 @@ GraspMetrics HandController::measure(const ObjectView& object) const {
     m.hit = hit.hit;
     // ND = ((Ip - Sp) . (CTc - Sp)) / |CTc - Sp| - |CTc - Sp|
     if (hit.hit) m.nd = (hit.point - sp).dot(dir) - length;
-    m.signed_distance = model.distance.capsule_signed_distance(X_ObjectPhalanx * cap.p_PhalanxA,
-                                                              X_ObjectPhalanx * cap.p_PhalanxB, cap.radius, hint_[id.value]);
+    m.signed_distance = capsule_signed_distance(model.distance, X_ObjectPhalanx * cap.p_PhalanxA,
+                                                X_ObjectPhalanx * cap.p_PhalanxB, cap.radius, m.blocked, hint_[id.value]);
     finger_count[spec.finger] += 1;
     if (m.hit) finger_sum[spec.finger] += std::abs(m.nd);
     out.capsules.push_back(m);
@@ -487,7 +516,9 @@ void HandController::refresh_contacts() const {
   for (PhalanxId id : rig_->capsule_phalanges()) {
     if (!state_.blocked[id.value]) continue;
     const Capsule c = capsule_in_object(id, X_ObjectPalm);
-    const SegmentQuery q = model.distance.closest_to_segment(c.a, c.b, kInf, hint_[id.value]);
+    // A blocked capsule touches: its closest point lies within reach of a bounded search.
+    SegmentQuery q = model.distance.closest_to_segment(c.a, c.b, c.radius + kTouchReach, hint_[id.value]);
+    if (!q.found) q = model.distance.closest_to_segment(c.a, c.b, kInf, hint_[id.value]);
     add(id, q.point_on_mesh, q.normal);
   }
   if (state_.palm_contact) {
