@@ -491,6 +491,48 @@ double half_area(const Vector3d& lo, const Vector3d& hi) {
 
 }  // namespace
 
+/// Depth-first walk of the BVH, nearer child first. `reach(node, key)` says whether a node may
+/// hold an answer and sets its ordering key (smaller first); a deferred node is asked again when
+/// resumed, so a reach that tightens as answers are found prunes it then. `leaf(node)` handles a
+/// leaf's triangles and returns true to end the walk.
+template <class Reach, class Leaf>
+void MeshDistance::traverse(Reach&& reach, Leaf&& leaf) const {
+  double key0 = 0;
+  double key1 = 0;
+  if (nodes_.empty() || !reach(nodes_[0], key0)) return;
+  std::uint32_t stack[kStackSize];
+  int top = 0;
+  std::uint32_t node = 0;
+  for (;;) {
+    const Node& nd = nodes_[node];
+    if (nd.count > 0) {
+      if (leaf(nd)) return;
+    } else {
+      std::uint32_t c0 = nd.first;
+      std::uint32_t c1 = c0 + 1;
+      const bool r0 = reach(nodes_[c0], key0);
+      const bool r1 = reach(nodes_[c1], key1);
+      if (r0 && r1) {
+        if (key1 < key0) std::swap(c0, c1);
+        assert(top < kStackSize);
+        stack[top++] = c1;
+        node = c0;
+        continue;
+      }
+      if (r0 || r1) {
+        node = r0 ? c0 : c1;
+        continue;
+      }
+    }
+    bool resumed = false;
+    while (!resumed && top > 0) {
+      node = stack[--top];
+      resumed = reach(nodes_[node], key0);
+    }
+    if (!resumed) return;
+  }
+}
+
 MeshDistance::MeshDistance(const TriangleMesh& mesh) {
   if (mesh.triangles.empty()) throw std::invalid_argument("MeshDistance: mesh has no triangles");
   const std::size_t nv = mesh.vertices.size();
@@ -728,61 +770,31 @@ MeshDistance::Candidate MeshDistance::nearest_to_point(const Eigen::Vector3d& p,
   if (nodes_.empty() || !(max_distance >= 0)) return best;
   best.distance_sq = max_distance * max_distance;
   double best_d = max_distance;
-  std::uint32_t stack[kStackSize];
-  double stack_d[kStackSize];
-  int top = 0;
-  std::uint32_t node = 0;
-  if (point_box_sq(p, nodes_[0].lo, nodes_[0].hi) > best.distance_sq) return best;
-  for (;;) {
-    const Node& nd = nodes_[node];
-    if (nd.count > 0) {
-      for (std::uint32_t s = nd.first; s < nd.first + nd.count; ++s) {
-        const auto& bs = bounding_spheres_[s];
-        const double reach = best_d + bs[3];
-        if ((p - Vector3d(bs[0], bs[1], bs[2])).squaredNorm() > reach * reach) continue;
-        int feature = 0;
-        const Vector3d q = closest_on_triangle(p, corners_[s], feature);
-        const double d2 = (p - q).squaredNorm();
-        if (d2 < best.distance_sq || (!best.found && d2 <= best.distance_sq)) {
-          best.distance_sq = d2;
-          best.point = q;
-          best.slot = s;
-          best.found = true;
-          best_d = std::sqrt(d2);
-        }
-      }
-    } else {
-      std::uint32_t c0 = nd.first;
-      std::uint32_t c1 = c0 + 1;
-      double d0 = point_box_sq(p, nodes_[c0].lo, nodes_[c0].hi);
-      double d1 = point_box_sq(p, nodes_[c1].lo, nodes_[c1].hi);
-      // Nearest box first; when p lies in both, the one whose centre is nearer.
-      if (d1 < d0 || (d1 == d0 && (p - box_centre(nodes_[c1].lo, nodes_[c1].hi)).squaredNorm() <
-                                      (p - box_centre(nodes_[c0].lo, nodes_[c0].hi)).squaredNorm())) {
-        std::swap(c0, c1);
-        std::swap(d0, d1);
-      }
-      if (d1 <= best.distance_sq) {
-        assert(top < kStackSize);
-        stack[top] = c1;
-        stack_d[top++] = d1;
-      }
-      if (d0 <= best.distance_sq) {
-        node = c0;
-        continue;
+  // Nearest box first; boxes holding p (distance 0) by nearer centre.
+  const auto reach = [&](const Node& n, double& key) {
+    const double d = point_box_sq(p, n.lo, n.hi);
+    if (d > best.distance_sq) return false;
+    key = d > 0 ? d : -1.0 / (1.0 + (p - box_centre(n.lo, n.hi)).squaredNorm());
+    return true;
+  };
+  traverse(reach, [&](const Node& nd) {
+    for (std::uint32_t s = nd.first; s < nd.first + nd.count; ++s) {
+      const auto& bs = bounding_spheres_[s];
+      const double sphere_reach = best_d + bs[3];
+      if ((p - Vector3d(bs[0], bs[1], bs[2])).squaredNorm() > sphere_reach * sphere_reach) continue;
+      int feature = 0;
+      const Vector3d q = closest_on_triangle(p, corners_[s], feature);
+      const double d2 = (p - q).squaredNorm();
+      if (d2 < best.distance_sq || (!best.found && d2 <= best.distance_sq)) {
+        best.distance_sq = d2;
+        best.point = q;
+        best.slot = s;
+        best.found = true;
+        best_d = std::sqrt(d2);
       }
     }
-    bool next = false;
-    while (top > 0) {
-      --top;
-      if (stack_d[top] <= best.distance_sq) {
-        node = stack[top];
-        next = true;
-        break;
-      }
-    }
-    if (!next) break;
-  }
+    return false;
+  });
   return best;
 }
 
@@ -827,60 +839,27 @@ MeshDistance::Candidate MeshDistance::nearest_to_segment(const Eigen::Vector3d& 
       best_d = std::sqrt(d2);
     }
   }
-  std::uint32_t stack[kStackSize];
-  int top = 0;
-  std::uint32_t node = 0;
-  double key0 = 0;
-  double key1 = 0;
-  if (!seg.may_reach(nodes_[0].lo, nodes_[0].hi, nodes_[0].radius, best_d, key0)) return best;
-  for (;;) {
-    const Node& nd = nodes_[node];
-    if (nd.count > 0) {
-      for (std::uint32_t s = nd.first; s < nd.first + nd.count; ++s) {
-        const auto& bs = bounding_spheres_[s];
-        const double reach = best_d + bs[3];
-        if (seg.distance_sq(Vector3d(bs[0], bs[1], bs[2])) > reach * reach) continue;
-        double t = 0;
-        Vector3d q;
-        const double d2 =
-            segment_triangle_sq(a, b, seg.d, seg.dd, corners_[s], face_normals_[s], best.distance_sq, t, q);
-        if (d2 < best.distance_sq || (!best.found && d2 <= best.distance_sq)) {
-          best.distance_sq = d2;
-          best.segment_t = t;
-          best.point = q;
-          best.slot = s;
-          best.found = true;
-          best_d = std::sqrt(d2);
-        }
-      }
-      if (best.found && best.distance_sq == 0) break;
-    } else {
-      std::uint32_t c0 = nd.first;
-      std::uint32_t c1 = c0 + 1;
-      const bool r0 = seg.may_reach(nodes_[c0].lo, nodes_[c0].hi, nodes_[c0].radius, best_d, key0);
-      const bool r1 = seg.may_reach(nodes_[c1].lo, nodes_[c1].hi, nodes_[c1].radius, best_d, key1);
-      if (r0 && r1) {
-        if (key1 < key0) std::swap(c0, c1);
-        assert(top < kStackSize);
-        stack[top++] = c1;
-        node = c0;
-        continue;
-      }
-      if (r0 || r1) {
-        node = r0 ? c0 : c1;
-        continue;
-      }
-    }
-    bool next = false;
-    while (top > 0) {
-      node = stack[--top];
-      if (seg.may_reach(nodes_[node].lo, nodes_[node].hi, nodes_[node].radius, best_d, key0)) {
-        next = true;
-        break;
-      }
-    }
-    if (!next) break;
-  }
+  traverse([&](const Node& n, double& key) { return seg.may_reach(n.lo, n.hi, n.radius, best_d, key); },
+           [&](const Node& nd) {
+             for (std::uint32_t s = nd.first; s < nd.first + nd.count; ++s) {
+               const auto& bs = bounding_spheres_[s];
+               const double reach = best_d + bs[3];
+               if (seg.distance_sq(Vector3d(bs[0], bs[1], bs[2])) > reach * reach) continue;
+               double t = 0;
+               Vector3d q;
+               const double d2 =
+                   segment_triangle_sq(a, b, seg.d, seg.dd, corners_[s], face_normals_[s], best.distance_sq, t, q);
+               if (d2 < best.distance_sq || (!best.found && d2 <= best.distance_sq)) {
+                 best.distance_sq = d2;
+                 best.segment_t = t;
+                 best.point = q;
+                 best.slot = s;
+                 best.found = true;
+                 best_d = std::sqrt(d2);
+               }
+             }
+             return best.found && best.distance_sq == 0;  // cannot get closer
+           });
   return best;
 }
 
@@ -912,46 +891,25 @@ bool MeshDistance::capsule_overlaps(const Eigen::Vector3d& a, const Eigen::Vecto
     Vector3d q;
     if (segment_triangle_sq(a, b, seg.d, seg.dd, corners_[s], face_normals_[s], r2, t, q) <= r2) return true;
   }
-  std::uint32_t stack[kStackSize];
-  int top = 0;
-  std::uint32_t node = 0;
-  double key0 = 0;
-  double key1 = 0;
-  if (seg.may_reach(nodes_[0].lo, nodes_[0].hi, nodes_[0].radius, r, key0)) {
-    for (;;) {
-      const Node& nd = nodes_[node];
-      if (nd.count > 0) {
-        for (std::uint32_t s = nd.first; s < nd.first + nd.count; ++s) {
-          const auto& bs = bounding_spheres_[s];
-          const double c2 = seg.distance_sq(Vector3d(bs[0], bs[1], bs[2]));
-          if (c2 <= r2) return true;  // the centroid lies on the triangle
-          const double reach = r + bs[3];
-          if (c2 > reach * reach) continue;
-          double t = 0;
-          Vector3d q;
-          if (segment_triangle_sq(a, b, seg.d, seg.dd, corners_[s], face_normals_[s], r2, t, q) <= r2) return true;
-        }
-      } else {
-        std::uint32_t c0 = nd.first;
-        std::uint32_t c1 = c0 + 1;
-        const bool r0 = seg.may_reach(nodes_[c0].lo, nodes_[c0].hi, nodes_[c0].radius, r, key0);
-        const bool r1 = seg.may_reach(nodes_[c1].lo, nodes_[c1].hi, nodes_[c1].radius, r, key1);
-        if (r0 && r1) {
-          if (key1 < key0) std::swap(c0, c1);
-          assert(top < kStackSize);
-          stack[top++] = c1;
-          node = c0;
-          continue;
-        }
-        if (r0 || r1) {
-          node = r0 ? c0 : c1;
-          continue;
-        }
-      }
-      if (top == 0) break;
-      node = stack[--top];
-    }
-  }
+  bool overlaps = false;
+  traverse([&](const Node& n, double& key) { return seg.may_reach(n.lo, n.hi, n.radius, r, key); },
+           [&](const Node& nd) {
+             for (std::uint32_t s = nd.first; s < nd.first + nd.count; ++s) {
+               const auto& bs = bounding_spheres_[s];
+               const double c2 = seg.distance_sq(Vector3d(bs[0], bs[1], bs[2]));
+               const double reach = r + bs[3];
+               if (c2 > reach * reach) continue;
+               double t = 0;
+               Vector3d q;
+               // The centroid lies on the triangle, so c2 <= r2 settles it without the exact test.
+               if (c2 <= r2 || segment_triangle_sq(a, b, seg.d, seg.dd, corners_[s], face_normals_[s], r2, t, q) <= r2) {
+                 overlaps = true;
+                 return true;
+               }
+             }
+             return false;
+           });
+  if (overlaps) return true;
   // No surface within the radius: the capsule overlaps the solid only if it lies entirely inside.
   // a is farther than r from the surface, so a ray-parity test is well conditioned; it falls back
   // to the pseudo-normal test (contains) whenever the ray passes near an edge or grazes a plane.
@@ -971,59 +929,38 @@ bool MeshDistance::inside_by_ray_parity(const Eigen::Vector3d& p, bool& decided)
   u.normalize();
   const Vector3d inv = safe_inverse(u);
   int crossings = 0;
-  std::uint32_t stack[kStackSize];
-  int top = 0;
-  std::uint32_t node = 0;
-  double te = 0;
-  if (ray_hits_box(p, inv, root.lo, root.hi, 0.0, 0.0, kInf, te)) {
-    for (;;) {
-      const Node& nd = nodes_[node];
-      if (nd.count > 0) {
-        for (std::uint32_t s = nd.first; s < nd.first + nd.count; ++s) {
-          const Corners& v = corners_[s];
-          const Vector3d& n = face_normals_[s];
-          const double s0 = n.dot(p - v[0]);
-          const double sd = n.dot(u);
-          if (std::abs(sd) < 1e-9) {
-            if (std::abs(s0) <= eps) return false;  // ray (nearly) in the plane: undecided
-            continue;
-          }
-          const double t = -s0 / sd;
-          if (t < -eps) continue;
-          const Vector3d x = p + t * u;
-          bool in = true;
-          for (int k = 0; k < 3; ++k) {
-            const Vector3d e = v[(k + 1) % 3] - v[k];
-            const double g = e.cross(x - v[k]).dot(n);  // = |e| * signed in-plane distance
-            if (g < 0 && g * g > eps * eps * e.squaredNorm()) {
-              in = false;
-              break;
-            }
-            if (g * g <= eps * eps * e.squaredNorm()) return false;  // near an edge: undecided
-          }
-          if (!in) continue;
-          if (t <= eps) return false;  // p (nearly) on the surface: undecided
-          ++crossings;
-        }
-      } else {
-        const std::uint32_t c0 = nd.first;
-        double e0 = 0;
-        double e1 = 0;
-        const bool h0 = ray_hits_box(p, inv, nodes_[c0].lo, nodes_[c0].hi, 0.0, 0.0, kInf, e0);
-        const bool h1 = ray_hits_box(p, inv, nodes_[c0 + 1].lo, nodes_[c0 + 1].hi, 0.0, 0.0, kInf, e1);
-        if (h0 && h1) {
-          assert(top < kStackSize);
-          stack[top++] = c0 + 1;
-        }
-        if (h0 || h1) {
-          node = h0 ? c0 : c0 + 1;
-          continue;
-        }
-      }
-      if (top == 0) break;
-      node = stack[--top];
-    }
-  }
+  bool undecided = false;  // the ray grazes an edge or a plane, or p is on the surface
+  traverse([&](const Node& n, double& key) { return ray_hits_box(p, inv, n.lo, n.hi, 0.0, 0.0, kInf, key); },
+           [&](const Node& nd) {
+             for (std::uint32_t s = nd.first; s < nd.first + nd.count; ++s) {
+               const Corners& v = corners_[s];
+               const Vector3d& n = face_normals_[s];
+               const double s0 = n.dot(p - v[0]);
+               const double sd = n.dot(u);
+               if (std::abs(sd) < 1e-9) {
+                 if (std::abs(s0) <= eps) return undecided = true;  // ray (nearly) in the plane
+                 continue;
+               }
+               const double t = -s0 / sd;
+               if (t < -eps) continue;
+               const Vector3d x = p + t * u;
+               bool in = true;
+               for (int k = 0; k < 3; ++k) {
+                 const Vector3d e = v[(k + 1) % 3] - v[k];
+                 const double g = e.cross(x - v[k]).dot(n);  // = |e| * signed in-plane distance
+                 if (g < 0 && g * g > eps * eps * e.squaredNorm()) {
+                   in = false;
+                   break;
+                 }
+                 if (g * g <= eps * eps * e.squaredNorm()) return undecided = true;  // near an edge
+               }
+               if (!in) continue;
+               if (t <= eps) return undecided = true;  // p (nearly) on the surface
+               ++crossings;
+             }
+             return false;
+           });
+  if (undecided) return false;
   decided = true;
   return (crossings & 1) != 0;
 }
@@ -1098,60 +1035,21 @@ bool MeshDistance::sweep_forward(const Eigen::Vector3d& origin, const Eigen::Vec
     t_enter = std::max(ts, tb);
     return true;
   };
-  std::uint32_t stack[kStackSize];
-  double stack_t[kStackSize];
-  int top = 0;
-  std::uint32_t node = 0;
-  double e0 = 0;
-  double e1 = 0;
-  if (!reach(nodes_[0], e0)) return false;
-  for (;;) {
-    const Node& nd = nodes_[node];
-    if (nd.count > 0) {
-      for (std::uint32_t s = nd.first; s < nd.first + nd.count; ++s) {
-        const auto& bs = bounding_spheres_[s];
-        double tb = 0;
-        if (!ray_ball_entry(origin, dir, Vector3d(bs[0], bs[1], bs[2]), bs[3] + r, best_t, tb)) continue;
-        double t = 0;
-        if (!sweep_triangle(origin, dir, corners_[s], face_normals_[s], r, best_t, t)) continue;
-        if (t < best_t || (!found && t <= best_t)) {
-          best_t = t;
-          slot = s;
-          found = true;
-        }
-      }
-    } else {
-      std::uint32_t c0 = nd.first;
-      std::uint32_t c1 = c0 + 1;
-      const bool h0 = reach(nodes_[c0], e0);
-      const bool h1 = reach(nodes_[c1], e1);
-      if (h0 && h1) {
-        if (e1 < e0) {
-          std::swap(c0, c1);
-          std::swap(e0, e1);
-        }
-        assert(top < kStackSize);
-        stack[top] = c1;
-        stack_t[top++] = e1;
-        node = c0;
-        continue;
-      }
-      if (h0 || h1) {
-        node = h0 ? c0 : c1;
-        continue;
+  traverse(reach, [&](const Node& nd) {
+    for (std::uint32_t s = nd.first; s < nd.first + nd.count; ++s) {
+      const auto& bs = bounding_spheres_[s];
+      double tb = 0;
+      if (!ray_ball_entry(origin, dir, Vector3d(bs[0], bs[1], bs[2]), bs[3] + r, best_t, tb)) continue;
+      double t = 0;
+      if (!sweep_triangle(origin, dir, corners_[s], face_normals_[s], r, best_t, t)) continue;
+      if (t < best_t || (!found && t <= best_t)) {
+        best_t = t;
+        slot = s;
+        found = true;
       }
     }
-    bool next = false;
-    while (top > 0) {
-      --top;
-      if (stack_t[top] <= best_t) {
-        node = stack[top];
-        next = true;
-        break;
-      }
-    }
-    if (!next) break;
-  }
+    return false;
+  });
   if (found) t_hit = best_t;
   return found;
 }
@@ -1168,39 +1066,22 @@ bool MeshDistance::sweep_exit(const Eigen::Vector3d& origin, const Eigen::Vector
     const Vector3d x = origin + s * dir;
     double best_exit = s;
     std::uint32_t best_slot = slot;
-    std::uint32_t stack[kStackSize];
-    int top = 0;
-    std::uint32_t node = 0;
-    if (point_box_sq(x, nodes_[0].lo, nodes_[0].hi) > r_tol2) break;
-    for (;;) {
-      const Node& nd = nodes_[node];
-      if (nd.count > 0) {
-        for (std::uint32_t k = nd.first; k < nd.first + nd.count; ++k) {
-          int feature = 0;
-          if ((x - closest_on_triangle(x, corners_[k], feature)).squaredNorm() > r_tol2) continue;
-          double t0 = 0;
-          double t1 = 0;
-          if (line_triangle_minkowski(origin, dir, corners_[k], face_normals_[k], r, t0, t1) && t1 > best_exit) {
-            best_exit = t1;
-            best_slot = k;
-          }
-        }
-      } else {
-        const std::uint32_t c0 = nd.first;
-        const bool h0 = point_box_sq(x, nodes_[c0].lo, nodes_[c0].hi) <= r_tol2;
-        const bool h1 = point_box_sq(x, nodes_[c0 + 1].lo, nodes_[c0 + 1].hi) <= r_tol2;
-        if (h0 && h1) {
-          assert(top < kStackSize);
-          stack[top++] = c0 + 1;
-        }
-        if (h0 || h1) {
-          node = h0 ? c0 : c0 + 1;
-          continue;
+    const auto touches = [&](const Node& n, double& key) { return (key = point_box_sq(x, n.lo, n.hi)) <= r_tol2; };
+    double key = 0;
+    if (!touches(nodes_[0], key)) break;
+    traverse(touches, [&](const Node& nd) {
+      for (std::uint32_t k = nd.first; k < nd.first + nd.count; ++k) {
+        int feature = 0;
+        if ((x - closest_on_triangle(x, corners_[k], feature)).squaredNorm() > r_tol2) continue;
+        double t0 = 0;
+        double t1 = 0;
+        if (line_triangle_minkowski(origin, dir, corners_[k], face_normals_[k], r, t0, t1) && t1 > best_exit) {
+          best_exit = t1;
+          best_slot = k;
         }
       }
-      if (top == 0) break;
-      node = stack[--top];
-    }
+      return false;
+    });
     if (!(best_exit > s)) break;
     s = best_exit;
     slot = best_slot;

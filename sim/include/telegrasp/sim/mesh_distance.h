@@ -111,6 +111,8 @@ class MeshDistance {
     bool found = false;
   };
 
+  template <class Reach, class Leaf>
+  void traverse(Reach&& reach, Leaf&& leaf) const;
   [[nodiscard]] Candidate nearest_to_point(const Eigen::Vector3d& p, double max_distance) const;
   [[nodiscard]] Candidate nearest_to_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                              double max_distance, std::uint32_t hint = kNoHint) const;
