@@ -8,6 +8,7 @@
 #include <cassert>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 namespace telegrasp::sim {
 namespace {
@@ -57,8 +58,16 @@ struct HandController::Capsule {
   double radius;
 };
 
+bool HandController::TouchCache::matches(ObjectId o, const Capsule& c, bool touch) const {
+  return object.valid() && object == o && touching == touch && a == c.a && b == c.b;
+}
+
 HandController::HandController(std::shared_ptr<const HandRig> rig, GraspSettings settings)
     : rig_(std::move(rig)), settings_(settings) {
+  if (!(settings_.contact_tolerance > 0) || !std::isfinite(settings_.contact_tolerance))
+    throw std::invalid_argument("GraspSettings.contact_tolerance must be a positive number of metres");
+  if (!(settings_.speed_scale > 0) || !std::isfinite(settings_.speed_scale))
+    throw std::invalid_argument("GraspSettings.speed_scale must be a positive number");
   const std::size_t n = rig_->phalanges().size();
   state_.q.resize(n);
   for (std::size_t i = 0; i < n; ++i) state_.q[i] = rig_->phalanges()[i].open;
@@ -187,7 +196,7 @@ bool HandController::depenetrate(int finger, const Eigen::Isometry3d& X_ObjectPa
     const bool touching = mesh.capsule_overlaps(c.a, c.b, c.radius + tol, hint_[id.value]);
     state_.blocked[id.value] = touching;
     state_.blocked_angle[id.value] = state_.q[id.value];
-    touch_cache_[id.value] = {touching ? object.id : ObjectId(), c.a, c.b};
+    touch_cache_[id.value] = {object.id, c.a, c.b, touching};
   }
   return true;
 }
@@ -203,6 +212,10 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
   // hysteresis against rounding) or overlapping (discrete).
   const double release_gap = precise ? 2.0 * tol : 0.0;
 
+  // A finger whose input is fully released holds nothing: it unblocks and opens without
+  // touching anything (so a finger bent back past its open angle cannot keep a grasp).
+  if (u <= 0.0) object = nullptr;
+
   auto closing_sign = [&](std::size_t k) { return specs[chain[k].value].closed >= specs[chain[k].value].open ? 1.0 : -1.0; };
 
   // Interaction manager: unblock phalanges whose hand opened past them or whose contact ended.
@@ -217,10 +230,10 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
     if (!unblock && specs[id].capsule) {
       const Capsule c = capsule_in_object(chain[k], X_ObjectPalm);
       TouchCache& cache = touch_cache_[id];
-      if (cache.object == object->id && cache.a == c.a && cache.b == c.b) continue;
+      if (cache.matches(object->id, c, true)) continue;
       const MeshDistance& mesh = object->model->distance;
       unblock = !mesh.capsule_overlaps(c.a, c.b, c.radius + release_gap, hint_[id]);
-      cache = {unblock ? ObjectId() : object->id, c.a, c.b};
+      cache = {object->id, c.a, c.b, !unblock};
       // Precise mode: the hand's own motion pushed this finger into the object.
       if (!unblock && precise && mesh.capsule_overlaps(c.a, c.b, c.radius - tol, hint_[id])) pushed_in = true;
     }
@@ -250,7 +263,25 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
     moving |= d != 0;
     closing |= d * closing_sign(k) > 0;
   }
-  if (!moving) return;
+  if (!moving) {
+    // A finger at rest still blocks where the hand's motion brought a capsule into contact.
+    if (object == nullptr) return;
+    const double touch = precise ? tol : 0.0;
+    for (std::size_t m = 0; m < n; ++m) {
+      const int id = chain[m].value;
+      if (state_.blocked[id] || !specs[id].capsule || gap_bound_[id] > touch) continue;
+      const Capsule c = capsule_in_object(chain[m], X_ObjectPalm);
+      TouchCache& cache = touch_cache_[id];
+      if (cache.matches(object->id, c, false)) continue;
+      const bool touching = object->model->distance.capsule_overlaps(c.a, c.b, c.radius + touch, hint_[id]);
+      cache = {object->id, c.a, c.b, touching};
+      if (touching) {
+        state_.blocked[id] = 1;
+        state_.blocked_angle[id] = state_.q[id];
+      }
+    }
+    return;
+  }
 
   std::vector<double> q0(n);
   for (std::size_t k = 0; k < n; ++k) q0[k] = state_.q[chain[k].value];
@@ -281,7 +312,7 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
     const int id = chain[m].value;
     state_.blocked[id] = 1;
     state_.blocked_angle[id] = state_.q[id];
-    touch_cache_[id].object = ObjectId();  // checked afresh next tick
+    touch_cache_[id] = {};  // checked afresh next tick
   };
 
   if (!precise) {  // the paper's discrete test: move, then test overlap
@@ -349,9 +380,19 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
   }
 }
 
-HandTickEvents HandController::tick(const ControllerInput& input, double dt, std::span<const ObjectView> objects) {
-  assert(validate_input(input, *rig_).empty());
+HandTickEvents HandController::tick(const ControllerInput& raw_input, double dt, std::span<const ObjectView> objects) {
   HandTickEvents events;
+  if (!(dt > 0) || !std::isfinite(dt)) return events;  // no time passes
+  // An invalid input (callers should have rejected it) keeps the hand as it was.
+  ControllerInput fallback;
+  const bool valid = validate_input(raw_input, *rig_).empty();
+  if (!valid) {
+    fallback.X_WorldPalm = state_.X_WorldPalm;
+    fallback.trigger = state_.trigger;
+    fallback.curls = state_.curls;
+    fallback.tracking_valid = state_.has_pose;
+  }
+  const ControllerInput& input = valid ? raw_input : fallback;
   // Pose and hand velocity.
   if (input.tracking_valid) {
     if (state_.has_pose && dt > 0) {
@@ -429,12 +470,13 @@ HandTickEvents HandController::tick(const ControllerInput& input, double dt, std
     held_model_ = object->model;
     metrics_ = measure(*object);
     hold_metrics_ = metrics_;
-    hold_metrics_q_ = state_.q;
+    hold_metrics_key_ = shape_key();
     refresh_contacts();
     events.grasped = true;
   } else if (!rule && state_.grasped.valid()) {
     events.released = true;
     events.released_object = state_.grasped;
+    events.X_WorldReleased = *grasped_object_pose();
     state_.grasped = ObjectId();
     metrics_.reset();
   }
@@ -450,12 +492,20 @@ ObjectId HandController::release() {
   return released;
 }
 
+std::vector<double> HandController::shape_key() const {
+  std::vector<double> key = state_.q;
+  key.insert(key.end(), state_.blocked.begin(), state_.blocked.end());
+  key.push_back(state_.palm_contact);
+  key.push_back(state_.grasped.value);
+  return key;
+}
+
 std::optional<GraspMetrics> HandController::hold_metrics() const {
   const auto X_WorldObject = grasped_object_pose();
   if (!X_WorldObject) return std::nullopt;
-  if (hold_metrics_q_ != state_.q) {
+  if (hold_metrics_key_ != shape_key()) {
     hold_metrics_ = measure({state_.grasped, *X_WorldObject, held_model_});
-    hold_metrics_q_ = state_.q;
+    hold_metrics_key_ = shape_key();
   }
   return hold_metrics_;
 }
@@ -488,19 +538,22 @@ GraspMetrics HandController::measure(const ObjectView& object) const {
     if (hit.hit) m.nd = (hit.point - sp).dot(dir) - length;
     m.signed_distance = capsule_signed_distance(model.distance, X_ObjectPhalanx * cap.p_PhalanxA,
                                                 X_ObjectPhalanx * cap.p_PhalanxB, cap.radius, m.blocked, hint_[id.value]);
-    finger_count[spec.finger] += 1;
-    if (m.hit) finger_sum[spec.finger] += std::abs(m.nd);
+    if (m.hit) {
+      finger_count[spec.finger] += 1;
+      finger_sum[spec.finger] += std::abs(m.nd);
+    }
     out.capsules.push_back(m);
   }
   for (std::size_t f = 0; f < finger_sum.size(); ++f)
     if (finger_count[f] > 0) out.hand_error_mm += 1000.0 * finger_sum[f] / finger_count[f];
+  for (const CapsuleMetric& m : out.capsules) out.capsules_without_hit += !m.hit;
   return out;
 }
 
 void HandController::refresh_contacts() const {
   const ObjectModel& model = *held_model_;
   contacts_.clear();
-  contacts_q_ = state_.q;
+  contacts_key_ = shape_key();
   const Eigen::Isometry3d X_ObjectPalm = state_.X_PalmObject.inverse();
   const auto metrics = hold_metrics();
   auto add = [&](PhalanxId id, const Eigen::Vector3d& p_Object, const Eigen::Vector3d& n_Object) {
@@ -530,7 +583,7 @@ void HandController::refresh_contacts() const {
 std::vector<Contact> HandController::contacts() const {
   const auto X_WorldObject = grasped_object_pose();
   if (!X_WorldObject) return {};
-  if (contacts_q_ != state_.q) refresh_contacts();
+  if (contacts_key_ != shape_key()) refresh_contacts();
   std::vector<Contact> out = contacts_;
   for (Contact& c : out) {
     c.p_WorldContact = *X_WorldObject * c.p_ObjectContact;

@@ -161,9 +161,12 @@ ScriptedOperator::ScriptedOperator(std::shared_ptr<const HandRig> rig, OperatorS
 Eigen::Isometry3d ScriptedOperator::noisy(const Eigen::Isometry3d& X) {
   std::normal_distribution<double> n(0.0, 1.0);
   Eigen::Isometry3d out = X;
-  out.translation() += skill_.position_error * Eigen::Vector3d(n(rng_), n(rng_), n(rng_));
-  const Eigen::Vector3d axis = Eigen::Vector3d(n(rng_), n(rng_), n(rng_));
-  const double angle = skill_.orientation_error * n(rng_);
+  // Draw one at a time: the order of arguments' evaluation is the compiler's choice.
+  double draws[7];
+  for (double& d : draws) d = n(rng_);
+  out.translation() += skill_.position_error * Eigen::Vector3d(draws[0], draws[1], draws[2]);
+  const Eigen::Vector3d axis(draws[3], draws[4], draws[5]);
+  const double angle = skill_.orientation_error * draws[6];
   if (axis.norm() > 1e-9) out.linear() = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix() * X.linear();
   return out;
 }

@@ -56,6 +56,7 @@ struct World::Impl {
   std::map<int, Object> objects;  // ordered by id: deterministic iteration
   std::vector<Hand> hands;
   std::vector<GraspEvent> events;
+  std::vector<GraspEvent> pending;  // from calls between steps, delivered with the next step's
   int next_object = 0;
   std::uint64_t tick = 0;
 
@@ -129,7 +130,16 @@ ObjectId World::add_object(ObjectModelPtr model, const Eigen::Isometry3d& X_Worl
 void World::remove_object(ObjectId id) {
   auto it = impl_->objects.find(id.value);
   if (it == impl_->objects.end()) return;
-  if (it->second.holder.valid()) impl_->hand(it->second.holder).controller->release();
+  if (it->second.holder.valid()) {
+    impl_->hand(it->second.holder).controller->release();
+    GraspEvent e;
+    e.kind = GraspEvent::Kind::kRelease;
+    e.hand = it->second.holder;
+    e.object = id;
+    e.tick = impl_->tick;
+    e.time = time();
+    impl_->pending.push_back(std::move(e));
+  }
   impl_->dynamics.removeRigidBody(it->second.body.get());
   impl_->objects.erase(it);
 }
@@ -155,7 +165,8 @@ std::string World::set_input(HandId hand, const ControllerInput& input) {
 
 void World::step() {
   Impl& w = *impl_;
-  w.events.clear();
+  w.events = std::move(w.pending);
+  w.pending.clear();
   const double dt = w.settings.dt;
   const double now = static_cast<double>(w.tick + 1) * dt;
   std::vector<ObjectView> views;
@@ -171,10 +182,13 @@ void World::step() {
       if (it != w.objects.end() && it->second.holder == hand_id) {
         Impl::Object& o = it->second;
         o.holder = HandId();
+        // Let go where the hand holds it now, with the hand's motion: v = v_palm + w x (p_object - p_palm).
+        const btTransform pose = to_bt(ev.X_WorldReleased);
+        o.motion->setWorldTransform(pose);
+        o.body->setWorldTransform(pose);
         w.make_kinematic(o, false);
-        // Hand the hand's motion to physics: v = v_palm + w x (p_object - p_palm).
         const HandState& s = hand.state();
-        const Eigen::Vector3d r = to_eigen(o.body->getWorldTransform().getOrigin()) - s.X_WorldPalm.translation();
+        const Eigen::Vector3d r = ev.X_WorldReleased.translation() - s.X_WorldPalm.translation();
         const Eigen::Vector3d v = s.v_WorldPalm + s.w_WorldPalm.cross(r);
         o.body->setLinearVelocity(to_bt(v));
         o.body->setAngularVelocity(to_bt(s.w_WorldPalm));

@@ -343,7 +343,16 @@ int main(int argc, char** argv) {
       // The trial's seed depends on the object and trial only, so modes and speeds see the same poses.
       const std::uint64_t seed = opt.seed * 1000003ULL + job.object * 1009ULL + static_cast<std::uint64_t>(job.trial);
       const bool draw = !opt.svg_dir.empty() && job.trial == 0;
-      records[j] = run_trial(models[job.object], rig, opt, configs[job.config], job.trial, seed, draw);
+      try {
+        records[j] = run_trial(models[job.object], rig, opt, configs[job.config], job.trial, seed, draw);
+      } catch (const std::exception& e) {  // counted as not grasped, said once
+        records[j].object = models[job.object]->name;
+        records[j].mode = mode_name(configs[job.config].mode);
+        records[j].speed_scale = configs[job.config].speed;
+        records[j].trial = job.trial;
+        std::lock_guard lock(log_mutex);
+        std::cerr << "\ntelegrasp-eval: " << records[j].object << " trial " << job.trial << " failed: " << e.what() << "\n";
+      }
       const std::size_t done = ++finished;
       std::lock_guard lock(log_mutex);
       std::cerr << "\r[" << done << "/" << jobs.size() << "] " << records[j].mode << " x" << configs[job.config].speed << " "

@@ -78,11 +78,18 @@ TEST(HandKinematicsTest, LeftHandMirrorsRight) {
     }
   }
   // Capsules and metric points mirror too.
+  const auto mirror = [](const Eigen::Vector3d& p) { return Eigen::Vector3d(p.x(), -p.y(), p.z()); };
   for (PhalanxId id : right.capsule_phalanges()) {
     const auto& r = *right.phalanges()[id.value].capsule;
     const auto& l = *left.phalanges()[id.value].capsule;
-    EXPECT_LT((l.p_PhalanxCTc - Eigen::Vector3d(r.p_PhalanxCTc.x(), -r.p_PhalanxCTc.y(), r.p_PhalanxCTc.z())).norm(), kExact);
+    EXPECT_LT((l.p_PhalanxA - mirror(r.p_PhalanxA)).norm(), kExact);
+    EXPECT_LT((l.p_PhalanxB - mirror(r.p_PhalanxB)).norm(), kExact);
+    EXPECT_LT((l.p_PhalanxCTc - mirror(r.p_PhalanxCTc)).norm(), kExact);
+    EXPECT_LT((l.p_PhalanxSp - mirror(r.p_PhalanxSp)).norm(), kExact);
+    EXPECT_EQ(l.radius, r.radius);
   }
+  EXPECT_LT((left.selection_sphere().p_PalmCenter - mirror(right.selection_sphere().p_PalmCenter)).norm(), kExact);
+  EXPECT_LT((left.palm_contact().p_PalmCenter - mirror(right.palm_contact().p_PalmCenter)).norm(), kExact);
 }
 
 }  // namespace

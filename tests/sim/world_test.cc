@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 
 namespace telegrasp::sim {
@@ -54,31 +55,42 @@ TEST(WorldTest, ReleaseCarriesTheHandVelocity) {
   for (int i = 0; i < 30; ++i) world.step();
   ASSERT_TRUE(grasp(world, hand, can).has_value());
   EXPECT_EQ(world.holder(can), hand);
-  // Move the hand at a constant velocity (no rotation), then open it.
-  const Eigen::Vector3d v(0.3, -0.1, 0.5);
+  // Move the hand at a constant velocity v while turning it at w about its palm, then open it.
+  const Eigen::Vector3d v(0.3, -0.1, 0.5), w(0.0, 0.0, 3.0);
   ControllerInput in;
   in.X_WorldPalm = world.hand(hand).state().X_WorldPalm;
   in.trigger = 1.0;
-  for (int t = 0; t < 10; ++t) {
+  const auto advance = [&] {
     in.X_WorldPalm.translation() += v * world.dt();
+    in.X_WorldPalm.linear() = Eigen::AngleAxisd(w.norm() * world.dt(), w.normalized()).toRotationMatrix() * in.X_WorldPalm.linear();
+  };
+  for (int t = 0; t < 10; ++t) {
+    advance();
     world.set_input(hand, in);
     world.step();
     ASSERT_EQ(world.holder(can), hand) << "held while moving";
   }
   const Eigen::Isometry3d held_pose = world.object_pose(can);
   EXPECT_LT((held_pose.translation() - world.hand(hand).grasped_object_pose()->translation()).norm(), 1e-9) << "follows the hand exactly";
+  // Where the object is as the hand lets go: carried by this tick's hand pose.
+  const Eigen::Isometry3d X_PalmObject = world.hand(hand).state().X_PalmObject;
   in.trigger = 0.0;
-  in.X_WorldPalm.translation() += v * world.dt();
+  advance();
+  const Eigen::Vector3d p_released = (in.X_WorldPalm * X_PalmObject).translation();
   world.set_input(hand, in);
   world.step();
   ASSERT_EQ(world.events().size(), 1u);
   const GraspEvent& release = world.events()[0];
   EXPECT_EQ(release.kind, GraspEvent::Kind::kRelease);
-  EXPECT_LT((release.v_WorldObject - v).norm(), 1e-9);
+  // v_object = v_palm + w x (p_object - p_palm), at the pose where it was let go.
+  const Eigen::Vector3d expected_v = v + w.cross(p_released - in.X_WorldPalm.translation());
+  EXPECT_LT((release.v_WorldObject - expected_v).norm(), 1e-9);
+  EXPECT_LT((release.w_WorldObject - w).norm(), 1e-9);
   EXPECT_FALSE(world.holder(can).valid());
   // After one physics step the object flies with that velocity plus one step of gravity.
-  const Eigen::Vector3d expected = v + Eigen::Vector3d(0, 0, -9.81) * world.dt();
+  const Eigen::Vector3d expected = expected_v + Eigen::Vector3d(0, 0, -9.81) * world.dt();
   EXPECT_LT((world.object_velocity(can) - expected).norm(), 1e-6);
+  EXPECT_LT((world.object_pose(can).translation() - (p_released + expected * world.dt())).norm(), 1e-6);
 }
 
 // Object-local contacts, transformed by the object's pose, give the world contacts, and normals
@@ -92,13 +104,24 @@ TEST(WorldTest, ObjectLocalContactsMatchWorldContacts) {
   const auto event = grasp(world, hand, id);
   ASSERT_TRUE(event.has_value());
   ASSERT_FALSE(event->contacts.empty());
-  const Eigen::Isometry3d X_WorldObject = *world.hand(hand).grasped_object_pose();
+  // The object's pose as the world publishes it (the physics body), not the hand's own record.
+  const Eigen::Isometry3d X_WorldObject = world.object_pose(id);
+  const HandController& h = world.hand(hand);
   for (const Contact& c : event->contacts) {
-    EXPECT_LT((X_WorldObject * c.p_ObjectContact - c.p_WorldContact).norm(), 1e-12);
-    EXPECT_LT((X_WorldObject.linear() * c.n_Object - c.n_World).norm(), 1e-12);
+    EXPECT_LT((X_WorldObject * c.p_ObjectContact - c.p_WorldContact).norm(), 1e-9);
+    EXPECT_LT((X_WorldObject.linear() * c.n_Object - c.n_World).norm(), 1e-9);
     EXPECT_NEAR(c.n_World.norm(), 1.0, 1e-9);
-    // The contact lies on the surface.
+    // The contact lies on the surface, and (for a phalanx) one capsule radius from its axis,
+    // within the contact tolerance.
     EXPECT_LT(std::abs(model->distance.signed_distance(c.p_ObjectContact)), 1e-9);
+    if (!c.phalanx.valid()) continue;
+    const auto& cap = *h.rig().phalanges()[c.phalanx.value].capsule;
+    const Eigen::Isometry3d X = h.state().X_WorldPalm * h.state().X_PalmPhalanx[c.phalanx.value];
+    const Eigen::Vector3d a = X * cap.p_PhalanxA, b = X * cap.p_PhalanxB;
+    const double t = std::clamp((c.p_WorldContact - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
+    const double from_axis = (c.p_WorldContact - (a + t * (b - a))).norm();
+    EXPECT_GE(from_axis, cap.radius - 1e-6);
+    EXPECT_LE(from_axis, cap.radius + 2 * 0.05e-3 + 1e-6);
   }
   // Still consistent after the hand has carried the object somewhere else.
   ControllerInput in;
@@ -110,6 +133,23 @@ TEST(WorldTest, ObjectLocalContactsMatchWorldContacts) {
   world.step();
   const Eigen::Isometry3d moved = world.object_pose(id);
   for (const Contact& c : world.hand(hand).contacts()) EXPECT_LT((moved * c.p_ObjectContact - c.p_WorldContact).norm(), 1e-9);
+}
+
+// Removing a held object lets the hand go and reports the release with the next step's events.
+TEST(WorldTest, RemovingAHeldObjectReportsItsRelease) {
+  World world;
+  auto model = standin("005_tomato_soup_can");
+  const ObjectId can = world.add_object(model, World::resting_pose(*model, 0.45, 0.0, 0.0));
+  const HandId hand = world.add_hand(human_right());
+  for (int i = 0; i < 30; ++i) world.step();
+  ASSERT_TRUE(grasp(world, hand, can).has_value());
+  world.remove_object(can);
+  EXPECT_FALSE(world.hand(hand).state().grasped.valid());
+  world.step();
+  ASSERT_FALSE(world.events().empty());
+  EXPECT_EQ(world.events()[0].kind, GraspEvent::Kind::kRelease);
+  EXPECT_EQ(world.events()[0].object, can);
+  EXPECT_EQ(world.events()[0].hand, hand);
 }
 
 TEST(WorldTest, RejectsBadInputAndKeepsThePreviousOne) {

@@ -66,7 +66,8 @@ struct CapsuleMetric {
 /// ND of every capsule and the HandError, taken on the tick of the grasp.
 struct GraspMetrics {
   std::vector<CapsuleMetric> capsules;
-  double hand_error_mm = 0;     ///< Sum over fingers of mean |ND| over the finger's capsules (no-hit counts 0).
+  double hand_error_mm = 0;     ///< Sum over fingers of mean |ND| over the finger's capsules that hit.
+  int capsules_without_hit = 0; ///< Capsules whose sweep found nothing (left out of HandError).
 };
 
 /// A contact between a blocked phalanx (or the palm) and the grasped object.
@@ -101,15 +102,18 @@ struct HandTickEvents {
   bool grasped = false;   ///< The grasp rule turned true: attach `state().grasped`.
   bool released = false;  ///< The grasp rule turned false: hand `released_object` back to physics.
   ObjectId released_object;
+  Eigen::Isometry3d X_WorldReleased = Eigen::Isometry3d::Identity();  ///< Its pose as the hand let go.
 };
 
 /// The four components (selection, interaction manager, finger movement, grasping logic)
 /// for one hand. Deterministic: equal inputs give bit-identical states.
 class HandController {
  public:
+  /// Throws std::invalid_argument for a non-positive contact tolerance or speed scale.
   HandController(std::shared_ptr<const HandRig> rig, GraspSettings settings);
 
-  /// Advances one tick of `dt` seconds. `input` must have passed validate_input. While an object
+  /// Advances one tick of `dt` seconds (dt <= 0: nothing happens). An input that fails
+  /// validate_input is ignored (the hand keeps its last pose, trigger and curls). While an object
   /// is grasped its pose is taken as X_WorldPalm * X_PalmObject, not from `objects`.
   HandTickEvents tick(const ControllerInput& input, double dt, std::span<const ObjectView> objects);
 
@@ -139,6 +143,8 @@ class HandController {
   void select_object(std::span<const ObjectView> objects);
   void step_finger(int finger, double u, double dt, const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm);
   void refresh_contacts() const;
+  // The hand's shape as the contact and metric caches see it: joint angles, blocks, palm, grasp.
+  std::vector<double> shape_key() const;
   // Precise mode: extends a finger the hand pushed into the object until it rests on the surface;
   // false if even the fully extended finger penetrates (the hand itself is inside).
   bool depenetrate(int finger, const Eigen::Isometry3d& X_ObjectPalm, const ObjectView& object);
@@ -148,17 +154,20 @@ class HandController {
   HandState state_;
   std::optional<GraspMetrics> metrics_;
   const ObjectModel* held_model_ = nullptr;
-  // Caches keyed on the joint angles (the hand-object pose is fixed while holding).
+  // Caches keyed on shape_key() (the hand-object pose is fixed while holding).
   mutable std::vector<Contact> contacts_;  // object frame only; world fields filled by contacts()
-  mutable std::vector<double> contacts_q_;
+  mutable std::vector<double> contacts_key_;
   mutable std::optional<GraspMetrics> hold_metrics_;
-  mutable std::vector<double> hold_metrics_q_;
+  mutable std::vector<double> hold_metrics_key_;
   // reach_[k][m]: bound on the distance from joint k to any point of capsule m's segment.
   std::vector<std::vector<double>> reach_;
-  // Where each blocked capsule was last found touching (object frame); an identical pose skips the query.
+  // Where each capsule was last checked (object frame) and whether it touched; an identical pose
+  // gives the same answer without a query.
   struct TouchCache {
     ObjectId object;
     Eigen::Vector3d a{0, 0, 0}, b{0, 0, 0};
+    bool touching = false;
+    bool matches(ObjectId o, const Capsule& c, bool touch) const;
   };
   std::vector<TouchCache> touch_cache_;
   // Per phalanx, the triangle last found nearest to its capsule: a search hint (speed only).

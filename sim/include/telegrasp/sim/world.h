@@ -72,7 +72,7 @@ class World {
   /// The hand holding `id`, or an invalid id.
   HandId holder(ObjectId id) const;
   const HandController& hand(HandId id) const;
-  /// Events of the last step, in order.
+  /// Events of the last step, in order (a release caused by remove_object between steps comes first).
   const std::vector<GraspEvent>& events() const;
 
  private:
