@@ -273,12 +273,17 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
       const Capsule c = capsule_in_object(chain[m], X_ObjectPalm);
       TouchCache& cache = touch_cache_[id];
       if (cache.matches(object->id, c, false)) continue;
-      const bool touching = object->model->distance.capsule_overlaps(c.a, c.b, c.radius + touch, hint_[id]);
+      const MeshDistance& mesh = object->model->distance;
+      const bool touching = mesh.capsule_overlaps(c.a, c.b, c.radius + touch, hint_[id]);
       cache = {object->id, c.a, c.b, touching};
-      if (touching) {
-        state_.blocked[id] = 1;
-        state_.blocked_angle[id] = state_.q[id];
+      if (!touching) continue;
+      // Pushed in, not just touching: precise mode bends the finger back onto the surface.
+      if (precise && mesh.capsule_overlaps(c.a, c.b, c.radius - tol, hint_[id]) && depenetrate(finger, X_ObjectPalm, *object)) {
+        forget_bounds();
+        return;
       }
+      state_.blocked[id] = 1;
+      state_.blocked_angle[id] = state_.q[id];
     }
     return;
   }
