@@ -48,11 +48,24 @@ std::optional<GraspEvent> grasp(World& world, HandId hand, ObjectId id) {
   return std::nullopt;
 }
 
-TEST(WorldTest, ReleaseCarriesTheHandVelocity) {
+// A world with one stand-in resting at (x, y, yaw) and the human right hand, settled for 1/3 s.
+struct OneObjectScene {
   World world;
-  const ObjectId can = world.add_object(standin("005_tomato_soup_can"), World::resting_pose(*standin("005_tomato_soup_can"), 0.45, 0.0, 0.0));
-  const HandId hand = world.add_hand(human_right());
-  for (int i = 0; i < 30; ++i) world.step();
+  ObjectModelPtr model;
+  ObjectId object;
+  HandId hand;
+  OneObjectScene(const std::string& name, double x, double y, double yaw) : model(standin(name)) {
+    object = world.add_object(model, World::resting_pose(*model, x, y, yaw));
+    hand = world.add_hand(human_right());
+    for (int i = 0; i < 30; ++i) world.step();
+  }
+};
+
+TEST(WorldTest, ReleaseCarriesTheHandVelocity) {
+  OneObjectScene scene("005_tomato_soup_can", 0.45, 0.0, 0.0);
+  World& world = scene.world;
+  const ObjectId can = scene.object;
+  const HandId hand = scene.hand;
   ASSERT_TRUE(grasp(world, hand, can).has_value());
   EXPECT_EQ(world.holder(can), hand);
   // Move the hand at a constant velocity v while turning it at w about its palm, then open it.
@@ -96,11 +109,11 @@ TEST(WorldTest, ReleaseCarriesTheHandVelocity) {
 // Object-local contacts, transformed by the object's pose, give the world contacts, and normals
 // are unit and point out of the object.
 TEST(WorldTest, ObjectLocalContactsMatchWorldContacts) {
-  World world;
-  auto model = standin("010_potted_meat_can");
-  const ObjectId id = world.add_object(model, World::resting_pose(*model, 0.42, 0.05, 1.234));
-  const HandId hand = world.add_hand(human_right());
-  for (int i = 0; i < 30; ++i) world.step();
+  OneObjectScene scene("010_potted_meat_can", 0.42, 0.05, 1.234);
+  World& world = scene.world;
+  const ObjectModelPtr& model = scene.model;
+  const ObjectId id = scene.object;
+  const HandId hand = scene.hand;
   const auto event = grasp(world, hand, id);
   ASSERT_TRUE(event.has_value());
   ASSERT_FALSE(event->contacts.empty());
@@ -137,11 +150,10 @@ TEST(WorldTest, ObjectLocalContactsMatchWorldContacts) {
 
 // Removing a held object lets the hand go and reports the release with the next step's events.
 TEST(WorldTest, RemovingAHeldObjectReportsItsRelease) {
-  World world;
-  auto model = standin("005_tomato_soup_can");
-  const ObjectId can = world.add_object(model, World::resting_pose(*model, 0.45, 0.0, 0.0));
-  const HandId hand = world.add_hand(human_right());
-  for (int i = 0; i < 30; ++i) world.step();
+  OneObjectScene scene("005_tomato_soup_can", 0.45, 0.0, 0.0);
+  World& world = scene.world;
+  const ObjectId can = scene.object;
+  const HandId hand = scene.hand;
   ASSERT_TRUE(grasp(world, hand, can).has_value());
   world.remove_object(can);
   EXPECT_FALSE(world.hand(hand).state().grasped.valid());
