@@ -21,6 +21,8 @@
 #include <sstream>
 #include <string>
 #include <thread>
+
+#include <unistd.h>
 #include <vector>
 
 namespace {
@@ -337,6 +339,7 @@ int main(int argc, char** argv) {
   std::vector<Record> records(jobs.size());
   std::atomic<std::size_t> next{0}, finished{0};
   std::mutex log_mutex;
+  const bool stderr_is_terminal = isatty(STDERR_FILENO) != 0;
   auto worker = [&] {
     for (std::size_t j = next++; j < jobs.size(); j = next++) {
       const Job& job = jobs[j];
@@ -355,14 +358,16 @@ int main(int argc, char** argv) {
       }
       const std::size_t done = ++finished;
       std::lock_guard lock(log_mutex);
-      std::cerr << "\r[" << done << "/" << jobs.size() << "] " << records[j].mode << " x" << configs[job.config].speed << " "
-                << records[j].object << " trial " << job.trial << (records[j].held_after_lift ? " held" : " NOT held") << "        " << std::flush;
+      // One line rewritten in place on a terminal; a line per trial in a log file.
+      std::cerr << (stderr_is_terminal ? "\r[" : "[") << done << "/" << jobs.size() << "] " << records[j].mode << " x"
+                << configs[job.config].speed << " " << records[j].object << " trial " << job.trial
+                << (records[j].held_after_lift ? " held" : " NOT held") << (stderr_is_terminal ? "        " : "\n") << std::flush;
     }
   };
   std::vector<std::thread> pool;
   for (int i = 0; i < opt.threads; ++i) pool.emplace_back(worker);
   for (auto& t : pool) t.join();
-  std::cerr << "\n";
+  if (stderr_is_terminal) std::cerr << "\n";
 
   json summaries = json::array();
   for (std::size_t c = 0; c < configs.size(); ++c) {
