@@ -20,6 +20,11 @@ constexpr int kMaxAdvancementSteps = 64;
 
 bool in_unit_interval(double v) { return std::isfinite(v) && v >= 0.0 && v <= 1.0; }
 
+// Distance from p (object frame) to the object's bounding box; 0 inside it.
+double distance_to_bounds(const ObjectModel& model, const Eigen::Vector3d& p) {
+  return (p - p.cwiseMax(model.p_ObjectMin).cwiseMin(model.p_ObjectMax)).norm();
+}
+
 // Blocked capsules lie within the contact tolerance (plus hysteresis) of the surface; searches
 // for their closest point need look no farther than this beyond the radius.
 constexpr double kTouchReach = 1e-3;
@@ -80,6 +85,7 @@ HandController::HandController(std::shared_ptr<const HandRig> rig, GraspSettings
   // reach_[k][m] bounds |p - o_k| for any point p of capsule m's segment and the origin o_k of an
   // ancestor joint k, in any configuration (triangle inequality along the chain).
   reach_.assign(n, std::vector<double>(n, 0.0));
+  palm_reach_.assign(n, 0.0);
   for (std::size_t m = 0; m < n; ++m) {
     const auto& cap = rig_->phalanges()[m].capsule;
     if (!cap) continue;
@@ -88,13 +94,15 @@ HandController::HandController(std::shared_ptr<const HandRig> rig, GraspSettings
       reach_[k][m] = r;
       r += rig_->phalanges()[k].X_ParentJoint.translation().norm();
     }
+    palm_reach_[m] = r;  // past the root joint: from the palm origin
   }
-  palm_reach_.assign(n, 0.0);
-  for (std::size_t m = 0; m < n; ++m) {
-    if (!rig_->phalanges()[m].capsule) continue;
-    int root = static_cast<int>(m);
-    while (rig_->phalanges()[root].parent >= 0) root = rig_->phalanges()[root].parent;
-    palm_reach_[m] = reach_[root][m] + rig_->phalanges()[root].X_ParentJoint.translation().norm();
+}
+
+void HandController::update_finger_poses(int finger) {
+  for (PhalanxId id : rig_->fingers()[finger].phalanges) {
+    const PhalanxSpec& spec = rig_->phalanges()[id.value];
+    const Eigen::Isometry3d X_PalmParent = spec.parent < 0 ? Eigen::Isometry3d::Identity() : state_.X_PalmPhalanx[spec.parent];
+    state_.X_PalmPhalanx[id.value] = phalanx_pose(spec, X_PalmParent, state_.q[id.value]);
   }
 }
 
@@ -118,9 +126,7 @@ void HandController::select_object(std::span<const ObjectView> objects) {
   for (const ObjectView& view : objects) {
     const ObjectModel& model = *view.model;
     const Eigen::Vector3d c = view.X_WorldObject.inverse() * p_WorldCenter;
-    // Cheap reject: the sphere misses the object's bounding box.
-    const Eigen::Vector3d excess = (c - c.cwiseMax(model.p_ObjectMin).cwiseMin(model.p_ObjectMax));
-    if (excess.norm() > sphere.radius) continue;
+    if (distance_to_bounds(model, c) > sphere.radius) continue;  // cheap reject
     // Early-out overlap test (a point is a zero-length capsule); distances only to rank.
     if (!model.distance.capsule_overlaps(c, c, sphere.radius)) continue;
     candidates.push_back({view.id, &model, c});
@@ -151,41 +157,33 @@ bool HandController::depenetrate(int finger, const Eigen::Isometry3d& X_ObjectPa
       const int id = chain[k].value;
       const double extended = specs[id].closed >= specs[id].open ? specs[id].min : specs[id].max;
       state_.q[id] = q0[k] + s * (extended - q0[k]);
-      const int parent = specs[id].parent;
-      state_.X_PalmPhalanx[id] = phalanx_pose(specs[id], parent < 0 ? Eigen::Isometry3d::Identity() : state_.X_PalmPhalanx[parent], state_.q[id]);
     }
+    update_finger_poses(finger);
   };
-  auto penetrating = [&]() {
+  // Some capsule of the finger comes within `extra` of the surface (0: overlaps the solid).
+  auto any_within = [&](double extra) {
     for (PhalanxId id : chain) {
       if (!specs[id.value].capsule) continue;
       const Capsule c = capsule_in_object(id, X_ObjectPalm);
-      if (mesh.capsule_overlaps(c.a, c.b, c.radius, hint_[id.value])) return true;
+      if (mesh.capsule_overlaps(c.a, c.b, c.radius + extra, hint_[id.value])) return true;
     }
     return false;
   };
   set_opening(1.0);
-  if (penetrating()) {  // the hand itself is in the object: extending the finger cannot help
+  if (any_within(0.0)) {  // the hand itself is in the object: extending the finger cannot help
     set_opening(0.0);
     return false;
   }
-  auto touching = [&]() {
-    for (PhalanxId id : chain) {
-      if (!specs[id.value].capsule) continue;
-      const Capsule c = capsule_in_object(id, X_ObjectPalm);
-      if (mesh.capsule_overlaps(c.a, c.b, c.radius + tol, hint_[id.value])) return true;
-    }
-    return false;
-  };
   // Bisection until the free end rests on the surface (within the tolerance).
   double lo = 0.0, hi = 1.0;  // penetrating at lo, free at hi
   for (int i = 0; i < 40; ++i) {
     const double mid = 0.5 * (lo + hi);
     set_opening(mid);
-    if (penetrating()) {
+    if (any_within(0.0)) {
       lo = mid;
     } else {
       hi = mid;
-      if (touching()) break;
+      if (any_within(tol)) break;
     }
   }
   set_opening(hi);
@@ -291,12 +289,8 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
   std::vector<double> q0(n);
   for (std::size_t k = 0; k < n; ++k) q0[k] = state_.q[chain[k].value];
   auto set_fraction = [&](double s) {
-    for (std::size_t k = 0; k < n; ++k) {
-      const int id = chain[k].value;
-      state_.q[id] = q0[k] + s * delta[k];
-      const int parent = specs[id].parent;
-      state_.X_PalmPhalanx[id] = phalanx_pose(specs[id], parent < 0 ? Eigen::Isometry3d::Identity() : state_.X_PalmPhalanx[parent], state_.q[id]);
-    }
+    for (std::size_t k = 0; k < n; ++k) state_.q[chain[k].value] = q0[k] + s * delta[k];
+    update_finger_poses(finger);
   };
   // Free capsules this step can move into the object.
   std::vector<std::size_t> affected;
@@ -400,7 +394,7 @@ HandTickEvents HandController::tick(const ControllerInput& raw_input, double dt,
   const ControllerInput& input = valid ? raw_input : fallback;
   // Pose and hand velocity.
   if (input.tracking_valid) {
-    if (state_.has_pose && dt > 0) {
+    if (state_.has_pose) {
       state_.v_WorldPalm = (input.X_WorldPalm.translation() - state_.X_WorldPalm.translation()) / dt;
       const Eigen::AngleAxisd dR(input.X_WorldPalm.linear() * state_.X_WorldPalm.linear().transpose());
       state_.w_WorldPalm = dR.axis() * (dR.angle() / dt);
@@ -465,8 +459,7 @@ HandTickEvents HandController::tick(const ControllerInput& raw_input, double dt,
     const PalmSphere& palm = rig_->palm_contact();
     const Eigen::Vector3d c = X_ObjectPalm * palm.p_PalmCenter;
     const ObjectModel& model = *object->model;
-    const bool near_box = (c - c.cwiseMax(model.p_ObjectMin).cwiseMin(model.p_ObjectMax)).norm() <= palm.radius;
-    state_.palm_contact = near_box && model.distance.capsule_overlaps(c, c, palm.radius);
+    state_.palm_contact = distance_to_bounds(model, c) <= palm.radius && model.distance.capsule_overlaps(c, c, palm.radius);
   }
   const bool rule = object && evaluate_grasp_rule(rig_->grasp_rule(), state_.blocked, state_.palm_contact);
   if (rule && !state_.grasped.valid()) {
@@ -546,12 +539,13 @@ GraspMetrics HandController::measure(const ObjectView& object) const {
     if (m.hit) {
       finger_count[spec.finger] += 1;
       finger_sum[spec.finger] += std::abs(m.nd);
+    } else {
+      ++out.capsules_without_hit;
     }
     out.capsules.push_back(m);
   }
   for (std::size_t f = 0; f < finger_sum.size(); ++f)
     if (finger_count[f] > 0) out.hand_error_mm += 1000.0 * finger_sum[f] / finger_count[f];
-  for (const CapsuleMetric& m : out.capsules) out.capsules_without_hit += !m.hit;
   return out;
 }
 

@@ -83,9 +83,8 @@ OperatorSkill skill_profile(const std::string& name) {
   throw std::invalid_argument("unknown operator skill '" + name + "' (expected perfect, experienced or inexperienced)");
 }
 
-GraspPlan plan_grasp(const HandRig& rig_ref, const GraspSettings& settings, const ObjectModel& model,
+GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSettings& settings, const ObjectModel& model,
                      const Eigen::Isometry3d& X_WorldObject, double dt, double table_height) {
-  const auto rig = std::make_shared<const HandRig>(rig_ref);
   // The operator aims for where a precise hand would close well, whatever the simulated mode.
   GraspSettings planning = settings;
   planning.mode = ClosingMode::kPrecise;
@@ -173,7 +172,7 @@ Eigen::Isometry3d ScriptedOperator::noisy(const Eigen::Isometry3d& X) {
 
 void ScriptedOperator::begin(const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject,
                              const Eigen::Isometry3d& X_WorldPalm, double t0) {
-  plan_ = plan_grasp(*rig_, settings_, model, X_WorldObject, dt_, 0.0);
+  plan_ = plan_grasp(rig_, settings_, model, X_WorldObject, dt_, 0.0);
   X_last_ = X_WorldPalm;
   attempts_ = 0;
   held_after_lift_ = false;

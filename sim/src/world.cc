@@ -65,6 +65,11 @@ struct World::Impl {
     if (it == objects.end()) throw std::out_of_range("World: unknown object id " + std::to_string(id.value));
     return it->second;
   }
+  // Puts a body at a pose (its motion state too, so kinematic velocities follow).
+  static void place(Object& o, const btTransform& pose) {
+    o.motion->setWorldTransform(pose);
+    o.body->setWorldTransform(pose);
+  }
   Hand& hand(HandId id) {
     if (id.value < 0 || id.value >= static_cast<int>(hands.size())) throw std::out_of_range("World: unknown hand id " + std::to_string(id.value));
     return hands[id.value];
@@ -183,9 +188,7 @@ void World::step() {
         Impl::Object& o = it->second;
         o.holder = HandId();
         // Let go where the hand holds it now, with the hand's motion: v = v_palm + w x (p_object - p_palm).
-        const btTransform pose = to_bt(ev.X_WorldReleased);
-        o.motion->setWorldTransform(pose);
-        o.body->setWorldTransform(pose);
+        Impl::place(o, to_bt(ev.X_WorldReleased));
         w.make_kinematic(o, false);
         const HandState& s = hand.state();
         const Eigen::Vector3d r = ev.X_WorldReleased.translation() - s.X_WorldPalm.translation();
@@ -216,9 +219,7 @@ void World::step() {
     if (!o.holder.valid()) continue;
     const auto pose = w.hand(o.holder).controller->grasped_object_pose();
     assert(pose);
-    const btTransform t = to_bt(*pose);
-    o.motion->setWorldTransform(t);
-    o.body->setWorldTransform(t);
+    Impl::place(o, to_bt(*pose));
   }
   w.dynamics.stepSimulation(btScalar(dt), 1, btScalar(dt));
   ++w.tick;

@@ -17,6 +17,7 @@
 #include <fstream>
 #include <iostream>
 #include <mutex>
+#include <optional>
 #include <numbers>
 #include <sstream>
 #include <string>
@@ -186,6 +187,8 @@ Record run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRi
   rec.speed_scale = cfg.speed;
   rec.trial = trial;
   double z_held = -1e9;
+  std::optional<GraspMetrics> held;  // the hand as it was on the last tick of the hold
+  GraspSnapshot picture;
   while (!op.done() && world.time() - t0 < 30.0) {
     const bool grasped = world.holder(object) == hand;
     const ControllerInput in = op.next(world.time(), grasped);
@@ -193,16 +196,9 @@ Record run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRi
     world.step();
     if (op.phase() == OperatorPhase::kHold) {
       z_held = std::max(z_held, world.object_pose(object).translation().z());
-      if (const auto held = world.hand(hand).hold_metrics()) {
-        rec.hand_error_mm = held->hand_error_mm;
-        rec.capsules = capsule_records(*held, *rig);
-        if (draw) {
-          const ObjectView view{object, world.object_pose(object), model.get()};
-          char title[160];
-          std::snprintf(title, sizeof title, "%s, %s mode x%g, trial %d: HandError %.1f mm", model->name.c_str(),
-                        rec.mode.c_str(), cfg.speed, trial, held->hand_error_mm);
-          rec.svg = render_svg(snapshot(world.hand(hand), view, title));
-        }
+      if (auto now = world.hand(hand).hold_metrics()) {
+        held = std::move(now);
+        if (draw) picture = snapshot(world.hand(hand), {object, world.object_pose(object), model.get()}, "");
       }
     }
     for (const GraspEvent& e : world.events()) {
@@ -213,6 +209,17 @@ Record run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRi
       rec.grasp_tick_capsules = capsule_records(*e.metrics, *rig);
       rec.hand_error_mm = rec.grasp_tick_hand_error_mm;
       rec.capsules = rec.grasp_tick_capsules;
+    }
+  }
+  if (held) {
+    rec.hand_error_mm = held->hand_error_mm;
+    rec.capsules = capsule_records(*held, *rig);
+    if (draw) {
+      char title[160];
+      std::snprintf(title, sizeof title, "%s, %s mode x%g, trial %d: HandError %.1f mm", model->name.c_str(),
+                    rec.mode.c_str(), cfg.speed, trial, held->hand_error_mm);
+      picture.title = title;
+      rec.svg = render_svg(picture);
     }
   }
   rec.attempts = op.attempts();

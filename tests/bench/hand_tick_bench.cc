@@ -57,7 +57,7 @@ const Fixture& fixture(const std::string& source) {
   const auto known = find_protocol_object(source);
   f.model = std::filesystem::exists(source) ? load_object_model(source) : make_standin_model(*known);
   f.X_WorldObject = World::resting_pose(*f.model, 0.45, 0.0, 0.4);
-  f.plan = plan_grasp(*rig(), {}, *f.model, f.X_WorldObject, kDt);
+  f.plan = plan_grasp(rig(), {}, *f.model, f.X_WorldObject, kDt);
   HandController dry_run(rig(), {});
   const ObjectView view{ObjectId(0), f.X_WorldObject, f.model.get()};
   for (int t = 0; t < 90 && f.grasp_tick < 0; ++t)

@@ -99,7 +99,7 @@ void fast_close_on(const ObjectModelPtr& knife) {
   const Eigen::Isometry3d X_WorldObject = World::resting_pose(*knife, 0.45, 0.0, 0.9);
   GraspSettings fast;
   fast.speed_scale = 10.0;
-  const GraspPlan plan = plan_grasp(*hand_rig, fast, *knife, X_WorldObject, 1.0 / 90);
+  const GraspPlan plan = plan_grasp(hand_rig, fast, *knife, X_WorldObject, 1.0 / 90);
   ASSERT_TRUE(plan.predicted_grasp);
   HandController hand(hand_rig, fast);
   const ObjectView view{ObjectId(0), X_WorldObject, knife.get()};

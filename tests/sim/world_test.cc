@@ -34,7 +34,7 @@ TEST(WorldTest, ObjectRestsOnTheTable) {
 // Drives the hand to the planned grasp pose of `id` and squeezes until the world reports a grasp.
 // Returns the grasp event.
 std::optional<GraspEvent> grasp(World& world, HandId hand, ObjectId id) {
-  const GraspPlan plan = plan_grasp(*human_right(), {}, world.object_model(id), world.object_pose(id), world.dt());
+  const GraspPlan plan = plan_grasp(human_right(), {}, world.object_model(id), world.object_pose(id), world.dt());
   EXPECT_TRUE(plan.predicted_grasp);
   ControllerInput in;
   in.X_WorldPalm = plan.X_WorldPalm;
@@ -63,9 +63,7 @@ struct OneObjectScene {
 
 TEST(WorldTest, ReleaseCarriesTheHandVelocity) {
   OneObjectScene scene("005_tomato_soup_can", 0.45, 0.0, 0.0);
-  World& world = scene.world;
-  const ObjectId can = scene.object;
-  const HandId hand = scene.hand;
+  auto& [world, model, can, hand] = scene;
   ASSERT_TRUE(grasp(world, hand, can).has_value());
   EXPECT_EQ(world.holder(can), hand);
   // Move the hand at a constant velocity v while turning it at w about its palm, then open it.
@@ -110,10 +108,7 @@ TEST(WorldTest, ReleaseCarriesTheHandVelocity) {
 // are unit and point out of the object.
 TEST(WorldTest, ObjectLocalContactsMatchWorldContacts) {
   OneObjectScene scene("010_potted_meat_can", 0.42, 0.05, 1.234);
-  World& world = scene.world;
-  const ObjectModelPtr& model = scene.model;
-  const ObjectId id = scene.object;
-  const HandId hand = scene.hand;
+  auto& [world, model, id, hand] = scene;
   const auto event = grasp(world, hand, id);
   ASSERT_TRUE(event.has_value());
   ASSERT_FALSE(event->contacts.empty());
@@ -151,9 +146,7 @@ TEST(WorldTest, ObjectLocalContactsMatchWorldContacts) {
 // Removing a held object lets the hand go and reports the release with the next step's events.
 TEST(WorldTest, RemovingAHeldObjectReportsItsRelease) {
   OneObjectScene scene("005_tomato_soup_can", 0.45, 0.0, 0.0);
-  World& world = scene.world;
-  const ObjectId can = scene.object;
-  const HandId hand = scene.hand;
+  auto& [world, model, can, hand] = scene;
   ASSERT_TRUE(grasp(world, hand, can).has_value());
   world.remove_object(can);
   EXPECT_FALSE(world.hand(hand).state().grasped.valid());

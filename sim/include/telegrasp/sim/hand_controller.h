@@ -140,6 +140,8 @@ class HandController {
  private:
   struct Capsule;  // a capsule placed in the object frame
   Capsule capsule_in_object(PhalanxId id, const Eigen::Isometry3d& X_ObjectPalm) const;
+  // Recomputes X_PalmPhalanx along one finger from state_.q.
+  void update_finger_poses(int finger);
   void select_object(std::span<const ObjectView> objects);
   void step_finger(int finger, double u, double dt, const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm);
   void refresh_contacts() const;

@@ -46,7 +46,7 @@ struct GraspPlan {
 /// best: a grasp with no capsule ending inside the object, then opposing contact normals (a pinch
 /// or wrap, not a press), then fingers above the table top at `table_height` (the World's is 0),
 /// then the most capsules blocked, then the least HandError. Deterministic.
-GraspPlan plan_grasp(const HandRig& rig, const GraspSettings& settings, const ObjectModel& model,
+GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSettings& settings, const ObjectModel& model,
                      const Eigen::Isometry3d& X_WorldObject, double dt, double table_height = 0.0);
 
 /// Produces controller inputs for one trial: react, reach to a planned grasp pose with the skill's
