@@ -1,0 +1,80 @@
+// telegrasp::client::Client: publish controller states and commands to a telegrasp server and
+// receive everything it publishes, with callbacks or by polling. No Fast DDS types here.
+#pragma once
+
+#include "telegrasp/client/types.h"
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace telegrasp::client {
+
+/// Server outputs a client subscribes to (bits; default all).
+enum Topics : unsigned {
+  kHandSkeletons = 1u << 0,
+  kGraspStates = 1u << 1,
+  kContactSets = 1u << 2,
+  kGraspEvents = 1u << 3,
+  kSceneStates = 1u << 4,
+  kServerStatuses = 1u << 5,
+  kAllTopics = (1u << 6) - 1,
+};
+
+struct ClientOptions {
+  std::string client_id;               ///< Names this client's hands; 1..64 characters.
+  int domain = 0;                      ///< DDS domain, 0..232.
+  std::string profile = "loopback";    ///< Participant profile: loopback, lan, wan.
+  std::string profiles_file;           ///< "": $TELEGRASP_PROFILES, else the shipped file.
+  unsigned topics = kAllTopics;        ///< Outputs to subscribe to.
+};
+
+/// One DDS participant with a writer per input topic and a reader per subscribed output.
+/// Thread-safe. Callbacks run on a DDS thread: keep them short, do not call back into the
+/// client from them except the poll/take functions.
+class Client {
+ public:
+  /// Throws std::runtime_error naming what is wrong (client id, domain, profiles file, profile).
+  explicit Client(ClientOptions options);
+  ~Client();
+  Client(const Client&) = delete;
+  Client& operator=(const Client&) = delete;
+
+  const std::string& client_id() const;
+
+  /// Publishes one controller sample; returns the sequence number it carries.
+  std::uint64_t publish(const ControllerSample& sample);
+  /// Sends a scene command (reliable); returns its command id.
+  std::uint64_t send_command(const SceneCommand& command);
+
+  /// Callbacks, one per output; setting one replaces the previous. Empty function: none.
+  void on_hand_skeleton(std::function<void(const HandSkeleton&)> callback);
+  void on_grasp_state(std::function<void(const GraspState&)> callback);
+  void on_contact_set(std::function<void(const ContactSet&)> callback);
+  void on_grasp_event(std::function<void(const GraspEvent&)> callback);
+  void on_scene_state(std::function<void(const SceneState&)> callback);
+  void on_server_status(std::function<void(const ServerStatus&)> callback);
+
+  /// Polling: the newest sample of each output (per hand for per-hand outputs).
+  std::optional<SceneState> latest_scene_state() const;
+  std::optional<ServerStatus> latest_server_status() const;
+  std::vector<HandSkeleton> latest_hand_skeletons() const;
+  std::optional<GraspState> latest_grasp_state(const HandKey& hand) const;
+  std::optional<ContactSet> latest_contact_set(const HandKey& hand) const;
+  /// Every grasp event received since the last call, in arrival order.
+  std::vector<GraspEvent> take_grasp_events();
+
+  /// Waits until a server is matched (it reads our controller states and we have its status);
+  /// false on timeout.
+  bool wait_for_server(std::chrono::milliseconds timeout) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace telegrasp::client

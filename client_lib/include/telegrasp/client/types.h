@@ -1,0 +1,149 @@
+// The data a telegrasp client sends and receives, in Eigen and std types (no Fast DDS here).
+// Mirrors idl/telegrasp.idl; units SI, poses named with their frames.
+#pragma once
+
+#include <Eigen/Geometry>
+
+#include <compare>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace telegrasp::client {
+
+enum class HandSide : std::uint8_t { kLeft = 0, kRight = 1 };
+
+/// "left" / "right" (or "side<N>" for a value that is neither).
+std::string to_string(HandSide side);
+
+/// One hand of one client: the key of every per-hand topic.
+struct HandKey {
+  std::string client_id;
+  HandSide side = HandSide::kRight;
+  auto operator<=>(const HandKey&) const = default;
+};
+
+/// One controller sample for one hand.
+struct ControllerSample {
+  HandSide side = HandSide::kRight;
+  Eigen::Isometry3d X_WorldPalm = Eigen::Isometry3d::Identity();
+  double trigger = 0;                  ///< 0 open .. 1 closed.
+  std::vector<double> curls;           ///< Empty, or five values in [0, 1] (thumb first).
+  std::uint32_t buttons = 0;           ///< BUTTON_* bits of the IDL.
+  bool tracking_valid = true;          ///< False: the server keeps the last pose.
+  std::uint64_t sequence_number = 0;   ///< 0: Client::publish numbers the hand's samples 1, 2, 3 ...
+  std::int64_t client_time_ns = 0;     ///< 0: Client::publish stamps steady_clock now.
+};
+
+struct HandSkeleton {
+  HandKey hand;
+  std::string rig;
+  std::uint64_t tick = 0;
+  double time = 0;
+  std::uint64_t input_sequence = 0;    ///< Newest controller sample this skeleton reflects.
+  std::int64_t input_client_time_ns = 0;
+  bool late_latched = false;           ///< Re-posed on that sample's arrival, fingers of the last tick.
+  bool frozen = false;                 ///< The client went silent; the hand keeps its last input.
+  Eigen::Isometry3d X_WorldPalm = Eigen::Isometry3d::Identity();
+  std::vector<Eigen::Isometry3d> X_WorldPhalanx;  ///< Rig order.
+  std::vector<double> joint_angles;               ///< rad, rig order.
+};
+
+struct GraspState {
+  HandKey hand;
+  std::uint64_t tick = 0;
+  double time = 0;
+  int selected_object = -1;            ///< -1: none.
+  int grasped_object = -1;             ///< -1: none.
+  double trigger = 0;
+  std::vector<bool> blocked;           ///< Per phalanx, rig order.
+  bool palm_contact = false;
+};
+
+struct ContactPoint {
+  int phalanx = -1;                    ///< Rig index; -1 for the palm.
+  Eigen::Vector3d p_WorldContact{0, 0, 0}, n_World{0, 0, 0};
+  Eigen::Vector3d p_ObjectContact{0, 0, 0}, n_Object{0, 0, 0};
+  double nd = 0;                       ///< The paper's ND, m; meaningful only if nd_hit.
+  bool nd_hit = false;
+};
+
+struct ContactSet {
+  HandKey hand;
+  std::uint64_t tick = 0;
+  double time = 0;
+  int object_id = -1;
+  Eigen::Isometry3d X_WorldObject = Eigen::Isometry3d::Identity();
+  std::vector<ContactPoint> contacts;
+};
+
+struct CapsuleReport {
+  int phalanx = -1;
+  std::string phalanx_name;
+  bool hit = false;                    ///< False: "no hit", kept apart from nd = 0.
+  double nd = 0;                       ///< m
+  double signed_distance = 0;          ///< m
+  bool blocked = false;
+};
+
+struct GraspEvent {
+  enum class Kind { kGrasp, kRelease };
+  std::uint64_t event_id = 0;          ///< Unique and increasing per server run.
+  Kind kind = Kind::kGrasp;
+  HandKey hand;
+  int object_id = -1;
+  std::string object_name;
+  std::uint64_t tick = 0;
+  double time = 0;
+  double object_spawn_time = 0;
+  Eigen::Isometry3d X_WorldObject = Eigen::Isometry3d::Identity();
+  std::uint64_t input_sequence = 0;
+  double hand_error_mm = 0;            ///< Grasp events.
+  int capsules_without_hit = 0;        ///< Grasp events.
+  std::vector<CapsuleReport> capsules; ///< Grasp events.
+  std::vector<ContactPoint> contacts;  ///< Grasp events.
+  Eigen::Vector3d v_WorldObject{0, 0, 0};  ///< Release events: velocity handed to physics.
+  Eigen::Vector3d w_WorldObject{0, 0, 0};
+};
+
+struct ObjectState {
+  int id = -1;
+  std::string name;
+  Eigen::Isometry3d X_WorldObject = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d v_WorldObject{0, 0, 0};
+  bool held = false;
+  HandKey holder;                      ///< When held.
+  double spawn_time = 0;
+};
+
+struct SceneState {
+  std::uint64_t tick = 0;
+  double time = 0;
+  std::vector<ObjectState> objects;
+};
+
+struct SceneCommand {
+  enum class Kind { kSpawn, kRemove, kReset };
+  Kind kind = Kind::kSpawn;
+  std::string model;                   ///< kSpawn: a name from ServerStatus::models.
+  int object_id = -1;                  ///< kRemove.
+  bool on_table = true;                ///< kSpawn: rest on the table at (x, y, yaw), else at X_WorldObject.
+  double x = 0.45, y = 0, yaw = 0;
+  Eigen::Isometry3d X_WorldObject = Eigen::Isometry3d::Identity();
+};
+
+struct ServerStatus {
+  std::uint64_t tick = 0;
+  double time = 0;
+  double tick_rate_hz = 0;
+  int clients = 0, hands = 0, objects = 0;
+  double tick_us_p50 = 0, tick_us_max = 0;
+  std::uint64_t missed_ticks = 0;
+  std::uint64_t inputs_accepted = 0, inputs_rejected = 0;
+  std::map<std::string, std::uint64_t> rejected;  ///< Per reason, since the server started.
+  std::uint64_t commands_accepted = 0, commands_rejected = 0;
+  std::vector<std::string> models;     ///< Model names a spawn command accepts.
+};
+
+}  // namespace telegrasp::client

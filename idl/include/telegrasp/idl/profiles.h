@@ -1,0 +1,18 @@
+// Finding and loading the Fast DDS XML profiles (deploy/fastdds/telegrasp_profiles.xml).
+#pragma once
+
+#include <string>
+
+namespace telegrasp::idl {
+
+/// The profiles file to use when none is given: $TELEGRASP_PROFILES if set, else the source
+/// tree's deploy/fastdds/telegrasp_profiles.xml if it exists, else the installed copy
+/// (<prefix>/share/telegrasp/telegrasp_profiles.xml).
+std::string default_profiles_file();
+
+/// Loads `path` (or default_profiles_file() if empty) into Fast DDS once per process and checks
+/// that `participant_profile` is defined in it. Throws std::runtime_error naming the file or the
+/// profile that is wrong. Safe to call again with the same file.
+void load_profiles(const std::string& path, const std::string& participant_profile);
+
+}  // namespace telegrasp::idl
