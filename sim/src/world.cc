@@ -51,13 +51,14 @@ struct World::Impl {
   btDbvtBroadphase broadphase;
   btSequentialImpulseConstraintSolver solver;
   btDiscreteDynamicsWorld dynamics{&dispatcher, &broadphase, &solver, &collision_config};
-  btBoxShape table_shape{btVector3(1.0, 1.0, 0.05)};
+  std::unique_ptr<btBoxShape> table_shape;
   std::unique_ptr<btRigidBody> table;
   std::map<int, Object> objects;  // ordered by id: deterministic iteration
-  std::vector<Hand> hands;
+  std::map<int, Hand> hands;  // ordered by id: hands tick in id order
   std::vector<GraspEvent> events;
   std::vector<GraspEvent> pending;  // from calls between steps, delivered with the next step's
   int next_object = 0;
+  int next_hand = 0;
   std::uint64_t tick = 0;
 
   Object& object(ObjectId id) {
@@ -71,8 +72,19 @@ struct World::Impl {
     o.body->setWorldTransform(pose);
   }
   Hand& hand(HandId id) {
-    if (id.value < 0 || id.value >= static_cast<int>(hands.size())) throw std::out_of_range("World: unknown hand id " + std::to_string(id.value));
-    return hands[id.value];
+    auto it = hands.find(id.value);
+    if (it == hands.end()) throw std::out_of_range("World: unknown hand id " + std::to_string(id.value));
+    return it->second;
+  }
+  // A release that happens between steps (object or hand removed), delivered with the next step.
+  void pend_release(HandId hand_id, ObjectId object_id) {
+    GraspEvent e;
+    e.kind = GraspEvent::Kind::kRelease;
+    e.hand = hand_id;
+    e.object = object_id;
+    e.tick = tick;
+    e.time = static_cast<double>(tick) * settings.dt;
+    pending.push_back(std::move(e));
   }
 
   void make_kinematic(Object& o, bool kinematic) {
@@ -92,7 +104,9 @@ World::World(WorldSettings settings) : impl_(std::make_unique<Impl>()) {
   if (!(settings.dt > 0)) throw std::invalid_argument("WorldSettings.dt must be > 0");
   impl_->settings = settings;
   impl_->dynamics.setGravity(to_bt(settings.gravity));
-  btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, &impl_->table_shape);
+  if (!(settings.table_half_extent > 0)) throw std::invalid_argument("WorldSettings.table_half_extent must be > 0");
+  impl_->table_shape = std::make_unique<btBoxShape>(btVector3(settings.table_half_extent, settings.table_half_extent, 0.05));
+  btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, impl_->table_shape.get());
   info.m_friction = 0.8;
   impl_->table = std::make_unique<btRigidBody>(info);
   impl_->table->setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(0, 0, -0.05)));
@@ -137,13 +151,7 @@ void World::remove_object(ObjectId id) {
   if (it == impl_->objects.end()) return;
   if (it->second.holder.valid()) {
     impl_->hand(it->second.holder).controller->release();
-    GraspEvent e;
-    e.kind = GraspEvent::Kind::kRelease;
-    e.hand = it->second.holder;
-    e.object = id;
-    e.tick = impl_->tick;
-    e.time = time();
-    impl_->pending.push_back(std::move(e));
+    impl_->pend_release(it->second.holder, id);
   }
   impl_->dynamics.removeRigidBody(it->second.body.get());
   impl_->objects.erase(it);
@@ -157,8 +165,27 @@ Eigen::Isometry3d World::resting_pose(const ObjectModel& model, double x, double
 }
 
 HandId World::add_hand(std::shared_ptr<const HandRig> rig) {
-  impl_->hands.push_back({std::make_unique<HandController>(std::move(rig), impl_->settings.grasp), {}});
-  return HandId(static_cast<int>(impl_->hands.size()) - 1);
+  const HandId id(impl_->next_hand++);
+  impl_->hands.emplace(id.value, Impl::Hand{std::make_unique<HandController>(std::move(rig), impl_->settings.grasp), {}});
+  return id;
+}
+
+void World::remove_hand(HandId id) {
+  auto it = impl_->hands.find(id.value);
+  if (it == impl_->hands.end()) return;
+  const ObjectId held = it->second.controller->release();
+  if (held.valid()) {
+    Impl::Object& o = impl_->object(held);
+    if (o.holder == id) {
+      // Dropped where it is, at rest: physics takes it from here.
+      o.holder = HandId();
+      impl_->make_kinematic(o, false);
+      o.body->setLinearVelocity(btVector3(0, 0, 0));
+      o.body->setAngularVelocity(btVector3(0, 0, 0));
+      impl_->pend_release(id, held);
+    }
+  }
+  impl_->hands.erase(it);
 }
 
 std::string World::set_input(HandId hand, const ControllerInput& input) {
@@ -178,10 +205,10 @@ void World::step() {
   views.reserve(w.objects.size());
   for (auto& [id, o] : w.objects) views.push_back({ObjectId(id), to_eigen(o.body->getWorldTransform()), o.model.get()});
 
-  for (std::size_t h = 0; h < w.hands.size(); ++h) {
-    HandController& hand = *w.hands[h].controller;
-    const HandId hand_id(static_cast<int>(h));
-    const HandTickEvents ev = hand.tick(w.hands[h].input, dt, views);
+  for (auto& [h, hand_entry] : w.hands) {
+    HandController& hand = *hand_entry.controller;
+    const HandId hand_id(h);
+    const HandTickEvents ev = hand.tick(hand_entry.input, dt, views);
     if (ev.released) {
       auto it = w.objects.find(ev.released_object.value);
       if (it != w.objects.end() && it->second.holder == hand_id) {
@@ -237,7 +264,7 @@ std::vector<ObjectId> World::objects() const {
 
 std::vector<HandId> World::hands() const {
   std::vector<HandId> out;
-  for (std::size_t i = 0; i < impl_->hands.size(); ++i) out.emplace_back(static_cast<int>(i));
+  for (const auto& [id, h] : impl_->hands) out.emplace_back(id);
   return out;
 }
 

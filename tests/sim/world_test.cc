@@ -157,6 +157,38 @@ TEST(WorldTest, RemovingAHeldObjectReportsItsRelease) {
   EXPECT_EQ(world.events()[0].hand, hand);
 }
 
+// Removing a hand that holds an object drops the object to physics: it falls back to the table,
+// nobody holds it, the release is reported once, and the remaining ids are unchanged.
+TEST(WorldTest, RemovingAHandDropsItsObjectToPhysics) {
+  OneObjectScene scene("005_tomato_soup_can", 0.45, 0.0, 0.0);
+  auto& [world, model, can, hand] = scene;
+  const HandId other = world.add_hand(human_right());
+  ASSERT_TRUE(grasp(world, hand, can).has_value());
+  // Lift 5 cm so the drop is visible.
+  ControllerInput in;
+  in.X_WorldPalm = world.hand(hand).state().X_WorldPalm;
+  in.trigger = 1;
+  for (int i = 0; i < 45; ++i) {
+    in.X_WorldPalm.translation().z() += 0.05 / 45;
+    world.set_input(hand, in);
+    world.step();
+  }
+  ASSERT_EQ(world.holder(can), hand);
+  const double z_lifted = world.object_pose(can).translation().z();
+  world.remove_hand(hand);
+  EXPECT_EQ(world.hands(), std::vector<HandId>{other});
+  EXPECT_FALSE(world.holder(can).valid());
+  int releases = 0;
+  for (int i = 0; i < 90; ++i) {
+    world.step();
+    for (const GraspEvent& e : world.events()) releases += e.kind == GraspEvent::Kind::kRelease && e.object == can && e.hand == hand;
+  }
+  EXPECT_EQ(releases, 1);
+  EXPECT_LT(world.object_pose(can).translation().z(), z_lifted - 0.04);  // it fell
+  world.remove_hand(hand);  // unknown now: ignored
+  EXPECT_EQ(world.add_hand(human_right()).value, other.value + 1);  // ids are not reused
+}
+
 TEST(WorldTest, RejectsBadInputAndKeepsThePreviousOne) {
   World world;
   const HandId hand = world.add_hand(human_right());

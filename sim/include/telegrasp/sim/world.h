@@ -19,6 +19,7 @@ namespace telegrasp::sim {
 struct WorldSettings {
   double dt = 1.0 / 90.0;                       ///< Fixed tick, seconds.
   Eigen::Vector3d gravity{0, 0, -9.81};
+  double table_half_extent = 1.0;               ///< The table top is [-this, this]^2 at z = 0, m.
   GraspSettings grasp;
 };
 
@@ -36,7 +37,7 @@ struct GraspEvent {
   Eigen::Vector3d w_WorldObject{0, 0, 0};
 };
 
-/// One physics scene with a table top at z = 0, dynamic objects and hands. One thread owns it.
+/// One physics scene with a table top at z = 0 (square, see WorldSettings), dynamic objects and hands. One thread owns it.
 /// Deterministic: the same calls in the same order give bit-identical results.
 class World {
  public:
@@ -54,6 +55,9 @@ class World {
 
   /// Adds a hand driven by a rig; it starts open, at the origin, until its first input.
   HandId add_hand(std::shared_ptr<const HandRig> rig);
+  /// Removes a hand; an object it holds is dropped to physics at rest where it is (a release event
+  /// comes with the next step). Unknown ids are ignored. Ids are never reused.
+  void remove_hand(HandId id);
   /// Sets a hand's input for the next step; returns "" or the reason the input was rejected
   /// (the hand then keeps its previous input).
   std::string set_input(HandId hand, const ControllerInput& input);

@@ -1,0 +1,63 @@
+// Conversions between sim types and the DDS types of idl/: the server's one boundary between
+// the two. Pure functions; round-trip tested in tests/server/conversions_test.cc.
+#pragma once
+
+#include "telegrasp/idl/telegrasp.h"
+#include "telegrasp/sim/hand_controller.h"
+#include "telegrasp/sim/world.h"
+
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <string>
+
+namespace telegrasp::server {
+
+/// A hand on the wire: (client id, hand side).
+struct HandAddress {
+  std::string client_id;
+  std::uint8_t side = 1;
+  auto operator<=>(const HandAddress&) const = default;
+};
+
+msg::Vec3 to_msg(const Eigen::Vector3d& v);
+Eigen::Vector3d to_eigen(const msg::Vec3& v);
+/// Pose as position + unit quaternion (w, x, y, z).
+msg::Pose3 to_msg(const Eigen::Isometry3d& X);
+/// Precondition: the quaternion is finite and unit length within 1e-3 (validate first); it is
+/// normalised here so the rotation is exact.
+Eigen::Isometry3d to_eigen(const msg::Pose3& pose);
+
+/// The sim input a (validated) controller state asks for.
+sim::ControllerInput to_sim_input(const msg::ControllerState& state);
+
+/// What a published hand sample says about the input it reflects.
+struct InputStamp {
+  std::uint64_t sequence = 0;
+  std::int64_t client_time_ns = 0;
+};
+
+/// The hand's skeleton at its current state. With `X_WorldPalm_override` the palm (and every
+/// phalanx with it) is re-posed there, fingers unchanged: the late-latched skeleton.
+msg::HandSkeleton make_hand_skeleton(const HandAddress& address, const sim::HandController& hand, std::uint64_t tick,
+                                     double time, const InputStamp& input, bool frozen,
+                                     const Eigen::Isometry3d* X_WorldPalm_override = nullptr);
+msg::GraspState make_grasp_state(const HandAddress& address, const sim::HandController& hand, std::uint64_t tick, double time);
+msg::ContactPoint to_msg(const sim::Contact& contact);
+sim::Contact to_sim(const msg::ContactPoint& contact);
+/// Contacts of the grasp `hand` holds, with the object's pose at this tick.
+msg::ContactSet make_contact_set(const HandAddress& address, const sim::HandController& hand, std::uint64_t tick,
+                                 double time, const Eigen::Isometry3d& X_WorldObject);
+
+/// A sim grasp event with everything a subscriber needs to interpret it without the server.
+struct EventContext {
+  HandAddress hand;
+  std::uint64_t event_id = 0;
+  std::string object_name;
+  double object_spawn_time = 0;
+  Eigen::Isometry3d X_WorldObject = Eigen::Isometry3d::Identity();
+  std::uint64_t input_sequence = 0;
+};
+msg::GraspEvent make_grasp_event(const sim::GraspEvent& event, const sim::HandRig& rig, const EventContext& context);
+
+}  // namespace telegrasp::server

@@ -1,0 +1,39 @@
+// DdsNode: the one owner of the server's Fast DDS entities. Its listeners only hand samples to
+// the InputMailbox (controller states) or a command queue; publishing is an OutputSink.
+#pragma once
+
+#include "input_mailbox.h"
+#include "output_sink.h"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace telegrasp::server {
+
+class DdsNode final : public OutputSink {
+ public:
+  /// Joins `domain` with the participant profile `profile` of `profiles_file` ("" = default).
+  /// Throws std::runtime_error naming the profile, topic or entity that could not be created.
+  DdsNode(int domain, const std::string& profile, const std::string& profiles_file, InputMailbox& mailbox);
+  ~DdsNode() override;
+  DdsNode(const DdsNode&) = delete;
+  DdsNode& operator=(const DdsNode&) = delete;
+
+  /// Scene commands received since the last call, in arrival order.
+  std::vector<msg::SceneCommand> take_commands();
+
+  void publish(const msg::HandSkeleton& skeleton) override;
+  void publish(const msg::GraspState& state) override;
+  void publish(const msg::ContactSet& contacts) override;
+  void publish(const msg::GraspEvent& event) override;
+  void publish(const msg::SceneState& scene) override;
+  void publish(const msg::ServerStatus& status) override;
+  void hand_removed(const HandAddress& hand) override;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace telegrasp::server

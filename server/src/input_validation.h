@@ -1,0 +1,42 @@
+// Validation of controller states arriving from the network: the reasons a sample is dropped.
+#pragma once
+
+#include "telegrasp/idl/telegrasp.h"
+
+#include <array>
+#include <string_view>
+
+namespace telegrasp::server {
+
+/// Why a controller state was dropped; the names are the keys of ServerStatus.rejected.
+enum class RejectReason {
+  kEmptyClientId,
+  kUnknownHandSide,
+  kNonFinite,
+  kQuaternionNotUnit,
+  kTriggerOutOfRange,
+  kCurlsWrongCount,
+  kCurlsOutOfRange,
+  kStaleSequence,
+  kClientIdOwnedByAnotherParticipant,
+  kTooManyHands,
+  kCount,
+};
+
+inline constexpr std::array<std::string_view, static_cast<int>(RejectReason::kCount)> kRejectReasonNames = {
+    "empty_client_id",    "unknown_hand_side",  "non_finite",     "quaternion_not_unit",
+    "trigger_out_of_range", "curls_wrong_count", "curls_out_of_range", "stale_sequence",
+    "client_id_owned_by_another_participant", "too_many_hands"};
+
+inline std::string_view name(RejectReason r) { return kRejectReasonNames[static_cast<int>(r)]; }
+
+/// A unit quaternion is one whose norm is within this of 1.
+inline constexpr double kUnitQuaternionTolerance = 1e-3;
+
+/// Checks one sample on its own (not its order or sender): client id, hand side, finite
+/// numbers, unit quaternion, trigger in [0, 1], curls empty or one value in [0, 1] per finger of
+/// the side's rig (`fingers[side]`). Returns true if valid, else false with `reason` set.
+bool validate_controller_state(const msg::ControllerState& state, const std::array<std::size_t, 2>& fingers,
+                               RejectReason& reason);
+
+}  // namespace telegrasp::server

@@ -1,0 +1,289 @@
+#include "scene_server.h"
+
+#include "telegrasp/idl/topics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <set>
+#include <stdexcept>
+
+namespace telegrasp::server {
+namespace {
+
+constexpr std::size_t kMaxObjects = 128;  // the SceneState bound in telegrasp.idl
+
+bool finite_unit_pose(const msg::Pose3& p) {
+  const msg::Quat& q = p.orientation();
+  for (double v : {p.position().x(), p.position().y(), p.position().z(), q.w(), q.x(), q.y(), q.z()})
+    if (!std::isfinite(v)) return false;
+  return std::abs(std::sqrt(q.w() * q.w() + q.x() * q.x() + q.y() * q.y() + q.z() * q.z()) - 1) <= kUnitQuaternionTolerance;
+}
+
+}  // namespace
+
+std::vector<SceneObjectSpec> default_layout(const std::vector<sim::ObjectModelPtr>& models, double gap,
+                                            double table_half_extent) {
+  const double y_min = -table_half_extent + gap, y_max = table_half_extent - gap;
+  double row_x = 0.35, row_depth = 0, cursor_y = y_min;
+  std::vector<SceneObjectSpec> out;
+  for (const auto& m : models) {
+    const Eigen::Vector3d lo = m->p_ObjectMin, hi = m->p_ObjectMax;
+    if (cursor_y + (hi.y() - lo.y()) > y_max && cursor_y > y_min) {  // next row
+      row_x += row_depth + gap;
+      row_depth = 0;
+      cursor_y = y_min;
+    }
+    out.push_back({m->name, row_x - lo.x(), cursor_y - lo.y(), 0.0});
+    cursor_y += (hi.y() - lo.y()) + gap;
+    row_depth = std::max(row_depth, hi.x() - lo.x());
+  }
+  if (!out.empty() && row_x + row_depth > table_half_extent)
+    throw std::runtime_error("default scene: " + std::to_string(models.size()) + " objects do not fit on the table");
+  return out;
+}
+
+SceneServer::SceneServer(const ServerSettings& settings, std::vector<sim::ObjectModelPtr> models,
+                         std::shared_ptr<const sim::HandRig> right_rig, std::shared_ptr<const sim::HandRig> left_rig,
+                         InputMailbox& mailbox, OutputSink& sink)
+    : settings_(settings), mailbox_(mailbox), sink_(sink) {
+  rigs_[idl::kHandLeft] = std::move(left_rig);
+  rigs_[idl::kHandRight] = std::move(right_rig);
+  for (auto& m : models) {
+    if (models_.count(m->name)) throw std::runtime_error("two models are named '" + m->name + "'");
+    model_names_.push_back(m->name);
+    models_.emplace(m->name, std::move(m));
+  }
+  sim::WorldSettings ws;
+  ws.dt = 1.0 / settings.tick_hz;
+  ws.grasp.mode = settings.closing_mode;
+  ws.table_half_extent = kTableHalfExtent;
+  world_ = std::make_unique<sim::World>(ws);
+  spawn_initial_scene();
+}
+
+void SceneServer::spawn_initial_scene() {
+  if (settings_.empty_scene) return;
+  std::vector<SceneObjectSpec> specs = settings_.objects;
+  if (specs.empty()) {
+    std::vector<sim::ObjectModelPtr> all;
+    for (const auto& n : model_names_) all.push_back(models_.at(n));
+    specs = default_layout(all, 0.15, kTableHalfExtent);
+  }
+  if (specs.size() > kMaxObjects) throw std::runtime_error("scene: at most " + std::to_string(kMaxObjects) + " objects");
+  for (const auto& s : specs) {
+    auto it = models_.find(s.model);
+    if (it == models_.end()) throw std::runtime_error("scene object '" + s.model + "': no such model (see --list-models)");
+    spawn(it->second, sim::World::resting_pose(*it->second, s.x, s.y, s.yaw));
+  }
+}
+
+sim::ObjectId SceneServer::spawn(const sim::ObjectModelPtr& model, const Eigen::Isometry3d& X_WorldObject) {
+  const sim::ObjectId id = world_->add_object(model, X_WorldObject);
+  objects_[id.value] = {model->name, world_->time()};
+  return id;
+}
+
+std::optional<sim::HandId> SceneServer::hand_id(const HandAddress& hand) const {
+  auto it = hands_.find(hand);
+  if (it == hands_.end()) return std::nullopt;
+  return it->second.id;
+}
+
+void SceneServer::on_inputs(std::vector<InputSample> samples, std::int64_t now_ns) {
+  (void)now_ns;
+  for (InputSample& s : samples) {
+    auto it = hands_.find(s.hand);
+    if (it == hands_.end()) {
+      const sim::HandId id = world_->add_hand(rigs_[s.hand.side]);
+      address_of_[id.value] = s.hand;
+      it = hands_.emplace(s.hand, Hand{id, {}, 0, false, std::nullopt}).first;
+    }
+    Hand& h = it->second;
+    const sim::ControllerInput input = to_sim_input(s.state);
+    if (const std::string why = world_->set_input(h.id, input); !why.empty()) {
+      // validate_controller_state admits only what the sim accepts; this is a broken invariant.
+      std::cerr << "telegrasp-server: internal: sim rejected a validated input of " << s.hand.client_id << ": " << why << "\n";
+      continue;
+    }
+    h.stamp = {s.state.sequence_number(), s.state.client_time_ns()};
+    h.last_received_ns = s.received_ns;
+    h.frozen = false;
+    if (settings_.late_latch) {
+      const sim::HandController& hand = world_->hand(h.id);
+      const Eigen::Isometry3d X_WorldPalm = input.tracking_valid ? input.X_WorldPalm : hand.state().X_WorldPalm;
+      sink_.publish(make_hand_skeleton(s.hand, hand, world_->tick(), world_->time(), h.stamp, false, &X_WorldPalm));
+    }
+  }
+}
+
+void SceneServer::remove_hand(std::map<HandAddress, Hand>::iterator it) {
+  world_->remove_hand(it->second.id);
+  mailbox_.forget_hand(it->first);
+  sink_.hand_removed(it->first);
+  hands_.erase(it);
+}
+
+void SceneServer::tick(std::int64_t now_ns) {
+  for (auto it = hands_.begin(); it != hands_.end();) {
+    Hand& h = it->second;
+    const double silent = static_cast<double>(now_ns - h.last_received_ns) * 1e-9;
+    if (silent > settings_.remove_after_s) {
+      std::cerr << "telegrasp-server: client '" << it->first.client_id << "' " << (it->first.side == idl::kHandLeft ? "left" : "right")
+                << " hand silent for " << silent << " s: removed\n";
+      remove_hand(it++);
+      continue;
+    }
+    h.frozen = silent > settings_.freeze_after_s;
+    ++it;
+  }
+  world_->step();
+  publish_events();
+  // Forget the addresses and names of removed hands and objects once their events are out.
+  std::set<int> live_hands;
+  for (const auto& [addr, h] : hands_) live_hands.insert(h.id.value);
+  std::erase_if(address_of_, [&](const auto& kv) { return !live_hands.count(kv.first); });
+  std::set<int> live_objects;
+  for (sim::ObjectId id : world_->objects()) live_objects.insert(id.value);
+  std::erase_if(objects_, [&](const auto& kv) { return !live_objects.count(kv.first); });
+
+  const std::uint64_t tick = world_->tick();
+  const double time = world_->time();
+  for (auto& [addr, h] : hands_) {
+    const sim::HandController& hand = world_->hand(h.id);
+    sink_.publish(make_hand_skeleton(addr, hand, tick, time, h.stamp, h.frozen));
+    msg::GraspState gs = make_grasp_state(addr, hand, tick, time);
+    bool changed = !h.published_state;
+    if (h.published_state) {
+      msg::GraspState old = *h.published_state;
+      old.tick(tick);
+      old.time(time);
+      changed = !(old == gs);
+    }
+    if (changed) {
+      sink_.publish(gs);
+      h.published_state = std::move(gs);
+    }
+    if (const auto X_WorldObject = hand.grasped_object_pose()) sink_.publish(make_contact_set(addr, hand, tick, time, *X_WorldObject));
+  }
+  sink_.publish(scene_state());
+}
+
+void SceneServer::publish_events() {
+  for (const sim::GraspEvent& e : world_->events()) {
+    auto addr = address_of_.find(e.hand.value);
+    if (addr == address_of_.end()) continue;  // cannot happen: addresses live one tick past removal
+    EventContext ctx;
+    ctx.hand = addr->second;
+    ctx.event_id = next_event_id_++;
+    if (auto o = objects_.find(e.object.value); o != objects_.end()) {
+      ctx.object_name = o->second.name;
+      ctx.object_spawn_time = o->second.spawn_time;
+    }
+    const auto objects = world_->objects();
+    if (std::find(objects.begin(), objects.end(), e.object) != objects.end()) ctx.X_WorldObject = world_->object_pose(e.object);
+    if (auto h = hands_.find(ctx.hand); h != hands_.end()) ctx.input_sequence = h->second.stamp.sequence;
+    sink_.publish(make_grasp_event(e, *rigs_[ctx.hand.side], ctx));
+  }
+}
+
+msg::SceneState SceneServer::scene_state() const {
+  msg::SceneState m;
+  m.tick(world_->tick());
+  m.time(world_->time());
+  for (sim::ObjectId id : world_->objects()) {
+    msg::ObjectState o;
+    o.id(id.value);
+    o.name(objects_.at(id.value).name);
+    o.spawn_time(objects_.at(id.value).spawn_time);
+    o.pose(to_msg(world_->object_pose(id)));
+    o.linear_velocity(to_msg(world_->object_velocity(id)));
+    const sim::HandId holder = world_->holder(id);
+    o.held(holder.valid());
+    if (holder.valid()) {
+      const HandAddress& a = address_of_.at(holder.value);
+      o.holder_client(a.client_id);
+      o.holder_hand(a.side);
+    }
+    m.objects().push_back(std::move(o));
+  }
+  return m;
+}
+
+std::string SceneServer::apply_command(const msg::SceneCommand& c) {
+  std::string why;
+  switch (c.kind()) {
+    case msg::SCENE_SPAWN: {
+      auto it = models_.find(c.model().to_string());
+      if (it == models_.end()) {
+        why = "unknown model '" + c.model().to_string() + "'";
+      } else if (world_->objects().size() >= kMaxObjects) {
+        why = "the scene is full (" + std::to_string(kMaxObjects) + " objects)";
+      } else if (c.on_table()) {
+        const double lim = kTableHalfExtent - 0.05;
+        if (!std::isfinite(c.x()) || !std::isfinite(c.y()) || !std::isfinite(c.yaw()) || std::abs(c.x()) > lim || std::abs(c.y()) > lim)
+          why = "spawn on the table needs finite x, y in [-" + std::to_string(lim) + ", " + std::to_string(lim) + "] and a finite yaw";
+        else
+          spawn(it->second, sim::World::resting_pose(*it->second, c.x(), c.y(), c.yaw()));
+      } else if (!finite_unit_pose(c.pose())) {
+        why = "spawn pose must be finite with a unit quaternion";
+      } else {
+        spawn(it->second, to_eigen(c.pose()));
+      }
+      break;
+    }
+    case msg::SCENE_REMOVE: {
+      const auto objects = world_->objects();
+      if (std::find(objects.begin(), objects.end(), sim::ObjectId(c.object_id())) == objects.end())
+        why = "no object with id " + std::to_string(c.object_id());
+      else
+        world_->remove_object(sim::ObjectId(c.object_id()));
+      break;
+    }
+    case msg::SCENE_RESET:
+      for (sim::ObjectId id : world_->objects()) world_->remove_object(id);
+      spawn_initial_scene();
+      break;
+    default:
+      why = "unknown command kind " + std::to_string(static_cast<int>(c.kind()));
+  }
+  if (why.empty()) {
+    ++commands_accepted_;
+  } else {
+    ++commands_rejected_;
+    std::cerr << "telegrasp-server: rejected scene command " << c.command_id() << " from '" << c.client_id().to_string() << "': " << why << "\n";
+  }
+  return why;
+}
+
+msg::ServerStatus SceneServer::status(const LoopStats& loop) const {
+  msg::ServerStatus m;
+  m.tick(world_->tick());
+  m.time(world_->time());
+  m.tick_rate_hz(settings_.tick_hz);
+  std::set<std::string> clients;
+  for (const auto& [addr, h] : hands_) clients.insert(addr.client_id);
+  m.clients(static_cast<std::int32_t>(clients.size()));
+  m.hands(static_cast<std::int32_t>(hands_.size()));
+  m.objects(static_cast<std::int32_t>(world_->objects().size()));
+  m.tick_us_p50(loop.tick_us_p50);
+  m.tick_us_max(loop.tick_us_max);
+  m.missed_ticks(loop.missed_ticks);
+  m.inputs_accepted(mailbox_.accepted());
+  const auto rejected = mailbox_.rejected();
+  std::uint64_t total = 0;
+  for (int r = 0; r < static_cast<int>(RejectReason::kCount); ++r) {
+    msg::RejectCount rc;
+    rc.reason(std::string(name(static_cast<RejectReason>(r))));
+    rc.count(rejected[r]);
+    total += rejected[r];
+    m.rejected().push_back(std::move(rc));
+  }
+  m.inputs_rejected(total);
+  m.commands_accepted(commands_accepted_);
+  m.commands_rejected(commands_rejected_);
+  for (const auto& n : model_names_) m.models().push_back(n);
+  return m;
+}
+
+}  // namespace telegrasp::server

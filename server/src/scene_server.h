@@ -1,0 +1,86 @@
+// SceneServer: the simulation thread's state: the World, the hands of every client, the objects,
+// and what is published after each input and each tick. Knows nothing of DDS entities.
+#pragma once
+
+#include "conversions.h"
+#include "input_mailbox.h"
+#include "output_sink.h"
+#include "server_config.h"
+#include "telegrasp/sim/world.h"
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace telegrasp::server {
+
+/// Where the default scene puts each model: rows along +y from x = 0.35 m, footprints apart by
+/// at least `gap`, all on a table of half extent `table_half_extent`.
+std::vector<SceneObjectSpec> default_layout(const std::vector<sim::ObjectModelPtr>& models, double gap,
+                                            double table_half_extent);
+
+/// Timing of the loop that drives the SceneServer, for ServerStatus.
+struct LoopStats {
+  double tick_us_p50 = 0, tick_us_max = 0;
+  std::uint64_t missed_ticks = 0;
+};
+
+class SceneServer {
+ public:
+  /// Builds the scene (settings.objects or default_layout of every model). Throws
+  /// std::runtime_error naming a scene object whose model is unknown.
+  SceneServer(const ServerSettings& settings, std::vector<sim::ObjectModelPtr> models,
+              std::shared_ptr<const sim::HandRig> right_rig, std::shared_ptr<const sim::HandRig> left_rig,
+              InputMailbox& mailbox, OutputSink& sink);
+
+  /// Takes accepted samples: a new hand joins; the hand's input for the next tick is replaced;
+  /// with late latching its skeleton is published at once, re-posed at the sample's palm.
+  void on_inputs(std::vector<InputSample> samples, std::int64_t now_ns);
+  /// One fixed tick: silent hands frozen or removed, physics and hands stepped, outputs published.
+  void tick(std::int64_t now_ns);
+  /// Applies a scene command; returns "" or why it was rejected (counted in the status).
+  std::string apply_command(const msg::SceneCommand& command);
+  /// The status message for the current state.
+  msg::ServerStatus status(const LoopStats& loop) const;
+
+  const sim::World& world() const { return *world_; }
+  /// The hand of a client, if present.
+  std::optional<sim::HandId> hand_id(const HandAddress& hand) const;
+  static constexpr double kTableHalfExtent = 2.0;
+
+ private:
+  struct Hand {
+    sim::HandId id;
+    InputStamp stamp;
+    std::int64_t last_received_ns = 0;
+    bool frozen = false;
+    std::optional<msg::GraspState> published_state;  // last GraspState sent (on change only)
+  };
+  struct Object {
+    std::string name;
+    double spawn_time = 0;
+  };
+  void spawn_initial_scene();
+  sim::ObjectId spawn(const sim::ObjectModelPtr& model, const Eigen::Isometry3d& X_WorldObject);
+  void remove_hand(std::map<HandAddress, Hand>::iterator it);
+  void publish_events();
+  msg::SceneState scene_state() const;
+
+  ServerSettings settings_;
+  std::map<std::string, sim::ObjectModelPtr> models_;
+  std::vector<std::string> model_names_;  // in the order given
+  std::shared_ptr<const sim::HandRig> rigs_[2];  // by side
+  InputMailbox& mailbox_;
+  OutputSink& sink_;
+  std::unique_ptr<sim::World> world_;
+  std::map<HandAddress, Hand> hands_;
+  std::map<int, HandAddress> address_of_;  // by HandId; kept one tick after removal for its events
+  std::map<int, Object> objects_;          // by ObjectId
+  std::uint64_t next_event_id_ = 1;
+  std::uint64_t commands_accepted_ = 0, commands_rejected_ = 0;
+};
+
+}  // namespace telegrasp::server

@@ -1,0 +1,80 @@
+#include "server_config.h"
+
+#include "server_config.pb.h"
+
+#include <google/protobuf/io/tokenizer.h>
+#include <google/protobuf/text_format.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace telegrasp::server {
+namespace {
+
+// Collects parse errors with their line and column.
+class ErrorCollector : public google::protobuf::io::ErrorCollector {
+ public:
+  void AddError(int line, int column, const std::string& message) override {
+    if (text.empty()) text = "line " + std::to_string(line + 1) + ":" + std::to_string(column + 1) + ": " + message;
+  }
+  std::string text;
+};
+
+}  // namespace
+
+void load_server_config(const std::string& path, ServerSettings& s) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("server config " + path + ": cannot open");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  proto::ServerConfig c;
+  google::protobuf::TextFormat::Parser parser;
+  ErrorCollector errors;
+  parser.RecordErrorsTo(&errors);
+  if (!parser.ParseFromString(buffer.str(), &c)) throw std::runtime_error("server config " + path + ": " + errors.text);
+  const auto* d = c.GetDescriptor();
+  const auto* r = c.GetReflection();
+  auto has = [&](const char* field) { return r->HasField(c, d->FindFieldByName(field)); };
+  if (has("domain")) s.domain = c.domain();
+  if (has("profile")) s.profile = c.profile();
+  if (has("profiles_file")) s.profiles_file = c.profiles_file();
+  if (has("tick_hz")) s.tick_hz = c.tick_hz();
+  if (has("objects_dir")) s.objects_dir = c.objects_dir();
+  for (const auto& o : c.objects()) {
+    if (o.model().empty()) throw std::runtime_error("server config " + path + ": objects.model must name a model");
+    s.objects.push_back({o.model(), o.x(), o.y(), o.yaw()});
+  }
+  if (has("empty_scene")) s.empty_scene = c.empty_scene();
+  if (has("right_rig")) s.right_rig = c.right_rig();
+  if (has("left_rig")) s.left_rig = c.left_rig();
+  if (has("closing_mode")) {
+    if (c.closing_mode() == "precise") s.closing_mode = sim::ClosingMode::kPrecise;
+    else if (c.closing_mode() == "discrete") s.closing_mode = sim::ClosingMode::kDiscrete;
+    else throw std::runtime_error("server config " + path + ": closing_mode must be precise or discrete, got '" + c.closing_mode() + "'");
+  }
+  if (has("freeze_after_s")) s.freeze_after_s = c.freeze_after_s();
+  if (has("remove_after_s")) s.remove_after_s = c.remove_after_s();
+  if (c.has_late_latch()) s.late_latch = c.late_latch();
+  if (has("status_period_s")) s.status_period_s = c.status_period_s();
+  if (has("max_hands")) s.max_hands = c.max_hands();
+  validate_settings(s, "server config " + path);
+}
+
+void validate_settings(const ServerSettings& s, const std::string& origin) {
+  auto fail = [&](const std::string& what) { throw std::runtime_error(origin + ": " + what); };
+  if (s.domain < 0 || s.domain > 232) fail("domain must be in [0, 232], got " + std::to_string(s.domain));
+  if (s.profile.empty()) fail("profile must not be empty");
+  if (!(s.tick_hz >= 1 && s.tick_hz <= 2000)) fail("tick_hz must be in [1, 2000], got " + std::to_string(s.tick_hz));
+  if (!(s.freeze_after_s > 0)) fail("freeze_after_s must be > 0");
+  if (!(s.remove_after_s >= s.freeze_after_s)) fail("remove_after_s must be >= freeze_after_s");
+  if (!(s.remove_after_s <= 0.9)) fail("remove_after_s must be <= 0.9 (a silent client's object is released within 1 s)");
+  if (!(s.status_period_s > 0)) fail("status_period_s must be > 0");
+  if (s.max_hands < 1 || s.max_hands > 4096) fail("max_hands must be in [1, 4096]");
+  for (const auto& o : s.objects)
+    if (!std::isfinite(o.x) || !std::isfinite(o.y) || !std::isfinite(o.yaw)) fail("objects '" + o.model + "': x, y, yaw must be finite");
+  if (s.empty_scene && !s.objects.empty()) fail("empty_scene and objects exclude each other");
+}
+
+}  // namespace telegrasp::server
