@@ -36,6 +36,7 @@ void load_server_config(const std::string& path, ServerSettings& s) {
   if (!parser.ParseFromString(buffer.str(), &c)) throw std::runtime_error("server config " + path + ": " + errors.text);
   const auto* d = c.GetDescriptor();
   const auto* r = c.GetReflection();
+  // Every scalar is `optional`: a field written in the file, even as 0, replaces the default.
   auto has = [&](const char* field) { return r->HasField(c, d->FindFieldByName(field)); };
   if (has("domain")) s.domain = c.domain();
   if (has("profile")) s.profile = c.profile();
@@ -56,7 +57,7 @@ void load_server_config(const std::string& path, ServerSettings& s) {
   }
   if (has("freeze_after_s")) s.freeze_after_s = c.freeze_after_s();
   if (has("remove_after_s")) s.remove_after_s = c.remove_after_s();
-  if (c.has_late_latch()) s.late_latch = c.late_latch();
+  if (has("late_latch")) s.late_latch = c.late_latch();
   if (has("status_period_s")) s.status_period_s = c.status_period_s();
   if (has("max_hands")) s.max_hands = c.max_hands();
   validate_settings(s, "server config " + path);

@@ -1,0 +1,147 @@
+// Tests server/src/conversions: sim <-> IDL round trips and hand-checked field mappings.
+#include "conversions.h"
+
+#include "telegrasp/sim/hand_rig.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace telegrasp::server {
+namespace {
+
+constexpr double kTol = 1e-12;
+
+Eigen::Isometry3d some_pose() {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  X.translation() = Eigen::Vector3d(0.3, -1.25, 2.5);
+  return X;
+}
+
+TEST(ConversionsTest, PoseRoundTrips) {
+  const Eigen::Isometry3d X = some_pose();
+  EXPECT_TRUE(to_eigen(to_msg(X)).isApprox(X, kTol));
+}
+
+// A quarter turn about +z is (w, x, y, z) = (cos 45°, 0, 0, sin 45°): the wire order is w first.
+TEST(ConversionsTest, QuaternionIsWFirst) {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.linear() = Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const msg::Pose3 p = to_msg(X);
+  EXPECT_NEAR(p.orientation().w(), std::sqrt(0.5), kTol);
+  EXPECT_NEAR(p.orientation().x(), 0, kTol);
+  EXPECT_NEAR(p.orientation().y(), 0, kTol);
+  EXPECT_NEAR(p.orientation().z(), std::sqrt(0.5), kTol);
+  // And back: the x axis maps to +y.
+  EXPECT_TRUE((to_eigen(p).linear() * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitY(), kTol));
+}
+
+TEST(ConversionsTest, ControllerStateToSimInput) {
+  msg::ControllerState s;
+  s.palm(to_msg(some_pose()));
+  s.trigger(0.25);
+  s.curls({0.1, 0.2, 0.3, 0.4, 0.5});
+  s.tracking_valid(false);
+  const sim::ControllerInput in = to_sim_input(s);
+  EXPECT_TRUE(in.X_WorldPalm.isApprox(some_pose(), kTol));
+  EXPECT_EQ(in.trigger, 0.25);
+  EXPECT_EQ(in.curls, (std::vector<double>{0.1, 0.2, 0.3, 0.4, 0.5}));
+  EXPECT_FALSE(in.tracking_valid);
+}
+
+TEST(ConversionsTest, ContactRoundTrips) {
+  sim::Contact c;
+  c.phalanx = sim::PhalanxId(7);
+  c.p_WorldContact = {1, 2, 3};
+  c.n_World = {0, 0, 1};
+  c.p_ObjectContact = {-1, 0.5, 0.25};
+  c.n_Object = {1, 0, 0};
+  c.nd = -0.0012;
+  c.nd_hit = true;
+  const sim::Contact back = to_sim(to_msg(c));
+  EXPECT_EQ(back.phalanx, c.phalanx);
+  EXPECT_EQ(back.p_WorldContact, c.p_WorldContact);
+  EXPECT_EQ(back.n_World, c.n_World);
+  EXPECT_EQ(back.p_ObjectContact, c.p_ObjectContact);
+  EXPECT_EQ(back.n_Object, c.n_Object);
+  EXPECT_EQ(back.nd, c.nd);
+  EXPECT_EQ(back.nd_hit, c.nd_hit);
+  sim::Contact palm;  // the palm's phalanx is the invalid id -1
+  EXPECT_EQ(to_msg(palm).phalanx(), -1);
+}
+
+// Every phalanx is published in the world frame: X_WorldPhalanx = X_WorldPalm * X_PalmPhalanx; a
+// late-latched skeleton moves the whole hand to the new palm pose and keeps the fingers.
+TEST(ConversionsTest, SkeletonIsTheHandInTheWorldFrame) {
+  auto rig = std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")));
+  sim::HandController hand(rig, {});
+  sim::ControllerInput in;
+  in.X_WorldPalm = some_pose();
+  in.trigger = 0.5;
+  for (int i = 0; i < 10; ++i) hand.tick(in, 1.0 / 90, {});
+  const HandAddress address{"alice", 1};
+  const msg::HandSkeleton m = make_hand_skeleton(address, hand, 10, 0.11, {42, 99}, false);
+  EXPECT_EQ(m.client_id().to_string(), "alice");
+  EXPECT_EQ(m.hand_side(), 1);
+  EXPECT_EQ(m.rig().to_string(), rig->name());
+  EXPECT_EQ(m.input_sequence(), 42u);
+  EXPECT_EQ(m.input_client_time_ns(), 99);
+  EXPECT_FALSE(m.late_latched());
+  ASSERT_EQ(m.phalanges().size(), rig->phalanges().size());
+  ASSERT_EQ(m.joint_angles(), hand.state().q);
+  for (std::size_t i = 0; i < m.phalanges().size(); ++i)
+    EXPECT_TRUE(to_eigen(m.phalanges()[i]).isApprox(some_pose() * hand.state().X_PalmPhalanx[i], 1e-9));
+
+  Eigen::Isometry3d moved = some_pose();
+  moved.translation() += Eigen::Vector3d(0.1, 0, 0);
+  const msg::HandSkeleton latched = make_hand_skeleton(address, hand, 10, 0.11, {43, 100}, false, &moved);
+  EXPECT_TRUE(latched.late_latched());
+  EXPECT_TRUE(to_eigen(latched.palm()).isApprox(moved, 1e-12));
+  for (std::size_t i = 0; i < latched.phalanges().size(); ++i)
+    EXPECT_TRUE(to_eigen(latched.phalanges()[i]).isApprox(moved * hand.state().X_PalmPhalanx[i], 1e-9));
+}
+
+TEST(ConversionsTest, GraspEventCarriesMetricsAndNames) {
+  auto rig = std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")));
+  sim::GraspEvent e;
+  e.kind = sim::GraspEvent::Kind::kGrasp;
+  e.hand = sim::HandId(3);
+  e.object = sim::ObjectId(5);
+  e.tick = 77;
+  e.time = 0.5;
+  sim::GraspMetrics metrics;
+  metrics.hand_error_mm = 2.5;
+  metrics.capsules_without_hit = 1;
+  metrics.capsules.push_back({sim::PhalanxId(2), true, -0.0004, -0.0001, true});
+  e.metrics = metrics;
+  EventContext ctx;
+  ctx.hand = {"bob", 0};
+  ctx.event_id = 11;
+  ctx.object_name = "can";
+  ctx.object_spawn_time = 0.25;
+  ctx.X_WorldObject = some_pose();
+  ctx.input_sequence = 1234;
+  const msg::GraspEvent m = make_grasp_event(e, *rig, ctx);
+  EXPECT_EQ(m.event_id(), 11u);
+  EXPECT_EQ(m.kind(), msg::GRASP_EVENT_GRASP);
+  EXPECT_EQ(m.client_id().to_string(), "bob");
+  EXPECT_EQ(m.hand_side(), 0);
+  EXPECT_EQ(m.object_id(), 5);
+  EXPECT_EQ(m.object_name().to_string(), "can");
+  EXPECT_EQ(m.tick(), 77u);
+  EXPECT_EQ(m.input_sequence(), 1234u);
+  EXPECT_TRUE(to_eigen(m.object_pose()).isApprox(some_pose(), 1e-12));
+  EXPECT_EQ(m.hand_error_mm(), 2.5);
+  EXPECT_EQ(m.capsules_without_hit(), 1);
+  ASSERT_EQ(m.capsules().size(), 1u);
+  EXPECT_EQ(m.capsules()[0].phalanx_name().to_string(), rig->phalanges()[2].name);
+  EXPECT_EQ(m.capsules()[0].nd(), -0.0004);
+  EXPECT_EQ(m.capsules()[0].signed_distance(), -0.0001);
+  EXPECT_TRUE(m.capsules()[0].hit());
+  EXPECT_TRUE(m.capsules()[0].blocked());
+}
+
+}  // namespace
+}  // namespace telegrasp::server

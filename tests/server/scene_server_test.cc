@@ -1,0 +1,267 @@
+// Tests server/src/scene_server with a recording sink instead of DDS: hands joining, late
+// latching, grasp events once each, contacts consistent with the published object pose, silent
+// hands frozen then removed with their object dropped, scene commands and the default layout.
+#include "scene_server.h"
+
+#include "telegrasp/sim/scripted_operator.h"
+#include "telegrasp/sim/standin_objects.h"
+
+#include <gtest/gtest.h>
+
+namespace telegrasp::server {
+namespace {
+
+constexpr std::int64_t kTickNs = 11'111'111;  // 90 Hz
+const ParticipantKey kParticipant{1};
+
+struct RecordingSink : OutputSink {
+  std::vector<msg::HandSkeleton> skeletons;
+  std::vector<msg::GraspState> states;
+  std::vector<msg::ContactSet> contacts;
+  std::vector<msg::GraspEvent> events;
+  std::vector<msg::SceneState> scenes;
+  std::vector<HandAddress> removed;
+  void publish(const msg::HandSkeleton& m) override { skeletons.push_back(m); }
+  void publish(const msg::GraspState& m) override { states.push_back(m); }
+  void publish(const msg::ContactSet& m) override { contacts.push_back(m); }
+  void publish(const msg::GraspEvent& m) override { events.push_back(m); }
+  void publish(const msg::SceneState& m) override { scenes.push_back(m); }
+  void publish(const msg::ServerStatus&) override {}
+  void hand_removed(const HandAddress& hand) override { removed.push_back(hand); }
+};
+
+std::shared_ptr<const sim::HandRig> rig(const char* name) {
+  return std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path(name)));
+}
+
+std::vector<sim::ObjectModelPtr> standins() {
+  std::vector<sim::ObjectModelPtr> out;
+  for (const auto& o : sim::protocol_objects()) out.push_back(sim::make_standin_model(o));
+  return out;
+}
+
+msg::ControllerState to_state(const std::string& client, std::uint8_t side, std::uint64_t seq, const sim::ControllerInput& in) {
+  msg::ControllerState s;
+  s.client_id(client);
+  s.hand_side(side);
+  s.sequence_number(seq);
+  s.client_time_ns(static_cast<std::int64_t>(seq) * 1000);
+  s.palm(to_msg(in.X_WorldPalm));
+  s.trigger(in.trigger);
+  s.tracking_valid(true);
+  return s;
+}
+
+// A server with an empty scene, driven by hand with explicit clock values.
+struct SceneServerTest : ::testing::Test {
+  ServerSettings settings = [] {
+    ServerSettings s;
+    s.empty_scene = true;
+    return s;
+  }();
+  std::vector<sim::ObjectModelPtr> models = standins();
+  std::shared_ptr<const sim::HandRig> right = rig("human_right"), left = rig("human_left");
+  InputMailbox mailbox{{5, 5}, 16, [](const std::string&) {}};
+  RecordingSink sink;
+  std::unique_ptr<SceneServer> scene;
+  std::int64_t now = 0;
+  std::uint64_t seq = 0;
+
+  void SetUp() override { scene = std::make_unique<SceneServer>(settings, models, right, left, mailbox, sink); }
+
+  int spawn(const std::string& model, double x, double y) {
+    msg::SceneCommand c;
+    c.kind(msg::SCENE_SPAWN);
+    c.model(model);
+    c.on_table(true);
+    c.x(x);
+    c.y(y);
+    EXPECT_EQ(scene->apply_command(c), "");
+    return scene->world().objects().back().value;
+  }
+  void send(const std::string& client, std::uint8_t side, const sim::ControllerInput& in) {
+    ASSERT_TRUE(mailbox.offer(to_state(client, side, ++seq, in), kParticipant, now));
+    scene->on_inputs(mailbox.drain(), now);
+  }
+  void tick() {
+    now += kTickNs;
+    scene->tick(now);
+  }
+  // Drives alice's right hand with the scripted operator until it holds `object`, then lifts.
+  void grasp_and_lift(int object) {
+    const sim::ObjectModel& model = scene->world().object_model(sim::ObjectId(object));
+    sim::ScriptedOperator op(right, sim::skill_profile("perfect"), 7);
+    Eigen::Isometry3d start = Eigen::Isometry3d::Identity();
+    start.translation() = scene->world().object_pose(sim::ObjectId(object)).translation() + Eigen::Vector3d(-0.3, -0.2, 0.3);
+    op.begin(model, scene->world().object_pose(sim::ObjectId(object)), start, scene->world().time());
+    while (op.phase() != sim::OperatorPhase::kHold && scene->world().time() < 20) {
+      const bool held = scene->world().holder(sim::ObjectId(object)).valid();
+      send("alice", 1, op.next(scene->world().time(), held));
+      tick();
+    }
+  }
+};
+
+// Footprints of the default layout never overlap and stay on the table.
+TEST(DefaultLayoutTest, KeepsFootprintsApartOnTheTable) {
+  const auto models = standins();
+  const double gap = 0.15, half = SceneServer::kTableHalfExtent;
+  const auto specs = default_layout(models, gap, half);
+  ASSERT_EQ(specs.size(), models.size());
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    const Eigen::Vector3d lo_i = models[i]->p_ObjectMin + Eigen::Vector3d(specs[i].x, specs[i].y, 0);
+    const Eigen::Vector3d hi_i = models[i]->p_ObjectMax + Eigen::Vector3d(specs[i].x, specs[i].y, 0);
+    EXPECT_GE(lo_i.x(), -half);
+    EXPECT_LE(hi_i.x(), half);
+    EXPECT_GE(lo_i.y(), -half);
+    EXPECT_LE(hi_i.y(), half);
+    for (std::size_t j = 0; j < i; ++j) {
+      const Eigen::Vector3d lo_j = models[j]->p_ObjectMin + Eigen::Vector3d(specs[j].x, specs[j].y, 0);
+      const Eigen::Vector3d hi_j = models[j]->p_ObjectMax + Eigen::Vector3d(specs[j].x, specs[j].y, 0);
+      const bool apart = lo_i.x() >= hi_j.x() + gap - 1e-9 || lo_j.x() >= hi_i.x() + gap - 1e-9 ||
+                         lo_i.y() >= hi_j.y() + gap - 1e-9 || lo_j.y() >= hi_i.y() + gap - 1e-9;
+      EXPECT_TRUE(apart) << specs[i].model << " and " << specs[j].model;
+    }
+  }
+}
+
+// A hand appears with its first sample; the skeleton reflecting that sample goes out at once
+// (late latched), before the tick; grasp states go out on change only.
+TEST_F(SceneServerTest, AHandJoinsOnItsFirstSampleAndIsLateLatched) {
+  sim::ControllerInput in;
+  in.X_WorldPalm.translation() = Eigen::Vector3d(0.1, 0.2, 0.3);
+  send("alice", 1, in);
+  ASSERT_TRUE(scene->hand_id({"alice", 1}));
+  ASSERT_EQ(sink.skeletons.size(), 1u);
+  EXPECT_TRUE(sink.skeletons[0].late_latched());
+  EXPECT_EQ(sink.skeletons[0].input_sequence(), 1u);
+  EXPECT_TRUE(to_eigen(sink.skeletons[0].palm()).isApprox(in.X_WorldPalm, 1e-12));
+  tick();
+  ASSERT_EQ(sink.skeletons.size(), 2u);
+  EXPECT_FALSE(sink.skeletons[1].late_latched());
+  EXPECT_TRUE(to_eigen(sink.skeletons[1].palm()).isApprox(in.X_WorldPalm, 1e-12));
+  EXPECT_EQ(sink.states.size(), 1u);
+  EXPECT_EQ(sink.scenes.size(), 1u);
+  tick();  // nothing changed: no new grasp state
+  EXPECT_EQ(sink.states.size(), 1u);
+  EXPECT_EQ(sink.skeletons.size(), 3u);
+}
+
+// One grasp event per grasp, with metrics; every contact set's object-frame points, moved by the
+// object pose published in the same tick's SceneState, give its world points.
+TEST_F(SceneServerTest, PublishesEachGraspOnceWithConsistentContacts) {
+  const int can = spawn("005_tomato_soup_can", 0.45, 0.0);
+  for (int i = 0; i < 30; ++i) tick();
+  grasp_and_lift(can);
+  ASSERT_EQ(sink.events.size(), 1u);
+  const msg::GraspEvent& e = sink.events[0];
+  EXPECT_EQ(e.kind(), msg::GRASP_EVENT_GRASP);
+  EXPECT_EQ(e.object_id(), can);
+  EXPECT_EQ(e.object_name().to_string(), "005_tomato_soup_can");
+  EXPECT_EQ(e.client_id().to_string(), "alice");
+  EXPECT_FALSE(e.capsules().empty());
+  EXPECT_FALSE(e.contacts().empty());
+  ASSERT_FALSE(sink.contacts.empty());
+  int checked = 0;
+  for (const msg::ContactSet& cs : sink.contacts) {
+    for (const msg::SceneState& ss : sink.scenes) {
+      if (ss.tick() != cs.tick()) continue;
+      ASSERT_EQ(ss.objects().size(), 1u);
+      EXPECT_TRUE(ss.objects()[0].held());
+      EXPECT_EQ(ss.objects()[0].holder_client().to_string(), "alice");
+      const Eigen::Isometry3d X_WorldObject = to_eigen(ss.objects()[0].pose());
+      for (const msg::ContactPoint& c : cs.contacts()) {
+        EXPECT_LT((X_WorldObject * to_eigen(c.p_object()) - to_eigen(c.p_world())).norm(), 1e-6);
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 0);
+}
+
+// A hand whose client goes silent is frozen after freeze_after_s, then removed after
+// remove_after_s; the object it held is dropped to physics and its release is published.
+TEST_F(SceneServerTest, ASilentHandIsFrozenThenRemovedAndDropsItsObject) {
+  const int can = spawn("005_tomato_soup_can", 0.45, 0.0);
+  for (int i = 0; i < 30; ++i) tick();
+  grasp_and_lift(can);
+  ASSERT_TRUE(scene->world().holder(sim::ObjectId(can)).valid());
+  const std::int64_t last_input = now - kTickNs;  // the last sample arrived before the last tick
+  bool saw_frozen = false;
+  while (!scene->world().objects().empty() && !sink.removed.size() && now - last_input < 2'000'000'000) {
+    tick();
+    saw_frozen |= !sink.skeletons.empty() && sink.skeletons.back().frozen();
+    if (now - last_input <= static_cast<std::int64_t>(settings.freeze_after_s * 1e9)) {
+      EXPECT_FALSE(sink.skeletons.back().frozen());
+    }
+  }
+  EXPECT_TRUE(saw_frozen);
+  ASSERT_EQ(sink.removed.size(), 1u);
+  EXPECT_EQ(sink.removed[0], (HandAddress{"alice", 1}));
+  const double silent_s = static_cast<double>(now - last_input) * 1e-9;
+  EXPECT_GT(silent_s, settings.remove_after_s);
+  EXPECT_LT(silent_s, 1.0);
+  tick();  // the release is published with the next step
+  ASSERT_EQ(sink.events.size(), 2u);
+  EXPECT_EQ(sink.events[1].kind(), msg::GRASP_EVENT_RELEASE);
+  EXPECT_EQ(sink.events[1].object_id(), can);
+  EXPECT_GT(sink.events[1].event_id(), sink.events[0].event_id());
+  EXPECT_FALSE(sink.scenes.back().objects()[0].held());
+  EXPECT_FALSE(scene->hand_id({"alice", 1}));
+  const double z_dropped = scene->world().object_pose(sim::ObjectId(can)).translation().z();
+  for (int i = 0; i < 90; ++i) tick();
+  EXPECT_LT(scene->world().object_pose(sim::ObjectId(can)).translation().z(), z_dropped - 0.03);  // it fell
+}
+
+TEST_F(SceneServerTest, AppliesAndRejectsSceneCommands) {
+  msg::SceneCommand c;
+  c.kind(msg::SCENE_SPAWN);
+  c.model("no_such_thing");
+  EXPECT_NE(scene->apply_command(c).find("unknown model"), std::string::npos);
+  c.model("005_tomato_soup_can");
+  c.on_table(true);
+  c.x(50);
+  EXPECT_NE(scene->apply_command(c), "");  // off the table
+  c.on_table(false);
+  c.pose().orientation().w(0);  // not a rotation
+  EXPECT_NE(scene->apply_command(c), "");
+  c.pose().orientation().w(1);
+  c.pose().position().z(0.5);
+  EXPECT_EQ(scene->apply_command(c), "");
+  ASSERT_EQ(scene->world().objects().size(), 1u);
+  EXPECT_NEAR(scene->world().object_pose(scene->world().objects()[0]).translation().z(), 0.5, 1e-12);
+
+  msg::SceneCommand remove;
+  remove.kind(msg::SCENE_REMOVE);
+  remove.object_id(99);
+  EXPECT_NE(scene->apply_command(remove), "");
+  remove.object_id(scene->world().objects()[0].value);
+  EXPECT_EQ(scene->apply_command(remove), "");
+  EXPECT_TRUE(scene->world().objects().empty());
+
+  const msg::ServerStatus s = scene->status({});
+  EXPECT_EQ(s.commands_accepted(), 2u);
+  EXPECT_EQ(s.commands_rejected(), 4u);
+  EXPECT_EQ(s.models().size(), models.size());
+}
+
+TEST(SceneServerResetTest, ResetRestoresTheConfiguredScene) {
+  ServerSettings settings;
+  settings.objects = {{"005_tomato_soup_can", 0.4, 0.0, 0.0}, {"056_tennis_ball", 0.6, 0.2, 0.5}};
+  InputMailbox mailbox{{5, 5}, 4, [](const std::string&) {}};
+  RecordingSink sink;
+  SceneServer scene(settings, standins(), rig("human_right"), rig("human_left"), mailbox, sink);
+  ASSERT_EQ(scene.world().objects().size(), 2u);
+  msg::SceneCommand c;
+  c.kind(msg::SCENE_RESET);
+  EXPECT_EQ(scene.apply_command(c), "");
+  const auto objects = scene.world().objects();
+  ASSERT_EQ(objects.size(), 2u);
+  EXPECT_EQ(scene.world().object_model(objects[1]).name, "056_tennis_ball");
+  EXPECT_NEAR(scene.world().object_pose(objects[1]).translation().x(), 0.6, 1e-12);
+  settings.objects = {{"no_such_model", 0, 0, 0}};
+  EXPECT_THROW(SceneServer(settings, standins(), rig("human_right"), rig("human_left"), mailbox, sink), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace telegrasp::server

@@ -1,0 +1,63 @@
+// Tests server/src/server_config: reading a text config, and errors that name the field.
+#include "server_config.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace telegrasp::server {
+namespace {
+
+std::string write_temp(const std::string& name, const std::string& text) {
+  const auto path = std::filesystem::temp_directory_path() / ("telegrasp_server_config_test_" + name + ".textproto");
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+std::string error_of(const std::string& text) {
+  ServerSettings s;
+  try {
+    load_server_config(write_temp("bad", text), s);
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ServerConfigTest, ReadsEveryFieldAndKeepsDefaultsElsewhere) {
+  ServerSettings s;
+  load_server_config(write_temp("good", R"(
+    domain: 7
+    profile: "lan"
+    tick_hz: 120
+    objects { model: "005_tomato_soup_can" x: 0.4 y: 0.1 yaw: 0.5 }
+    closing_mode: "discrete"
+    late_latch: false
+  )"), s);
+  EXPECT_EQ(s.domain, 7);
+  EXPECT_EQ(s.profile, "lan");
+  EXPECT_EQ(s.tick_hz, 120);
+  ASSERT_EQ(s.objects.size(), 1u);
+  EXPECT_EQ(s.objects[0].model, "005_tomato_soup_can");
+  EXPECT_EQ(s.objects[0].y, 0.1);
+  EXPECT_EQ(s.closing_mode, sim::ClosingMode::kDiscrete);
+  EXPECT_FALSE(s.late_latch);
+  EXPECT_EQ(s.freeze_after_s, 0.25);  // default kept
+}
+
+TEST(ServerConfigTest, ErrorsNameTheFileAndField) {
+  EXPECT_NE(error_of("tick_hz: 0").find("tick_hz"), std::string::npos);
+  EXPECT_NE(error_of("domain: 300").find("domain"), std::string::npos);
+  EXPECT_NE(error_of("closing_mode: \"fast\"").find("closing_mode"), std::string::npos);
+  EXPECT_NE(error_of("remove_after_s: 2").find("remove_after_s"), std::string::npos);
+  const std::string typo = error_of("tick_hertz: 90");
+  EXPECT_NE(typo.find("tick_hertz"), std::string::npos);
+  EXPECT_NE(typo.find("line 1"), std::string::npos);
+  EXPECT_NE(typo.find("telegrasp_server_config_test_bad"), std::string::npos);
+  ServerSettings s;
+  EXPECT_THROW(load_server_config("/no/such/file.textproto", s), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace telegrasp::server
