@@ -59,5 +59,13 @@ TEST(ServerConfigTest, ErrorsNameTheFileAndField) {
   EXPECT_THROW(load_server_config("/no/such/file.textproto", s), std::runtime_error);
 }
 
+// The example shipped for deployments loads as it is.
+TEST(ServerConfigTest, ShippedExampleLoads) {
+  ServerSettings s;
+  load_server_config(std::string(TELEGRASP_SOURCE_DIR) + "/deploy/server.example.textproto", s);
+  EXPECT_EQ(s.objects.size(), 3u);
+  EXPECT_TRUE(s.late_latch);
+}
+
 }  // namespace
 }  // namespace telegrasp::server
