@@ -35,7 +35,8 @@ struct ClientOptions {
 
 /// One DDS participant with a writer per input topic and a reader per subscribed output.
 /// Thread-safe. Callbacks run on a DDS thread: keep them short, do not call back into the
-/// client from them except the poll/take functions.
+/// client from them except the poll/take functions, and do not set a callback or destroy the
+/// client while holding a lock your callbacks take. No callback runs after the destructor returns.
 class Client {
  public:
   /// Throws std::runtime_error naming what is wrong (client id, domain, profiles file, profile).
@@ -46,12 +47,17 @@ class Client {
 
   const std::string& client_id() const;
 
-  /// Publishes one controller sample; returns the sequence number it carries.
+  /// Publishes one controller sample; returns the sequence number it carries. Invalid values go out
+  /// unchanged; throws std::invalid_argument only for what the wire cannot carry (> 5 curls).
   std::uint64_t publish(const ControllerSample& sample);
-  /// Sends a scene command (reliable); returns its command id.
+  /// Sends a scene command (reliable); returns its command id (1, 2, 3 ...). Throws
+  /// std::invalid_argument for a model name longer than 128 characters.
   std::uint64_t send_command(const SceneCommand& command);
 
-  /// Callbacks, one per output; setting one replaces the previous. Empty function: none.
+  /// Callbacks, one per output; setting one replaces the previous (no longer running when the
+  /// setter returns), then calls the new one at once, on the caller's thread, with what arrived
+  /// before it: the newest sample of each hand or output, and grasp events no callback has seen.
+  /// Each callback gets each sample once, in arrival order. Empty function: none.
   void on_hand_skeleton(std::function<void(const HandSkeleton&)> callback);
   void on_grasp_state(std::function<void(const GraspState&)> callback);
   void on_contact_set(std::function<void(const ContactSet&)> callback);
@@ -68,8 +74,8 @@ class Client {
   /// Every grasp event received since the last call, in arrival order.
   std::vector<GraspEvent> take_grasp_events();
 
-  /// Waits until a server is matched (it reads our controller states and we have its status);
-  /// false on timeout.
+  /// Waits until a server is matched (it reads our controller states and scene commands, and we
+  /// have its status if subscribed to kServerStatuses); false on timeout.
   bool wait_for_server(std::chrono::milliseconds timeout) const;
 
  private:

@@ -1,0 +1,507 @@
+#include "telegrasp/client/client.h"
+
+#include "conversions.h"
+#include "telegrasp/idl/profiles.h"
+#include "telegrasp/idl/telegraspPubSubTypes.h"
+#include "telegrasp/idl/topics.h"
+
+#include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/TypeSupport.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <condition_variable>
+#include <exception>
+#include <iostream>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <thread>
+#include <utility>
+
+namespace telegrasp::client {
+
+namespace dds = eprosima::fastdds::dds;
+namespace msg = telegrasp::msg;
+using client_lib::from_msg;
+using client_lib::to_msg;
+
+namespace {
+
+constexpr std::size_t kMaxClientIdChars = 64;   // string<64> in the IDL
+constexpr int kMaxDomain = 232;                 // the highest domain whose UDP ports fit in 16 bits
+constexpr std::size_t kMaxCurls = 5;            // sequence<double, 5>
+constexpr std::size_t kMaxModelChars = 128;     // string<128>
+constexpr std::size_t kMaxQueuedGraspEvents = 4096;
+constexpr std::chrono::milliseconds kServerPollPeriod{10};
+
+// Start-up mistakes in the options: fail fast, naming the field and what was expected.
+void validate(const ClientOptions& o) {
+  if (o.client_id.empty() || o.client_id.size() > kMaxClientIdChars)
+    throw std::runtime_error("ClientOptions.client_id '" + o.client_id + "' has " + std::to_string(o.client_id.size()) +
+                             " characters; expected 1.." + std::to_string(kMaxClientIdChars));
+  if (o.client_id.find('\0') != std::string::npos)
+    throw std::runtime_error("ClientOptions.client_id contains a NUL character, which the wire cannot carry");
+  if (o.domain < 0 || o.domain > kMaxDomain)
+    throw std::runtime_error("ClientOptions.domain is " + std::to_string(o.domain) + "; expected 0.." +
+                             std::to_string(kMaxDomain));
+  if (o.profile.empty())
+    throw std::runtime_error("ClientOptions.profile is empty; expected a participant profile name (loopback, lan, wan)");
+  if ((o.topics & ~static_cast<unsigned>(kAllTopics)) != 0)
+    throw std::runtime_error("ClientOptions.topics has bits outside kAllTopics");
+}
+
+std::int64_t steady_now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+// A user callback of one output. The mutex is held while the callback runs, is replaced, or is
+// caught up, so each callback sees every sample once and in order, and a replaced callback is no
+// longer running when its setter returns.
+template <class T>
+struct Channel {
+  std::mutex mutex;
+  std::function<void(const T&)> callback;
+};
+
+// The newest sample of a per-hand output, and which DDS instance is which hand (a disposed
+// instance arrives without its key).
+template <class T>
+struct PerHand {
+  std::map<HandKey, T> latest;
+  std::map<dds::InstanceHandle_t, HandKey> hand_of_instance;
+};
+
+}  // namespace
+
+struct Client::Impl {
+  template <class Msg>
+  class Listener;
+
+  explicit Impl(ClientOptions options_in);
+  ~Impl() { close(); }
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+
+  dds::Topic* topic(const char* name, dds::TopicDataType* type);
+  dds::DataWriter* writer(const char* name, dds::TopicDataType* type);
+  template <class Msg>
+  void reader(const char* name, dds::TopicDataType* type);
+  void close();
+  bool server_ready() const;
+
+  // Called on DDS threads by the listeners, one per valid sample.
+  void received(const msg::HandSkeleton& m, const dds::InstanceHandle_t& instance);
+  void received(const msg::GraspState& m, const dds::InstanceHandle_t& instance);
+  void received(const msg::ContactSet& m, const dds::InstanceHandle_t& instance);
+  void received(const msg::GraspEvent& m, const dds::InstanceHandle_t& instance);
+  void received(const msg::SceneState& m, const dds::InstanceHandle_t& instance);
+  void received(const msg::ServerStatus& m, const dds::InstanceHandle_t& instance);
+  // Called when the server disposes a hand's instance (the hand left): it leaves latest_*.
+  void disposed(const msg::HandSkeleton*, const dds::InstanceHandle_t& instance) { forget(skeletons, instance); }
+  void disposed(const msg::GraspState*, const dds::InstanceHandle_t& instance) { forget(grasp_states, instance); }
+  void disposed(const msg::ContactSet*, const dds::InstanceHandle_t& instance) { forget(contact_sets, instance); }
+  template <class Msg>
+  void disposed(const Msg*, const dds::InstanceHandle_t&) {}  // unkeyed topics: nothing per instance
+
+  template <class T>
+  void remember(PerHand<T>& store, const T& value, const dds::InstanceHandle_t& instance);
+  template <class T>
+  void forget(PerHand<T>& store, const dds::InstanceHandle_t& instance);
+  template <class T>
+  void call(Channel<T>& channel, const T& value, const char* what);
+  template <class T, class Snapshot>
+  void set_callback(Channel<T>& channel, std::function<void(const T&)> callback, const Snapshot& snapshot, const char* what);
+
+  const ClientOptions options;
+  dds::DomainParticipant* participant = nullptr;
+  dds::Publisher* publisher = nullptr;
+  dds::Subscriber* subscriber = nullptr;
+  dds::DataWriter* controller_writer = nullptr;
+  dds::DataWriter* command_writer = nullptr;
+  std::vector<dds::DataReader*> readers;
+  std::vector<std::unique_ptr<dds::DataReaderListener>> listeners;  // outlive their readers
+
+  // Outgoing numbering; held across the write so numbers go out in order.
+  std::mutex publish_mutex;
+  std::map<std::uint8_t, std::uint64_t> last_sequence;  // per raw hand-side value
+  std::uint64_t last_command_id = 0;
+
+  // Received data.
+  mutable std::mutex data_mutex;
+  PerHand<HandSkeleton> skeletons;
+  PerHand<GraspState> grasp_states;
+  PerHand<ContactSet> contact_sets;
+  std::optional<SceneState> scene;
+  std::optional<ServerStatus> status;
+  std::vector<GraspEvent> events;  // for take_grasp_events
+
+  // User callbacks, one channel per output.
+  Channel<HandSkeleton> skeleton_channel;
+  Channel<GraspState> grasp_state_channel;
+  Channel<ContactSet> contact_set_channel;
+  Channel<GraspEvent> grasp_event_channel;
+  Channel<SceneState> scene_state_channel;
+  Channel<ServerStatus> server_status_channel;
+  std::vector<GraspEvent> unseen_events;  // arrived while no event callback was set; under its channel's mutex
+  std::atomic<bool> callback_threw{false};
+
+  // Listener calls in flight; close() stops new ones and waits for these to finish.
+  std::mutex dispatch_mutex;
+  std::condition_variable dispatch_idle;
+  int dispatching = 0;
+  std::atomic<bool> closing{false};
+};
+
+// Drains a reader: every valid sample to Impl::received, every disposed instance to
+// Impl::disposed. Does nothing once the client is closing.
+template <class Msg>
+class Client::Impl::Listener final : public dds::DataReaderListener {
+ public:
+  explicit Listener(Impl& impl) : impl_(impl) {}
+
+  void on_data_available(dds::DataReader* reader) override {
+    {
+      std::lock_guard lock(impl_.dispatch_mutex);
+      if (impl_.closing) return;
+      ++impl_.dispatching;
+    }
+    Msg sample;
+    dds::SampleInfo info;
+    while (!impl_.closing && reader->take_next_sample(&sample, &info) == ReturnCode_t::RETCODE_OK) {
+      if (info.valid_data)
+        impl_.received(sample, info.instance_handle);
+      else if (info.instance_state == dds::NOT_ALIVE_DISPOSED_INSTANCE_STATE)
+        impl_.disposed(static_cast<const Msg*>(nullptr), info.instance_handle);
+    }
+    std::lock_guard lock(impl_.dispatch_mutex);
+    if (--impl_.dispatching == 0) impl_.dispatch_idle.notify_all();
+  }
+
+ private:
+  Impl& impl_;
+};
+
+Client::Impl::Impl(ClientOptions options_in) : options(std::move(options_in)) {
+  validate(options);
+  idl::load_profiles(options.profiles_file, options.profile);
+  participant = dds::DomainParticipantFactory::get_instance()->create_participant_with_profile(
+      static_cast<dds::DomainId_t>(options.domain), options.profile);
+  if (participant == nullptr)
+    throw std::runtime_error("cannot join DDS domain " + std::to_string(options.domain) + " with participant profile '" +
+                             options.profile + "'");
+  try {
+    publisher = participant->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
+    subscriber = participant->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
+    if (publisher == nullptr || subscriber == nullptr) throw std::runtime_error("cannot create a DDS publisher or subscriber");
+    controller_writer = writer(idl::kControllerStateTopic, new msg::ControllerStatePubSubType());
+    command_writer = writer(idl::kSceneCommandTopic, new msg::SceneCommandPubSubType());
+    // Readers last: their listeners may run as soon as they exist.
+    if (options.topics & kHandSkeletons) reader<msg::HandSkeleton>(idl::kHandSkeletonTopic, new msg::HandSkeletonPubSubType());
+    if (options.topics & kGraspStates) reader<msg::GraspState>(idl::kGraspStateTopic, new msg::GraspStatePubSubType());
+    if (options.topics & kContactSets) reader<msg::ContactSet>(idl::kContactSetTopic, new msg::ContactSetPubSubType());
+    if (options.topics & kGraspEvents) reader<msg::GraspEvent>(idl::kGraspEventTopic, new msg::GraspEventPubSubType());
+    if (options.topics & kSceneStates) reader<msg::SceneState>(idl::kSceneStateTopic, new msg::SceneStatePubSubType());
+    if (options.topics & kServerStatuses) reader<msg::ServerStatus>(idl::kServerStatusTopic, new msg::ServerStatusPubSubType());
+  } catch (...) {
+    close();
+    throw;
+  }
+}
+
+dds::Topic* Client::Impl::topic(const char* name, dds::TopicDataType* type) {
+  dds::TypeSupport support(type);  // owns `type` from here on
+  if (support.register_type(participant) != ReturnCode_t::RETCODE_OK)
+    throw std::runtime_error(std::string("cannot register the DDS type of topic ") + name);
+  dds::Topic* t = participant->create_topic(name, support.get_type_name(), dds::TOPIC_QOS_DEFAULT);
+  if (t == nullptr) throw std::runtime_error(std::string("cannot create DDS topic ") + name);
+  return t;
+}
+
+dds::DataWriter* Client::Impl::writer(const char* name, dds::TopicDataType* type) {
+  const std::string profile = std::string(name) + idl::kWriterSuffix;
+  dds::DataWriter* w = publisher->create_datawriter_with_profile(topic(name, type), profile);
+  if (w == nullptr)
+    throw std::runtime_error("cannot create the DDS writer of " + std::string(name) + ": is profile '" + profile +
+                             "' in the profiles file?");
+  return w;
+}
+
+template <class Msg>
+void Client::Impl::reader(const char* name, dds::TopicDataType* type) {
+  const std::string profile = std::string(name) + idl::kReaderSuffix;
+  dds::Topic* t = topic(name, type);
+  listeners.push_back(std::make_unique<Listener<Msg>>(*this));
+  dds::DataReader* r = subscriber->create_datareader_with_profile(t, profile, listeners.back().get());
+  if (r == nullptr)
+    throw std::runtime_error("cannot create the DDS reader of " + std::string(name) + ": is profile '" + profile +
+                             "' in the profiles file?");
+  readers.push_back(r);
+}
+
+void Client::Impl::close() {
+  {
+    std::unique_lock lock(dispatch_mutex);
+    closing = true;
+    dispatch_idle.wait(lock, [&] { return dispatching == 0; });
+  }
+  if (participant == nullptr) return;
+  for (dds::DataReader* r : readers) r->set_listener(nullptr);
+  participant->delete_contained_entities();
+  dds::DomainParticipantFactory::get_instance()->delete_participant(participant);
+  participant = nullptr;
+  readers.clear();
+}
+
+bool Client::Impl::server_ready() const {
+  // Both writers: a command sent right after wait_for_server must not go to an unmatched reader.
+  for (dds::DataWriter* w : {controller_writer, command_writer}) {
+    dds::PublicationMatchedStatus matched;
+    if (w->get_publication_matched_status(matched) != ReturnCode_t::RETCODE_OK || matched.current_count <= 0) return false;
+  }
+  if ((options.topics & kServerStatuses) == 0) return true;
+  std::lock_guard lock(data_mutex);
+  return status.has_value();
+}
+
+template <class T>
+void Client::Impl::remember(PerHand<T>& store, const T& value, const dds::InstanceHandle_t& instance) {
+  std::lock_guard lock(data_mutex);
+  store.hand_of_instance[instance] = value.hand;
+  store.latest[value.hand] = value;
+}
+
+template <class T>
+void Client::Impl::forget(PerHand<T>& store, const dds::InstanceHandle_t& instance) {
+  std::lock_guard lock(data_mutex);
+  const auto it = store.hand_of_instance.find(instance);
+  if (it == store.hand_of_instance.end()) return;
+  store.latest.erase(it->second);
+  store.hand_of_instance.erase(it);
+}
+
+template <class T>
+void Client::Impl::call(Channel<T>& channel, const T& value, const char* what) {
+  if (!channel.callback) return;
+  // An exception must not unwind into Fast DDS's threads: report the first one, drop the rest.
+  try {
+    channel.callback(value);
+  } catch (const std::exception& e) {
+    if (!callback_threw.exchange(true)) std::cerr << "telegrasp client: the " << what << " callback threw: " << e.what() << "\n";
+  } catch (...) {
+    if (!callback_threw.exchange(true)) std::cerr << "telegrasp client: the " << what << " callback threw\n";
+  }
+}
+
+// Replaces the callback, then catches the new one up with `snapshot()` (what arrived before it).
+template <class T, class Snapshot>
+void Client::Impl::set_callback(Channel<T>& channel, std::function<void(const T&)> callback, const Snapshot& snapshot,
+                                const char* what) {
+  std::lock_guard delivery(channel.mutex);
+  channel.callback = std::move(callback);
+  if (!channel.callback) return;
+  for (const T& value : snapshot()) call(channel, value, what);
+}
+
+void Client::Impl::received(const msg::HandSkeleton& m, const dds::InstanceHandle_t& instance) {
+  const HandSkeleton s = from_msg(m);
+  std::lock_guard delivery(skeleton_channel.mutex);
+  remember(skeletons, s, instance);
+  call(skeleton_channel, s, "HandSkeleton");
+}
+
+void Client::Impl::received(const msg::GraspState& m, const dds::InstanceHandle_t& instance) {
+  const GraspState s = from_msg(m);
+  std::lock_guard delivery(grasp_state_channel.mutex);
+  remember(grasp_states, s, instance);
+  call(grasp_state_channel, s, "GraspState");
+}
+
+void Client::Impl::received(const msg::ContactSet& m, const dds::InstanceHandle_t& instance) {
+  const ContactSet s = from_msg(m);
+  std::lock_guard delivery(contact_set_channel.mutex);
+  remember(contact_sets, s, instance);
+  call(contact_set_channel, s, "ContactSet");
+}
+
+void Client::Impl::received(const msg::GraspEvent& m, const dds::InstanceHandle_t&) {
+  const GraspEvent e = from_msg(m);
+  std::lock_guard delivery(grasp_event_channel.mutex);
+  {
+    std::lock_guard lock(data_mutex);
+    if (events.size() == kMaxQueuedGraspEvents) events.erase(events.begin());  // nobody polls: keep the newest
+    events.push_back(e);
+  }
+  if (grasp_event_channel.callback) {
+    call(grasp_event_channel, e, "GraspEvent");
+  } else {
+    if (unseen_events.size() == kMaxQueuedGraspEvents) unseen_events.erase(unseen_events.begin());
+    unseen_events.push_back(e);
+  }
+}
+
+void Client::Impl::received(const msg::SceneState& m, const dds::InstanceHandle_t&) {
+  const SceneState s = from_msg(m);
+  std::lock_guard delivery(scene_state_channel.mutex);
+  {
+    std::lock_guard lock(data_mutex);
+    scene = s;
+  }
+  call(scene_state_channel, s, "SceneState");
+}
+
+void Client::Impl::received(const msg::ServerStatus& m, const dds::InstanceHandle_t&) {
+  const ServerStatus s = from_msg(m);
+  std::lock_guard delivery(server_status_channel.mutex);
+  {
+    std::lock_guard lock(data_mutex);
+    status = s;
+  }
+  call(server_status_channel, s, "ServerStatus");
+}
+
+Client::Client(ClientOptions options) : impl_(std::make_unique<Impl>(std::move(options))) {}
+
+Client::~Client() = default;
+
+const std::string& Client::client_id() const { return impl_->options.client_id; }
+
+std::uint64_t Client::publish(const ControllerSample& sample) {
+  if (sample.curls.size() > kMaxCurls)
+    throw std::invalid_argument("ControllerSample.curls has " + std::to_string(sample.curls.size()) +
+                                " values; the wire carries at most " + std::to_string(kMaxCurls));
+  msg::ControllerState m = to_msg(sample, impl_->options.client_id);
+  if (m.client_time_ns() == 0) m.client_time_ns(steady_now_ns());
+  std::lock_guard lock(impl_->publish_mutex);
+  // 0: one more than the largest number this hand has carried, so an explicit stale number
+  // (sent on purpose) does not make the following automatic ones stale too.
+  std::uint64_t& last = impl_->last_sequence[m.hand_side()];
+  if (m.sequence_number() == 0) m.sequence_number(last + 1);
+  last = std::max(last, m.sequence_number());
+  if (!impl_->controller_writer->write(&m))
+    throw std::runtime_error("cannot write ControllerState " + std::to_string(m.sequence_number()) + " of client " +
+                             impl_->options.client_id);
+  return m.sequence_number();
+}
+
+std::uint64_t Client::send_command(const SceneCommand& command) {
+  if (command.model.size() > kMaxModelChars)
+    throw std::invalid_argument("SceneCommand.model has " + std::to_string(command.model.size()) +
+                                " characters; the wire carries at most " + std::to_string(kMaxModelChars));
+  std::lock_guard lock(impl_->publish_mutex);
+  const std::uint64_t command_id = impl_->last_command_id + 1;
+  msg::SceneCommand m = to_msg(command, impl_->options.client_id, command_id);
+  if (!impl_->command_writer->write(&m))
+    throw std::runtime_error("cannot write SceneCommand " + std::to_string(command_id) + " of client " +
+                             impl_->options.client_id);
+  impl_->last_command_id = command_id;
+  return command_id;
+}
+
+namespace {
+
+template <class T>
+std::vector<T> optional_as_vector(const std::optional<T>& value) {
+  return value ? std::vector<T>{*value} : std::vector<T>{};
+}
+
+template <class T>
+std::vector<T> values_of(const std::map<HandKey, T>& by_hand) {
+  std::vector<T> out;
+  out.reserve(by_hand.size());
+  for (const auto& [hand, value] : by_hand) out.push_back(value);
+  return out;
+}
+
+}  // namespace
+
+void Client::on_hand_skeleton(std::function<void(const HandSkeleton&)> callback) {
+  impl_->set_callback(impl_->skeleton_channel, std::move(callback), [&] { return latest_hand_skeletons(); }, "HandSkeleton");
+}
+
+void Client::on_grasp_state(std::function<void(const GraspState&)> callback) {
+  impl_->set_callback(impl_->grasp_state_channel, std::move(callback), [&] {
+    std::lock_guard lock(impl_->data_mutex);
+    return values_of(impl_->grasp_states.latest);
+  }, "GraspState");
+}
+
+void Client::on_contact_set(std::function<void(const ContactSet&)> callback) {
+  impl_->set_callback(impl_->contact_set_channel, std::move(callback), [&] {
+    std::lock_guard lock(impl_->data_mutex);
+    return values_of(impl_->contact_sets.latest);
+  }, "ContactSet");
+}
+
+void Client::on_grasp_event(std::function<void(const GraspEvent&)> callback) {
+  // Events are delivered once: only those no callback has seen are caught up.
+  impl_->set_callback(impl_->grasp_event_channel, std::move(callback), [&] { return std::exchange(impl_->unseen_events, {}); },
+                      "GraspEvent");
+}
+
+void Client::on_scene_state(std::function<void(const SceneState&)> callback) {
+  impl_->set_callback(impl_->scene_state_channel, std::move(callback), [&] { return optional_as_vector(latest_scene_state()); },
+                      "SceneState");
+}
+
+void Client::on_server_status(std::function<void(const ServerStatus&)> callback) {
+  impl_->set_callback(impl_->server_status_channel, std::move(callback),
+                      [&] { return optional_as_vector(latest_server_status()); }, "ServerStatus");
+}
+
+std::optional<SceneState> Client::latest_scene_state() const {
+  std::lock_guard lock(impl_->data_mutex);
+  return impl_->scene;
+}
+
+std::optional<ServerStatus> Client::latest_server_status() const {
+  std::lock_guard lock(impl_->data_mutex);
+  return impl_->status;
+}
+
+std::vector<HandSkeleton> Client::latest_hand_skeletons() const {
+  std::lock_guard lock(impl_->data_mutex);
+  return values_of(impl_->skeletons.latest);
+}
+
+std::optional<GraspState> Client::latest_grasp_state(const HandKey& hand) const {
+  std::lock_guard lock(impl_->data_mutex);
+  const auto it = impl_->grasp_states.latest.find(hand);
+  if (it == impl_->grasp_states.latest.end()) return std::nullopt;
+  return it->second;
+}
+
+std::optional<ContactSet> Client::latest_contact_set(const HandKey& hand) const {
+  std::lock_guard lock(impl_->data_mutex);
+  const auto it = impl_->contact_sets.latest.find(hand);
+  if (it == impl_->contact_sets.latest.end()) return std::nullopt;
+  return it->second;
+}
+
+std::vector<GraspEvent> Client::take_grasp_events() {
+  std::lock_guard lock(impl_->data_mutex);
+  return std::exchange(impl_->events, {});
+}
+
+bool Client::wait_for_server(std::chrono::milliseconds timeout) const {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  for (;;) {
+    if (impl_->server_ready()) return true;
+    const auto now = std::chrono::steady_clock::now();
+    if (now >= deadline) return false;
+    std::this_thread::sleep_for(std::min<std::chrono::steady_clock::duration>(kServerPollPeriod, deadline - now));
+  }
+}
+
+}  // namespace telegrasp::client

@@ -1,0 +1,413 @@
+#include "conversions.h"
+
+namespace telegrasp::client_lib {
+
+namespace {
+
+client::HandKey hand_key(const std::string& client_id, std::uint8_t side) {
+  return client::HandKey{client_id, from_msg_side(side)};
+}
+
+template <class Out, class In>
+std::vector<Out> to_msgs(const std::vector<In>& in) {
+  std::vector<Out> out;
+  out.reserve(in.size());
+  for (const In& x : in) out.push_back(to_msg(x));
+  return out;
+}
+
+template <class Out, class In>
+std::vector<Out> from_msgs(const std::vector<In>& in) {
+  std::vector<Out> out;
+  out.reserve(in.size());
+  for (const In& x : in) out.push_back(from_msg(x));
+  return out;
+}
+
+}  // namespace
+
+msg::Vec3 to_msg(const Eigen::Vector3d& v) {
+  msg::Vec3 m;
+  m.x(v.x());
+  m.y(v.y());
+  m.z(v.z());
+  return m;
+}
+
+Eigen::Vector3d from_msg(const msg::Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+msg::Pose3 to_msg(const Eigen::Isometry3d& X_AB) {
+  // No normalization: a scaled or sheared linear part gives a non-unit quaternion, which the
+  // server rejects instead of silently accepting a repaired pose.
+  const Eigen::Quaterniond q_AB(X_AB.linear());
+  msg::Pose3 m;
+  m.position(to_msg(Eigen::Vector3d(X_AB.translation())));
+  m.orientation().w(q_AB.w());
+  m.orientation().x(q_AB.x());
+  m.orientation().y(q_AB.y());
+  m.orientation().z(q_AB.z());
+  return m;
+}
+
+Eigen::Isometry3d from_msg(const msg::Pose3& pose) {
+  const msg::Quat& q = pose.orientation();
+  Eigen::Isometry3d X_AB = Eigen::Isometry3d::Identity();
+  X_AB.linear() = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z()).normalized().toRotationMatrix();
+  X_AB.translation() = from_msg(pose.position());
+  return X_AB;
+}
+
+std::uint8_t to_msg_side(client::HandSide side) { return static_cast<std::uint8_t>(side); }
+
+client::HandSide from_msg_side(std::uint8_t side) { return static_cast<client::HandSide>(side); }
+
+msg::ControllerState to_msg(const client::ControllerSample& sample, const std::string& client_id) {
+  msg::ControllerState m;
+  m.client_id(client_id);
+  m.hand_side(to_msg_side(sample.side));
+  m.sequence_number(sample.sequence_number);
+  m.client_time_ns(sample.client_time_ns);
+  m.palm(to_msg(sample.X_WorldPalm));
+  m.trigger(sample.trigger);
+  m.curls(sample.curls);
+  m.buttons(sample.buttons);
+  m.tracking_valid(sample.tracking_valid);
+  return m;
+}
+
+client::ControllerSample from_msg(const msg::ControllerState& m) {
+  client::ControllerSample s;
+  s.side = from_msg_side(m.hand_side());
+  s.X_WorldPalm = from_msg(m.palm());
+  s.trigger = m.trigger();
+  s.curls = m.curls();
+  s.buttons = m.buttons();
+  s.tracking_valid = m.tracking_valid();
+  s.sequence_number = m.sequence_number();
+  s.client_time_ns = m.client_time_ns();
+  return s;
+}
+
+msg::HandSkeleton to_msg(const client::HandSkeleton& s) {
+  msg::HandSkeleton m;
+  m.client_id(s.hand.client_id);
+  m.hand_side(to_msg_side(s.hand.side));
+  m.rig(s.rig);
+  m.tick(s.tick);
+  m.time(s.time);
+  m.input_sequence(s.input_sequence);
+  m.input_client_time_ns(s.input_client_time_ns);
+  m.late_latched(s.late_latched);
+  m.frozen(s.frozen);
+  m.palm(to_msg(s.X_WorldPalm));
+  m.phalanges(to_msgs<msg::Pose3>(s.X_WorldPhalanx));
+  m.joint_angles(s.joint_angles);
+  return m;
+}
+
+client::HandSkeleton from_msg(const msg::HandSkeleton& m) {
+  client::HandSkeleton s;
+  s.hand = hand_key(m.client_id().to_string(), m.hand_side());
+  s.rig = m.rig().to_string();
+  s.tick = m.tick();
+  s.time = m.time();
+  s.input_sequence = m.input_sequence();
+  s.input_client_time_ns = m.input_client_time_ns();
+  s.late_latched = m.late_latched();
+  s.frozen = m.frozen();
+  s.X_WorldPalm = from_msg(m.palm());
+  s.X_WorldPhalanx = from_msgs<Eigen::Isometry3d>(m.phalanges());
+  s.joint_angles = m.joint_angles();
+  return s;
+}
+
+msg::GraspState to_msg(const client::GraspState& s) {
+  msg::GraspState m;
+  m.client_id(s.hand.client_id);
+  m.hand_side(to_msg_side(s.hand.side));
+  m.tick(s.tick);
+  m.time(s.time);
+  m.selected_object(s.selected_object);
+  m.grasped_object(s.grasped_object);
+  m.trigger(s.trigger);
+  m.blocked(s.blocked);
+  m.palm_contact(s.palm_contact);
+  return m;
+}
+
+client::GraspState from_msg(const msg::GraspState& m) {
+  client::GraspState s;
+  s.hand = hand_key(m.client_id().to_string(), m.hand_side());
+  s.tick = m.tick();
+  s.time = m.time();
+  s.selected_object = m.selected_object();
+  s.grasped_object = m.grasped_object();
+  s.trigger = m.trigger();
+  s.blocked = m.blocked();
+  s.palm_contact = m.palm_contact();
+  return s;
+}
+
+msg::ContactPoint to_msg(const client::ContactPoint& c) {
+  msg::ContactPoint m;
+  m.phalanx(static_cast<std::int16_t>(c.phalanx));
+  m.p_world(to_msg(c.p_WorldContact));
+  m.n_world(to_msg(c.n_World));
+  m.p_object(to_msg(c.p_ObjectContact));
+  m.n_object(to_msg(c.n_Object));
+  m.nd(c.nd);
+  m.nd_hit(c.nd_hit);
+  return m;
+}
+
+client::ContactPoint from_msg(const msg::ContactPoint& m) {
+  client::ContactPoint c;
+  c.phalanx = m.phalanx();
+  c.p_WorldContact = from_msg(m.p_world());
+  c.n_World = from_msg(m.n_world());
+  c.p_ObjectContact = from_msg(m.p_object());
+  c.n_Object = from_msg(m.n_object());
+  c.nd = m.nd();
+  c.nd_hit = m.nd_hit();
+  return c;
+}
+
+msg::ContactSet to_msg(const client::ContactSet& s) {
+  msg::ContactSet m;
+  m.client_id(s.hand.client_id);
+  m.hand_side(to_msg_side(s.hand.side));
+  m.tick(s.tick);
+  m.time(s.time);
+  m.object_id(s.object_id);
+  m.object_pose(to_msg(s.X_WorldObject));
+  m.contacts(to_msgs<msg::ContactPoint>(s.contacts));
+  return m;
+}
+
+client::ContactSet from_msg(const msg::ContactSet& m) {
+  client::ContactSet s;
+  s.hand = hand_key(m.client_id().to_string(), m.hand_side());
+  s.tick = m.tick();
+  s.time = m.time();
+  s.object_id = m.object_id();
+  s.X_WorldObject = from_msg(m.object_pose());
+  s.contacts = from_msgs<client::ContactPoint>(m.contacts());
+  return s;
+}
+
+msg::CapsuleReport to_msg(const client::CapsuleReport& r) {
+  msg::CapsuleReport m;
+  m.phalanx(static_cast<std::int16_t>(r.phalanx));
+  m.phalanx_name(r.phalanx_name);
+  m.hit(r.hit);
+  m.nd(r.nd);
+  m.signed_distance(r.signed_distance);
+  m.blocked(r.blocked);
+  return m;
+}
+
+client::CapsuleReport from_msg(const msg::CapsuleReport& m) {
+  client::CapsuleReport r;
+  r.phalanx = m.phalanx();
+  r.phalanx_name = m.phalanx_name().to_string();
+  r.hit = m.hit();
+  r.nd = m.nd();
+  r.signed_distance = m.signed_distance();
+  r.blocked = m.blocked();
+  return r;
+}
+
+msg::GraspEventKind to_msg(client::GraspEvent::Kind kind) {
+  switch (kind) {
+    case client::GraspEvent::Kind::kGrasp: return msg::GRASP_EVENT_GRASP;
+    case client::GraspEvent::Kind::kRelease: return msg::GRASP_EVENT_RELEASE;
+  }
+  return static_cast<msg::GraspEventKind>(kind);  // not a kind: sent unchanged
+}
+
+client::GraspEvent::Kind from_msg(msg::GraspEventKind kind) {
+  switch (kind) {
+    case msg::GRASP_EVENT_GRASP: return client::GraspEvent::Kind::kGrasp;
+    case msg::GRASP_EVENT_RELEASE: return client::GraspEvent::Kind::kRelease;
+  }
+  return static_cast<client::GraspEvent::Kind>(kind);  // not a kind: kept unchanged
+}
+
+msg::GraspEvent to_msg(const client::GraspEvent& e) {
+  msg::GraspEvent m;
+  m.event_id(e.event_id);
+  m.kind(to_msg(e.kind));
+  m.client_id(e.hand.client_id);
+  m.hand_side(to_msg_side(e.hand.side));
+  m.object_id(e.object_id);
+  m.object_name(e.object_name);
+  m.tick(e.tick);
+  m.time(e.time);
+  m.object_spawn_time(e.object_spawn_time);
+  m.object_pose(to_msg(e.X_WorldObject));
+  m.input_sequence(e.input_sequence);
+  m.hand_error_mm(e.hand_error_mm);
+  m.capsules_without_hit(e.capsules_without_hit);
+  m.capsules(to_msgs<msg::CapsuleReport>(e.capsules));
+  m.contacts(to_msgs<msg::ContactPoint>(e.contacts));
+  m.release_velocity(to_msg(e.v_WorldObject));
+  m.release_angular_velocity(to_msg(e.w_WorldObject));
+  return m;
+}
+
+client::GraspEvent from_msg(const msg::GraspEvent& m) {
+  client::GraspEvent e;
+  e.event_id = m.event_id();
+  e.kind = from_msg(m.kind());
+  e.hand = hand_key(m.client_id().to_string(), m.hand_side());
+  e.object_id = m.object_id();
+  e.object_name = m.object_name().to_string();
+  e.tick = m.tick();
+  e.time = m.time();
+  e.object_spawn_time = m.object_spawn_time();
+  e.X_WorldObject = from_msg(m.object_pose());
+  e.input_sequence = m.input_sequence();
+  e.hand_error_mm = m.hand_error_mm();
+  e.capsules_without_hit = m.capsules_without_hit();
+  e.capsules = from_msgs<client::CapsuleReport>(m.capsules());
+  e.contacts = from_msgs<client::ContactPoint>(m.contacts());
+  e.v_WorldObject = from_msg(m.release_velocity());
+  e.w_WorldObject = from_msg(m.release_angular_velocity());
+  return e;
+}
+
+msg::ObjectState to_msg(const client::ObjectState& o) {
+  msg::ObjectState m;
+  m.id(o.id);
+  m.name(o.name);
+  m.pose(to_msg(o.X_WorldObject));
+  m.linear_velocity(to_msg(o.v_WorldObject));
+  m.held(o.held);
+  m.holder_client(o.holder.client_id);
+  m.holder_hand(to_msg_side(o.holder.side));
+  m.spawn_time(o.spawn_time);
+  return m;
+}
+
+client::ObjectState from_msg(const msg::ObjectState& m) {
+  client::ObjectState o;
+  o.id = m.id();
+  o.name = m.name().to_string();
+  o.X_WorldObject = from_msg(m.pose());
+  o.v_WorldObject = from_msg(m.linear_velocity());
+  o.held = m.held();
+  o.holder = hand_key(m.holder_client().to_string(), m.holder_hand());
+  o.spawn_time = m.spawn_time();
+  return o;
+}
+
+msg::SceneState to_msg(const client::SceneState& s) {
+  msg::SceneState m;
+  m.tick(s.tick);
+  m.time(s.time);
+  m.objects(to_msgs<msg::ObjectState>(s.objects));
+  return m;
+}
+
+client::SceneState from_msg(const msg::SceneState& m) {
+  client::SceneState s;
+  s.tick = m.tick();
+  s.time = m.time();
+  s.objects = from_msgs<client::ObjectState>(m.objects());
+  return s;
+}
+
+msg::SceneCommandKind to_msg(client::SceneCommand::Kind kind) {
+  switch (kind) {
+    case client::SceneCommand::Kind::kSpawn: return msg::SCENE_SPAWN;
+    case client::SceneCommand::Kind::kRemove: return msg::SCENE_REMOVE;
+    case client::SceneCommand::Kind::kReset: return msg::SCENE_RESET;
+  }
+  return static_cast<msg::SceneCommandKind>(kind);  // not a kind: sent unchanged
+}
+
+client::SceneCommand::Kind from_msg(msg::SceneCommandKind kind) {
+  switch (kind) {
+    case msg::SCENE_SPAWN: return client::SceneCommand::Kind::kSpawn;
+    case msg::SCENE_REMOVE: return client::SceneCommand::Kind::kRemove;
+    case msg::SCENE_RESET: return client::SceneCommand::Kind::kReset;
+  }
+  return static_cast<client::SceneCommand::Kind>(kind);  // not a kind: kept unchanged
+}
+
+msg::SceneCommand to_msg(const client::SceneCommand& c, const std::string& client_id, std::uint64_t command_id) {
+  msg::SceneCommand m;
+  m.client_id(client_id);
+  m.command_id(command_id);
+  m.kind(to_msg(c.kind));
+  m.model(c.model);
+  m.object_id(c.object_id);
+  m.on_table(c.on_table);
+  m.x(c.x);
+  m.y(c.y);
+  m.yaw(c.yaw);
+  m.pose(to_msg(c.X_WorldObject));
+  return m;
+}
+
+client::SceneCommand from_msg(const msg::SceneCommand& m) {
+  client::SceneCommand c;
+  c.kind = from_msg(m.kind());
+  c.model = m.model().to_string();
+  c.object_id = m.object_id();
+  c.on_table = m.on_table();
+  c.x = m.x();
+  c.y = m.y();
+  c.yaw = m.yaw();
+  c.X_WorldObject = from_msg(m.pose());
+  return c;
+}
+
+msg::ServerStatus to_msg(const client::ServerStatus& s) {
+  msg::ServerStatus m;
+  m.tick(s.tick);
+  m.time(s.time);
+  m.tick_rate_hz(s.tick_rate_hz);
+  m.clients(s.clients);
+  m.hands(s.hands);
+  m.objects(s.objects);
+  m.tick_us_p50(s.tick_us_p50);
+  m.tick_us_max(s.tick_us_max);
+  m.missed_ticks(s.missed_ticks);
+  m.inputs_accepted(s.inputs_accepted);
+  m.inputs_rejected(s.inputs_rejected);
+  for (const auto& [reason, count] : s.rejected) {
+    msg::RejectCount r;
+    r.reason(reason);
+    r.count(count);
+    m.rejected().push_back(r);
+  }
+  m.commands_accepted(s.commands_accepted);
+  m.commands_rejected(s.commands_rejected);
+  for (const std::string& model : s.models) m.models().emplace_back(model);
+  return m;
+}
+
+client::ServerStatus from_msg(const msg::ServerStatus& m) {
+  client::ServerStatus s;
+  s.tick = m.tick();
+  s.time = m.time();
+  s.tick_rate_hz = m.tick_rate_hz();
+  s.clients = m.clients();
+  s.hands = m.hands();
+  s.objects = m.objects();
+  s.tick_us_p50 = m.tick_us_p50();
+  s.tick_us_max = m.tick_us_max();
+  s.missed_ticks = m.missed_ticks();
+  s.inputs_accepted = m.inputs_accepted();
+  s.inputs_rejected = m.inputs_rejected();
+  // A reason sent twice (not by our server) adds up rather than losing a count.
+  for (const msg::RejectCount& r : m.rejected()) s.rejected[r.reason().to_string()] += r.count();
+  s.commands_accepted = m.commands_accepted();
+  s.commands_rejected = m.commands_rejected();
+  s.models.reserve(m.models().size());
+  for (const auto& model : m.models()) s.models.push_back(model.to_string());
+  return s;
+}
+
+}  // namespace telegrasp::client_lib

@@ -1,0 +1,116 @@
+// Tests the start-up checks of telegrasp::client::Client: bad options throw std::runtime_error
+// naming the field (or file, or profile) at fault; good options make a working client.
+#include "telegrasp/client/client.h"
+
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+#include <string>
+
+namespace telegrasp::client {
+namespace {
+
+// The first DDS domain of this file; each test that joins one uses its own.
+constexpr int kDomain = 205;
+
+ClientOptions good_options() {
+  ClientOptions o;
+  o.client_id = "options-test";
+  o.domain = kDomain;
+  o.topics = 0;
+  return o;
+}
+
+// The message of the std::runtime_error Client(o) throws, or "" if it does not throw.
+std::string construction_error(const ClientOptions& o) {
+  try {
+    Client client(o);
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+#define EXPECT_ERROR_MENTIONS(options, text)                                         \
+  do {                                                                               \
+    const std::string error = construction_error(options);                           \
+    EXPECT_NE(error, "") << "no error";                                              \
+    EXPECT_NE(error.find(text), std::string::npos) << "'" << error << "' lacks " << (text); \
+  } while (false)
+
+TEST(ClientOptionsTest, RejectsAnEmptyClientId) {
+  ClientOptions o = good_options();
+  o.client_id = "";
+  EXPECT_ERROR_MENTIONS(o, "client_id");
+}
+
+TEST(ClientOptionsTest, RejectsAClientIdLongerThan64Characters) {
+  ClientOptions o = good_options();
+  o.client_id = std::string(65, 'x');
+  EXPECT_ERROR_MENTIONS(o, "client_id");
+  EXPECT_ERROR_MENTIONS(o, "65");
+}
+
+TEST(ClientOptionsTest, RejectsAClientIdWithANulCharacter) {
+  ClientOptions o = good_options();
+  o.client_id = std::string("ab\0cd", 5);
+  EXPECT_ERROR_MENTIONS(o, "client_id");
+}
+
+TEST(ClientOptionsTest, RejectsDomainsOutside0To232) {
+  ClientOptions o = good_options();
+  o.domain = -1;
+  EXPECT_ERROR_MENTIONS(o, "domain");
+  o.domain = 233;
+  EXPECT_ERROR_MENTIONS(o, "domain");
+}
+
+TEST(ClientOptionsTest, RejectsAnEmptyProfile) {
+  ClientOptions o = good_options();
+  o.profile = "";
+  EXPECT_ERROR_MENTIONS(o, "profile");
+}
+
+TEST(ClientOptionsTest, RejectsAProfileNotInTheFile) {
+  ClientOptions o = good_options();
+  o.profile = "no_such_profile";
+  EXPECT_ERROR_MENTIONS(o, "no_such_profile");
+}
+
+TEST(ClientOptionsTest, RejectsAMissingProfilesFile) {
+  ClientOptions o = good_options();
+  o.profiles_file = "/nonexistent/telegrasp_profiles.xml";
+  EXPECT_ERROR_MENTIONS(o, "/nonexistent/telegrasp_profiles.xml");
+}
+
+TEST(ClientOptionsTest, RejectsUnknownTopicBits) {
+  ClientOptions o = good_options();
+  o.topics = kAllTopics + 1;
+  EXPECT_ERROR_MENTIONS(o, "topics");
+}
+
+TEST(ClientOptionsTest, AcceptsTheLimits) {
+  ClientOptions o = good_options();
+  o.client_id = std::string(64, 'x');
+  o.domain = kDomain + 1;
+  Client client(o);
+  EXPECT_EQ(client.client_id(), o.client_id);
+  // Nobody else is on this domain: no server.
+  EXPECT_FALSE(client.wait_for_server(std::chrono::milliseconds(50)));
+}
+
+TEST(ClientOptionsTest, RejectsValuesTheWireCannotCarry) {
+  Client client(good_options());
+  ControllerSample six_curls;
+  six_curls.curls.assign(6, 0.5);
+  EXPECT_THROW(client.publish(six_curls), std::invalid_argument);
+  SceneCommand long_model;
+  long_model.model = std::string(129, 'm');
+  EXPECT_THROW(client.send_command(long_model), std::invalid_argument);
+  // Neither used up a number.
+  EXPECT_EQ(client.publish(ControllerSample{}), 1u);
+  EXPECT_EQ(client.send_command(SceneCommand{}), 1u);
+}
+
+}  // namespace
+}  // namespace telegrasp::client

@@ -1,0 +1,34 @@
+// A minimal program built against the installed telegrasp package: a bad option is rejected,
+// then a client on a private domain publishes one sample.
+#include <telegrasp/client/client.h>
+
+#include <iostream>
+#include <stdexcept>
+
+int main() {
+  using namespace telegrasp::client;
+
+  ClientOptions bad;
+  bad.client_id = "";
+  try {
+    Client client(bad);
+    std::cerr << "an empty client id was accepted\n";
+    return 1;
+  } catch (const std::runtime_error& e) {
+    std::cout << "rejected as expected: " << e.what() << "\n";
+  }
+
+  ClientOptions options;
+  options.client_id = "consumer";
+  options.domain = 209;  // private: nobody else is here
+  options.profiles_file = TELEGRASP_PROFILES_FILE;
+  options.topics = kServerStatuses;
+  Client client(options);
+  ControllerSample sample;
+  sample.side = HandSide::kLeft;
+  sample.X_WorldPalm.translation() = Eigen::Vector3d(0.1, -0.3, 0.9);
+  const std::uint64_t sequence = client.publish(sample);
+  std::cout << "published sample " << sequence << " of " << client.client_id() << "'s " << to_string(sample.side)
+            << " hand; server found: " << std::boolalpha << client.wait_for_server(std::chrono::milliseconds(20)) << "\n";
+  return sequence == 1 ? 0 : 1;
+}
