@@ -1,9 +1,75 @@
 #!/usr/bin/env bash
-# The main job: installs dependencies, builds, and runs the grasp evaluation on the built-in
-# objects (extra arguments go to telegrasp-eval, e.g. --objects ../shared/data/ycb).
+# The main job: installs dependencies, builds telegrasp-server and telegrasp-bot, starts the server
+# in the background on a private DDS domain with the loopback profile, and lets a bot with two
+# hands grasp every object of the scene once over DDS; prints the bot's per-object table, stops
+# the server (SIGTERM) and exits with the bot's status (0: every trial done).
+#
+#   deploy/run-demo.sh [--objects DIR] [--domain N] [--trials N] [--skill NAME]
+#
+#   --objects DIR   the scene: every mesh file in DIR (default: the 30 built-in stand-ins);
+#                   server and bot both load it (the bot to plan its grasps)
+#   --domain N      DDS domain, so the demo never meets other DDS traffic (default 42)
+#   --trials N      grasps per object (default 1); --skill perfect|experienced|inexperienced
+#
+# TELEGRASP_BUILD_DIR picks the build folder (default build). The in-process evaluation, with no
+# network, is deploy/run-eval.sh.
 set -euo pipefail
+
+objects=()
+domain=42
+bot_args=(--trials 1)
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --objects|--domain|--trials|--skill)
+      [ $# -ge 2 ] || { echo "run-demo: $1 needs a value" >&2; exit 2; } ;;&
+    --objects) objects=(--objects "$(realpath -m -- "$2")"); shift 2 ;;
+    --domain) domain="$2"; shift 2 ;;
+    --trials|--skill) bot_args+=("$1" "$2"); shift 2 ;;
+    -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
+    *) echo "run-demo: unknown option '$1' (see deploy/run-demo.sh --help)" >&2; exit 2 ;;
+  esac
+done
+
 cd "$(dirname "$0")/.."
+build="${TELEGRASP_BUILD_DIR:-build}"
 deploy/install-deps.sh
-cmake -S . -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
-cmake --build build -j"$(nproc)" --target telegrasp-eval
-exec build/bin/telegrasp-eval "$@"
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+cmake --build "$build" -j"$(nproc)" --target telegrasp-server telegrasp-bot
+
+server_log="$(mktemp -t telegrasp-demo-server.XXXXXX)"
+server_pid=""
+bot_pid=""
+cleanup() {
+  trap - EXIT INT TERM
+  [ -n "$bot_pid" ] && kill -TERM "$bot_pid" 2>/dev/null && wait "$bot_pid" 2>/dev/null
+  if [ -n "$server_pid" ]; then
+    kill -TERM "$server_pid" 2>/dev/null
+    wait "$server_pid" 2>/dev/null
+    sed 's/^/  /' "$server_log" >&2
+  fi
+  rm -f "$server_log"
+}
+trap cleanup EXIT
+trap 'exit 130' INT TERM
+
+echo "run-demo: telegrasp-server on DDS domain $domain (loopback profile); its log follows the table" >&2
+"$build/bin/telegrasp-server" --domain "$domain" --profile loopback "${objects[@]}" >"$server_log" 2>&1 &
+server_pid=$!
+
+start=$SECONDS
+"$build/bin/telegrasp-bot" --domain "$domain" --profile loopback --hands both --timeout 60 \
+  "${bot_args[@]}" "${objects[@]}" &
+bot_pid=$!
+set +e
+wait -n -p finished "$server_pid" "$bot_pid"
+status=$?
+set -e
+if [ "$finished" = "$server_pid" ]; then
+  server_pid=""
+  echo "run-demo: telegrasp-server exited (status $status) before the bot was done:" >&2
+  sed 's/^/  /' "$server_log" >&2
+  exit 1
+fi
+bot_pid=""
+echo "run-demo: bot finished with status $status in $((SECONDS - start)) s" >&2
+exit "$status"

@@ -1,4 +1,5 @@
 // telegrasp-eval: runs scripted grasps on objects in-process and reports success, time and ND.
+#include "grasp_report.h"
 #include "grasp_svg.h"
 #include "telegrasp/sim/hand_rig.h"
 #include "telegrasp/sim/mesh_loading.h"
@@ -30,6 +31,10 @@ namespace {
 
 using namespace telegrasp::sim;
 using nlohmann::json;
+using telegrasp::report::capsule_records;
+using telegrasp::report::fmt;
+using telegrasp::report::Record;
+using telegrasp::report::summarize;
 
 constexpr const char* kUsage = R"(Usage: telegrasp-eval [options]
 
@@ -123,31 +128,11 @@ Options parse(int argc, char** argv) {
 
 const char* mode_name(ClosingMode m) { return m == ClosingMode::kPrecise ? "precise" : "discrete"; }
 
-struct CapsuleRecord {
-  std::string phalanx;
-  bool hit = false, blocked = false;
-  double nd_mm = 0, signed_distance_mm = 0;
+// The eval's view of a trial: the shared grasp record and its picture.
+struct Trial {
+  Record record;
+  std::string svg;  // picture of the settled hold, if asked for
 };
-
-struct Record {
-  std::string object, mode;
-  double speed_scale = 1;
-  int trial = 0, attempts = 0;
-  bool grasped = false, held_after_lift = false;
-  double time_to_grasp_s = 0;
-  double hand_error_mm = 0;               // the settled hand while held (end of the hold)
-  std::vector<CapsuleRecord> capsules;
-  double grasp_tick_hand_error_mm = 0;    // the tick the grasp rule turned true
-  std::vector<CapsuleRecord> grasp_tick_capsules;
-  std::string svg;                        // picture of the settled hold, if asked for
-};
-
-std::vector<CapsuleRecord> capsule_records(const GraspMetrics& metrics, const HandRig& rig) {
-  std::vector<CapsuleRecord> out;
-  for (const CapsuleMetric& m : metrics.capsules)
-    out.push_back({rig.phalanges()[m.phalanx.value].name, m.hit, m.blocked, 1000 * m.nd, 1000 * m.signed_distance});
-  return out;
-}
 
 struct Config {
   ClosingMode mode;
@@ -156,8 +141,8 @@ struct Config {
 
 // One grasp trial: the object rests at a random pose in front of the operator, who reaches,
 // grasps, lifts 10 cm, holds 1 s and releases.
-Record run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRig>& rig, const Options& opt,
-                 const Config& cfg, int trial, std::uint64_t seed, bool draw) {
+Trial run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRig>& rig, const Options& opt,
+                const Config& cfg, int trial, std::uint64_t seed, bool draw) {
   WorldSettings ws;
   ws.grasp.mode = cfg.mode;
   ws.grasp.speed_scale = cfg.speed;
@@ -181,7 +166,8 @@ Record run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRi
   const double t0 = world.time();
   const double z0 = world.object_pose(object).translation().z();
   op.begin(*model, world.object_pose(object), start.X_WorldPalm, t0);
-  Record rec;
+  Trial out;
+  Record& rec = out.record;
   rec.object = model->name;
   rec.mode = mode_name(cfg.mode);
   rec.speed_scale = cfg.speed;
@@ -219,78 +205,12 @@ Record run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRi
       std::snprintf(title, sizeof title, "%s, %s mode x%g, trial %d: HandError %.1f mm", model->name.c_str(),
                     rec.mode.c_str(), cfg.speed, trial, held->hand_error_mm);
       picture.title = title;
-      rec.svg = render_svg(picture);
+      out.svg = render_svg(picture);
     }
   }
   rec.attempts = op.attempts();
   rec.held_after_lift = op.held_after_lift() && z_held - z0 > 0.8 * ScriptedOperator::kLiftHeight;
-  return rec;
-}
-
-json capsule_json(const std::vector<CapsuleRecord>& capsules) {
-  json out = json::array();
-  for (const auto& c : capsules)
-    out.push_back({{"phalanx", c.phalanx}, {"hit", c.hit}, {"blocked", c.blocked},
-                   {"nd_mm", c.hit ? json(c.nd_mm) : json(nullptr)}, {"signed_distance_mm", c.signed_distance_mm}});
   return out;
-}
-
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const double idx = p * static_cast<double>(v.size() - 1);
-  const std::size_t i = static_cast<std::size_t>(idx);
-  const double f = idx - static_cast<double>(i);
-  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
-}
-
-json summarize(const std::vector<const Record*>& recs) {
-  int grasped = 0, held = 0, capsules = 0, below = 0, blocked_count = 0;
-  double time_sum = 0, he_sum = 0, he_tick_sum = 0, min_sd = 1e9;
-  std::vector<double> nd_abs, nd_abs_tick;
-  for (const Record* r : recs) {
-    grasped += r->grasped;
-    held += r->held_after_lift;
-    if (!r->grasped) continue;
-    time_sum += r->time_to_grasp_s;
-    he_sum += r->hand_error_mm;
-    he_tick_sum += r->grasp_tick_hand_error_mm;
-    for (const auto& c : r->grasp_tick_capsules)
-      if (c.hit) nd_abs_tick.push_back(std::abs(c.nd_mm));
-    for (const auto& c : r->capsules) {
-      ++capsules;
-      if (c.hit) nd_abs.push_back(std::abs(c.nd_mm));
-      if (c.blocked) {
-        ++blocked_count;
-        min_sd = std::min(min_sd, c.signed_distance_mm);
-        below += c.signed_distance_mm < -0.1;
-      }
-    }
-  }
-  auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
-  return {{"trials", recs.size()},
-          {"grasped", grasped},
-          {"held_after_lift", held},
-          {"held_rate", recs.empty() ? 0.0 : static_cast<double>(held) / static_cast<double>(recs.size())},
-          {"time_to_grasp_mean_s", num(grasped ? time_sum / grasped : NAN)},
-          {"hand_error_mean_mm", num(grasped ? he_sum / grasped : NAN)},
-          {"capsules", capsules},
-          {"capsules_hit", nd_abs.size()},
-          {"nd_abs_median_mm", num(percentile(nd_abs, 0.5))},
-          {"nd_abs_p95_mm", num(percentile(nd_abs, 0.95))},
-          {"blocked_capsules", blocked_count},
-          {"min_blocked_signed_distance_mm", num(blocked_count ? min_sd : NAN)},
-          {"blocked_below_minus_0_1mm", below},
-          {"grasp_tick_hand_error_mean_mm", num(grasped ? he_tick_sum / grasped : NAN)},
-          {"grasp_tick_nd_abs_median_mm", num(percentile(nd_abs_tick, 0.5))},
-          {"grasp_tick_nd_abs_p95_mm", num(percentile(nd_abs_tick, 0.95))}};
-}
-
-std::string fmt(double v, int prec = 2) {
-  if (!std::isfinite(v)) return "-";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.*f", prec, v);
-  return buf;
 }
 
 }  // namespace
@@ -343,7 +263,7 @@ int main(int argc, char** argv) {
   for (std::size_t c = 0; c < configs.size(); ++c)
     for (std::size_t o = 0; o < models.size(); ++o)
       for (int t = 0; t < opt.trials; ++t) jobs.push_back({c, o, t});
-  std::vector<Record> records(jobs.size());
+  std::vector<Trial> trials(jobs.size());
   std::atomic<std::size_t> next{0}, finished{0};
   std::mutex log_mutex;
   const bool stderr_is_terminal = isatty(STDERR_FILENO) != 0;
@@ -353,22 +273,23 @@ int main(int argc, char** argv) {
       // The trial's seed depends on the object and trial only, so modes and speeds see the same poses.
       const std::uint64_t seed = opt.seed * 1000003ULL + job.object * 1009ULL + static_cast<std::uint64_t>(job.trial);
       const bool draw = !opt.svg_dir.empty() && job.trial == 0;
+      Record& rec = trials[j].record;
       try {
-        records[j] = run_trial(models[job.object], rig, opt, configs[job.config], job.trial, seed, draw);
+        trials[j] = run_trial(models[job.object], rig, opt, configs[job.config], job.trial, seed, draw);
       } catch (const std::exception& e) {  // counted as not grasped, said once
-        records[j].object = models[job.object]->name;
-        records[j].mode = mode_name(configs[job.config].mode);
-        records[j].speed_scale = configs[job.config].speed;
-        records[j].trial = job.trial;
+        rec.object = models[job.object]->name;
+        rec.mode = mode_name(configs[job.config].mode);
+        rec.speed_scale = configs[job.config].speed;
+        rec.trial = job.trial;
         std::lock_guard lock(log_mutex);
-        std::cerr << "\ntelegrasp-eval: " << records[j].object << " trial " << job.trial << " failed: " << e.what() << "\n";
+        std::cerr << "\ntelegrasp-eval: " << rec.object << " trial " << job.trial << " failed: " << e.what() << "\n";
       }
       const std::size_t done = ++finished;
       std::lock_guard lock(log_mutex);
       // One line rewritten in place on a terminal; a line per trial in a log file.
-      std::cerr << (stderr_is_terminal ? "\r[" : "[") << done << "/" << jobs.size() << "] " << records[j].mode << " x"
-                << configs[job.config].speed << " " << records[j].object << " trial " << job.trial
-                << (records[j].held_after_lift ? " held" : " NOT held") << (stderr_is_terminal ? "        " : "\n") << std::flush;
+      std::cerr << (stderr_is_terminal ? "\r[" : "[") << done << "/" << jobs.size() << "] " << rec.mode << " x"
+                << configs[job.config].speed << " " << rec.object << " trial " << job.trial
+                << (rec.held_after_lift ? " held" : " NOT held") << (stderr_is_terminal ? "        " : "\n") << std::flush;
     }
   };
   std::vector<std::thread> pool;
@@ -379,21 +300,15 @@ int main(int argc, char** argv) {
   json summaries = json::array();
   for (std::size_t c = 0; c < configs.size(); ++c) {
     std::cout << "\n== mode " << mode_name(configs[c].mode) << ", closing speed x" << configs[c].speed << ", skill " << opt.skill << " ==\n";
-    std::printf("%-26s %6s %6s %8s %9s %9s %10s %9s\n", "object", "held", "grasp", "time_s", "|ND|med", "|ND|p95", "minSD_mm", "HErr_mm");
-    for (std::size_t o = 0; o < models.size(); ++o) {
-      std::vector<const Record*> recs;
-      for (std::size_t j = 0; j < jobs.size(); ++j)
-        if (jobs[j].config == c && jobs[j].object == o) recs.push_back(&records[j]);
-      const json s = summarize(recs);
-      auto get = [&](const char* k) { return s[k].is_null() ? NAN : s[k].get<double>(); };
-      std::printf("%-26s %3d/%-2d %3d/%-2d %8s %9s %9s %10s %9s\n", models[o]->name.c_str(), s["held_after_lift"].get<int>(),
-                  static_cast<int>(recs.size()), s["grasped"].get<int>(), static_cast<int>(recs.size()),
-                  fmt(get("time_to_grasp_mean_s")).c_str(), fmt(get("nd_abs_median_mm"), 3).c_str(), fmt(get("nd_abs_p95_mm"), 3).c_str(),
-                  fmt(get("min_blocked_signed_distance_mm"), 3).c_str(), fmt(get("hand_error_mean_mm")).c_str());
-    }
+    std::vector<telegrasp::report::ObjectRows> rows(models.size());
     std::vector<const Record*> all;
-    for (std::size_t j = 0; j < jobs.size(); ++j)
-      if (jobs[j].config == c) all.push_back(&records[j]);
+    for (std::size_t o = 0; o < models.size(); ++o) rows[o].object = models[o]->name;
+    for (std::size_t j = 0; j < jobs.size(); ++j) {
+      if (jobs[j].config != c) continue;
+      rows[jobs[j].object].records.push_back(&trials[j].record);
+      all.push_back(&trials[j].record);
+    }
+    telegrasp::report::print_object_table(rows);
     json s = summarize(all);
     s["mode"] = mode_name(configs[c].mode);
     s["speed_scale"] = configs[c].speed;
@@ -414,11 +329,12 @@ int main(int argc, char** argv) {
 
   if (!opt.svg_dir.empty()) {
     int written = 0;
-    for (const Record& r : records) {
-      if (r.svg.empty()) continue;
+    for (const Trial& t : trials) {
+      if (t.svg.empty()) continue;
+      const Record& r = t.record;
       char name[256];
       std::snprintf(name, sizeof name, "%s_%s_x%g.svg", r.object.c_str(), r.mode.c_str(), r.speed_scale);
-      std::ofstream(std::filesystem::path(opt.svg_dir) / name) << r.svg;
+      std::ofstream(std::filesystem::path(opt.svg_dir) / name) << t.svg;
       ++written;
     }
     std::cerr << "wrote " << written << " pictures to " << opt.svg_dir << "\n";
@@ -426,15 +342,7 @@ int main(int argc, char** argv) {
 
   if (!opt.json_path.empty()) {
     json grasps = json::array();
-    for (const Record& r : records) {
-      const json caps = capsule_json(r.capsules);
-      grasps.push_back({{"object", r.object}, {"trial", r.trial}, {"mode", r.mode}, {"speed_scale", r.speed_scale},
-                        {"grasped", r.grasped}, {"held_after_lift", r.held_after_lift}, {"attempts", r.attempts},
-                        {"time_to_grasp_s", r.grasped ? json(r.time_to_grasp_s) : json(nullptr)},
-                        {"hand_error_mm", r.grasped ? json(r.hand_error_mm) : json(nullptr)}, {"capsules", caps},
-                        {"grasp_tick", {{"hand_error_mm", r.grasped ? json(r.grasp_tick_hand_error_mm) : json(nullptr)},
-                                        {"capsules", capsule_json(r.grasp_tick_capsules)}}}});
-    }
+    for (const Trial& t : trials) grasps.push_back(telegrasp::report::record_json(t.record));
     json_out << json{{"grasps", grasps}, {"summary", summaries[0]}, {"summaries", summaries}}.dump(1) << "\n";
     if (!json_out.flush()) { std::cerr << "telegrasp-eval: cannot write " << opt.json_path << "\n"; return 1; }
     std::cerr << "wrote " << opt.json_path << "\n";

@@ -1,0 +1,112 @@
+#include "grasp_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace telegrasp::report {
+namespace {
+
+using nlohmann::json;
+
+json capsule_json(const std::vector<CapsuleRecord>& capsules) {
+  json out = json::array();
+  for (const auto& c : capsules)
+    out.push_back({{"phalanx", c.phalanx}, {"hit", c.hit}, {"blocked", c.blocked},
+                   {"nd_mm", c.hit ? json(c.nd_mm) : json(nullptr)}, {"signed_distance_mm", c.signed_distance_mm}});
+  return out;
+}
+
+// Linear interpolation between the closest ranks; NaN for no values.
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const double idx = p * static_cast<double>(v.size() - 1);
+  const std::size_t i = static_cast<std::size_t>(idx);
+  const double f = idx - static_cast<double>(i);
+  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
+}
+
+}  // namespace
+
+std::vector<CapsuleRecord> capsule_records(const sim::GraspMetrics& metrics, const sim::HandRig& rig) {
+  std::vector<CapsuleRecord> out;
+  for (const sim::CapsuleMetric& m : metrics.capsules)
+    out.push_back({rig.phalanges()[m.phalanx.value].name, m.hit, m.blocked, 1000 * m.nd, 1000 * m.signed_distance});
+  return out;
+}
+
+json summarize(const std::vector<const Record*>& recs) {
+  int grasped = 0, held = 0, capsules = 0, below = 0, blocked_count = 0;
+  double time_sum = 0, he_sum = 0, he_tick_sum = 0, min_sd = 1e9;
+  std::vector<double> nd_abs, nd_abs_tick;
+  for (const Record* r : recs) {
+    grasped += r->grasped;
+    held += r->held_after_lift;
+    if (!r->grasped) continue;
+    time_sum += r->time_to_grasp_s;
+    he_sum += r->hand_error_mm;
+    he_tick_sum += r->grasp_tick_hand_error_mm;
+    for (const auto& c : r->grasp_tick_capsules)
+      if (c.hit) nd_abs_tick.push_back(std::abs(c.nd_mm));
+    for (const auto& c : r->capsules) {
+      ++capsules;
+      if (c.hit) nd_abs.push_back(std::abs(c.nd_mm));
+      if (c.blocked) {
+        ++blocked_count;
+        min_sd = std::min(min_sd, c.signed_distance_mm);
+        below += c.signed_distance_mm < -0.1;
+      }
+    }
+  }
+  auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+  return {{"trials", recs.size()},
+          {"grasped", grasped},
+          {"held_after_lift", held},
+          {"held_rate", recs.empty() ? 0.0 : static_cast<double>(held) / static_cast<double>(recs.size())},
+          {"time_to_grasp_mean_s", num(grasped ? time_sum / grasped : NAN)},
+          {"hand_error_mean_mm", num(grasped ? he_sum / grasped : NAN)},
+          {"capsules", capsules},
+          {"capsules_hit", nd_abs.size()},
+          {"nd_abs_median_mm", num(percentile(nd_abs, 0.5))},
+          {"nd_abs_p95_mm", num(percentile(nd_abs, 0.95))},
+          {"blocked_capsules", blocked_count},
+          {"min_blocked_signed_distance_mm", num(blocked_count ? min_sd : NAN)},
+          {"blocked_below_minus_0_1mm", below},
+          {"grasp_tick_hand_error_mean_mm", num(grasped ? he_tick_sum / grasped : NAN)},
+          {"grasp_tick_nd_abs_median_mm", num(percentile(nd_abs_tick, 0.5))},
+          {"grasp_tick_nd_abs_p95_mm", num(percentile(nd_abs_tick, 0.95))}};
+}
+
+std::string fmt(double v, int prec) {
+  if (!std::isfinite(v)) return "-";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.*f", prec, v);
+  return buf;
+}
+
+void print_object_table(const std::vector<ObjectRows>& objects) {
+  std::printf("%-26s %6s %6s %8s %9s %9s %10s %9s\n", "object", "held", "grasp", "time_s", "|ND|med", "|ND|p95", "minSD_mm", "HErr_mm");
+  for (const ObjectRows& o : objects) {
+    const json s = summarize(o.records);
+    auto get = [&](const char* k) { return s[k].is_null() ? NAN : s[k].get<double>(); };
+    const int n = static_cast<int>(o.records.size());
+    std::printf("%-26s %3d/%-2d %3d/%-2d %8s %9s %9s %10s %9s\n", o.object.c_str(), s["held_after_lift"].get<int>(), n,
+                s["grasped"].get<int>(), n, fmt(get("time_to_grasp_mean_s")).c_str(), fmt(get("nd_abs_median_mm"), 3).c_str(),
+                fmt(get("nd_abs_p95_mm"), 3).c_str(), fmt(get("min_blocked_signed_distance_mm"), 3).c_str(),
+                fmt(get("hand_error_mean_mm")).c_str());
+  }
+}
+
+json record_json(const Record& r) {
+  const bool known_mode = !r.mode.empty();
+  return {{"object", r.object}, {"trial", r.trial}, {"mode", known_mode ? json(r.mode) : json(nullptr)},
+          {"speed_scale", known_mode ? json(r.speed_scale) : json(nullptr)},
+          {"grasped", r.grasped}, {"held_after_lift", r.held_after_lift}, {"attempts", r.attempts},
+          {"time_to_grasp_s", r.grasped ? json(r.time_to_grasp_s) : json(nullptr)},
+          {"hand_error_mm", r.grasped ? json(r.hand_error_mm) : json(nullptr)}, {"capsules", capsule_json(r.capsules)},
+          {"grasp_tick", {{"hand_error_mm", r.grasped ? json(r.grasp_tick_hand_error_mm) : json(nullptr)},
+                          {"capsules", capsule_json(r.grasp_tick_capsules)}}}};
+}
+
+}  // namespace telegrasp::report

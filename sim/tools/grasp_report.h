@@ -1,0 +1,60 @@
+// Grasp records and how they are reported: the per-object table, the summary line and the JSON
+// records, shared by telegrasp-eval (in-process) and telegrasp-bot (over DDS) so both print and
+// write the same thing.
+#pragma once
+
+#include "telegrasp/sim/hand_controller.h"
+#include "telegrasp/sim/hand_rig.h"
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <vector>
+
+namespace telegrasp::report {
+
+/// One capsule's metrics, in millimetres.
+struct CapsuleRecord {
+  std::string phalanx;
+  bool hit = false, blocked = false;
+  double nd_mm = 0, signed_distance_mm = 0;
+};
+
+/// One grasp trial.
+struct Record {
+  std::string object;
+  std::string mode;                       ///< Closing mode; "" if unknown (written as null).
+  double speed_scale = 1;                 ///< Written as null when `mode` is "".
+  int trial = 0, attempts = 0;
+  bool grasped = false, held_after_lift = false;
+  double time_to_grasp_s = 0;
+  double hand_error_mm = 0;               ///< The settled hand while held (end of the hold), else the grasp tick's.
+  std::vector<CapsuleRecord> capsules;
+  double grasp_tick_hand_error_mm = 0;    ///< The tick the grasp rule turned true.
+  std::vector<CapsuleRecord> grasp_tick_capsules;
+};
+
+/// The capsule metrics of a grasp, named by the rig's phalanges, in mm.
+std::vector<CapsuleRecord> capsule_records(const sim::GraspMetrics& metrics, const sim::HandRig& rig);
+
+/// Success counts and metric statistics over `records` (keys as in telegrasp-eval's JSON summary).
+nlohmann::json summarize(const std::vector<const Record*>& records);
+
+/// `v` with `prec` decimals, "-" if not finite.
+std::string fmt(double v, int prec = 2);
+
+/// The trials of one object, for one row of the table.
+struct ObjectRows {
+  std::string object;
+  std::vector<const Record*> records;
+};
+
+/// Prints the per-object table to stdout: held after lift, grasped, mean time to grasp, |ND|
+/// median and 95th percentile, the minimum signed distance of blocked capsules, mean HandError.
+void print_object_table(const std::vector<ObjectRows>& objects);
+
+/// One grasp record as JSON: {"object","trial","mode","speed_scale","grasped","held_after_lift",
+/// "attempts","time_to_grasp_s","hand_error_mm","capsules":[...],"grasp_tick":{...}}.
+nlohmann::json record_json(const Record& record);
+
+}  // namespace telegrasp::report
