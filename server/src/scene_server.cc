@@ -80,7 +80,7 @@ void SceneServer::spawn_initial_scene() {
 
 sim::ObjectId SceneServer::spawn(const sim::ObjectModelPtr& model, const Eigen::Isometry3d& X_WorldObject) {
   const sim::ObjectId id = world_->add_object(model, X_WorldObject);
-  objects_[id.value] = {model->name, world_->time()};
+  objects_[id.value] = {model->name, world_->time(), X_WorldObject};
   return id;
 }
 
@@ -147,6 +147,10 @@ void SceneServer::tick(std::int64_t now_ns) {
   for (sim::ObjectId id : world_->objects()) live_objects.insert(id.value);
   std::erase_if(objects_, [&](const auto& kv) { return !live_objects.count(kv.first); });
 
+  for (auto& [id, o] : objects_)
+    if (world_->object_pose(sim::ObjectId(id)).translation().z() < kFallenHeight && world_->place_object(sim::ObjectId(id), o.X_WorldSpawn))
+      std::cerr << "telegrasp-server: " << o.name << " (object " << id << ") fell off the table: put back where it was spawned\n";
+
   const std::uint64_t tick = world_->tick();
   const double time = world_->time();
   for (auto& [addr, h] : hands_) {
@@ -154,10 +158,11 @@ void SceneServer::tick(std::int64_t now_ns) {
     sink_.publish(make_hand_skeleton(addr, hand, tick, time, h.stamp, h.frozen));
     msg::GraspState gs = make_grasp_state(addr, hand, tick, time);
     bool changed = !h.published_state;
-    if (h.published_state) {
+    if (h.published_state) {  // a change of selection, grasp, blocking or palm contact; not of the trigger alone
       msg::GraspState old = *h.published_state;
       old.tick(tick);
       old.time(time);
+      old.trigger(gs.trigger());
       changed = !(old == gs);
     }
     if (changed) {

@@ -50,6 +50,8 @@ class SceneServer {
   /// The hand of a client, if present.
   std::optional<sim::HandId> hand_id(const HandAddress& hand) const;
   static constexpr double kTableHalfExtent = 2.0;
+  /// An object below this height fell off the table: it is put back where it was spawned.
+  static constexpr double kFallenHeight = -1.0;
 
  private:
   struct Hand {
@@ -62,6 +64,7 @@ class SceneServer {
   struct Object {
     std::string name;
     double spawn_time = 0;
+    Eigen::Isometry3d X_WorldSpawn = Eigen::Isometry3d::Identity();  // where it goes back if it falls off the table
   };
   void spawn_initial_scene();
   sim::ObjectId spawn(const sim::ObjectModelPtr& model, const Eigen::Isometry3d& X_WorldObject);

@@ -157,6 +157,17 @@ void World::remove_object(ObjectId id) {
   impl_->objects.erase(it);
 }
 
+bool World::place_object(ObjectId id, const Eigen::Isometry3d& X_WorldObject) {
+  auto it = impl_->objects.find(id.value);
+  if (it == impl_->objects.end() || it->second.holder.valid()) return false;
+  Impl::Object& o = it->second;
+  Impl::place(o, to_bt(X_WorldObject));
+  o.body->setLinearVelocity(btVector3(0, 0, 0));
+  o.body->setAngularVelocity(btVector3(0, 0, 0));
+  o.body->activate(true);
+  return true;
+}
+
 Eigen::Isometry3d World::resting_pose(const ObjectModel& model, double x, double y, double yaw) {
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
   X.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();

@@ -245,6 +245,31 @@ TEST_F(SceneServerTest, AppliesAndRejectsSceneCommands) {
   EXPECT_EQ(s.models().size(), models.size());
 }
 
+// An object that falls off the table comes back, at rest, to where it was spawned.
+TEST_F(SceneServerTest, AnObjectThatFallsOffTheTableIsPutBack) {
+  const int ball = spawn("056_tennis_ball", 0.45, 0.0);
+  const Eigen::Isometry3d X_spawn = scene->world().object_pose(sim::ObjectId(ball));
+  msg::SceneCommand c;  // a second ball dropped past the table's edge
+  c.kind(msg::SCENE_SPAWN);
+  c.model("056_tennis_ball");
+  c.on_table(false);
+  c.pose().orientation().w(1);
+  c.pose().position().x(SceneServer::kTableHalfExtent + 0.2);
+  c.pose().position().z(0.1);
+  ASSERT_EQ(scene->apply_command(c), "");
+  const sim::ObjectId dropped = scene->world().objects().back();
+  double lowest = 1;
+  for (int i = 0; i < 90 * 2; ++i) {
+    tick();
+    lowest = std::min(lowest, scene->world().object_pose(dropped).translation().z());
+  }
+  EXPECT_LT(lowest, SceneServer::kFallenHeight + 0.2);  // it did fall
+  const Eigen::Vector3d p = scene->world().object_pose(dropped).translation();
+  EXPECT_GT(p.z(), SceneServer::kFallenHeight);          // and is back up at its spawn pose or on its way down again
+  EXPECT_NEAR(p.x(), SceneServer::kTableHalfExtent + 0.2, 1e-6);
+  EXPECT_TRUE(scene->world().object_pose(sim::ObjectId(ball)).isApprox(X_spawn, 1e-3));  // the other one never moved
+}
+
 TEST(SceneServerResetTest, ResetRestoresTheConfiguredScene) {
   ServerSettings settings;
   settings.objects = {{"005_tomato_soup_can", 0.4, 0.0, 0.0}, {"056_tennis_ball", 0.6, 0.2, 0.5}};

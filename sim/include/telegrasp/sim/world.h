@@ -50,6 +50,8 @@ class World {
   ObjectId add_object(ObjectModelPtr model, const Eigen::Isometry3d& X_WorldObject);
   /// Removes an object; a hand holding it lets go. Unknown ids are ignored.
   void remove_object(ObjectId id);
+  /// Puts a free (not held) object at `X_WorldObject` at rest; false if it is held or unknown.
+  bool place_object(ObjectId id, const Eigen::Isometry3d& X_WorldObject);
   /// Pose at which `model` rests on the table at (x, y) with yaw about +z.
   static Eigen::Isometry3d resting_pose(const ObjectModel& model, double x, double y, double yaw);
 
