@@ -1,0 +1,263 @@
+// Shared pieces of the network benchmarks (telegrasp-bench-latency, telegrasp-bench-scale):
+// flag parsing, the server child process, raw Fast DDS entities, ServerStatus collection, CPU
+// time from /proc, and latency summaries.
+#pragma once
+
+#include "telegrasp/idl/telegrasp.h"
+
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <sys/types.h>
+#include <thread>
+#include <vector>
+
+namespace eprosima::fastdds::dds {
+class DomainParticipant;
+class Publisher;
+class Subscriber;
+class DataWriter;
+class DataReader;
+class Topic;
+}  // namespace eprosima::fastdds::dds
+
+namespace telegrasp::bench {
+
+namespace dds = eprosima::fastdds::dds;
+using Clock = std::chrono::steady_clock;
+
+/// steady_clock now, in ns since its epoch (the one clock every benchmark timestamp uses).
+std::int64_t now_ns();
+
+// ---------------------------------------------------------------------------------------------
+// Command line.
+
+/// A command-line mistake: main prints it with the program name and exits 2.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// Walks argv; `value()` takes the argument of the current flag or throws naming it.
+class ArgReader {
+ public:
+  ArgReader(int argc, char** argv) : argc_(argc), argv_(argv) {}
+  bool next();                      ///< Advances to the next argument; false at the end.
+  const std::string& flag() const { return flag_; }
+  std::string value();              ///< The current flag's value; throws UsageError if missing.
+  long long integer(long long lo, long long hi);  ///< value() as an integer in [lo, hi].
+  double number(double lo, double hi);            ///< value() as a finite number in [lo, hi].
+
+ private:
+  int argc_;
+  char** argv_;
+  int i_ = 0;
+  std::string flag_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Signals and child processes.
+
+/// SIGINT/SIGTERM set the flag stop_requested() returns; the benchmarks then wind down and clean up.
+void install_signal_handlers();
+bool stop_requested();
+/// Sleeps `seconds`, returning early (false) if a stop was requested.
+bool sleep_unless_stopped(double seconds);
+
+/// Ends the process if it is still running `seconds` after construction, or 15 s after a stop was
+/// requested: it SIGTERMs (then SIGKILLs) every running ChildProcess and calls _exit(1). A hang
+/// inside Fast DDS must not leave a server behind.
+class Watchdog {
+ public:
+  explicit Watchdog(double seconds);
+  ~Watchdog();
+  Watchdog(const Watchdog&) = delete;
+  Watchdog& operator=(const Watchdog&) = delete;
+
+ private:
+  std::atomic<bool> done_{false};
+  std::thread thread_;
+};
+
+/// This executable's path (/proc/self/exe) and the telegrasp-server next to it.
+std::string self_exe();
+std::string default_server_path();
+
+/// A child process (fork + exec) whose stdout and stderr go to a log file. It receives SIGTERM if
+/// this process dies (PR_SET_PDEATHSIG), and stop() (also run by the destructor) sends SIGTERM,
+/// waits, then SIGKILL: no child outlives the benchmark.
+class ChildProcess {
+ public:
+  ChildProcess() = default;
+  ChildProcess(const ChildProcess&) = delete;
+  ChildProcess& operator=(const ChildProcess&) = delete;
+  ~ChildProcess() { stop(); }
+
+  /// Starts argv[0] with `argv`; throws std::runtime_error if the log cannot be opened or fork fails.
+  void start(const std::vector<std::string>& argv, const std::string& log_path);
+  pid_t pid() const { return pid_; }
+  /// True while it runs; once it has exited, exit_description() says how.
+  bool running();
+  std::string exit_description() const { return exit_; }
+  /// SIGTERM, up to `grace_s` to exit, then SIGKILL; reaps it. Returns its exit description.
+  std::string stop(double grace_s = 5.0);
+  const std::string& log_path() const { return log_; }
+  /// The last `lines` lines of the log, for error messages.
+  std::string log_tail(int lines = 15) const;
+
+ private:
+  void reaped(int status);
+  pid_t pid_ = -1;
+  std::string log_;
+  std::string exit_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// CPU time from /proc.
+
+/// utime + stime of a process (all its threads) or of one thread, in microseconds; -1 if unreadable.
+std::int64_t process_cpu_us(pid_t pid);
+std::int64_t thread_cpu_us(pid_t pid, pid_t tid);
+/// CPU time (us) of every thread of a process, by thread id (Fast DDS 2.9 leaves its threads
+/// unnamed, so the id and its creation order are all there is).
+std::map<pid_t, std::int64_t> threads_cpu_us(pid_t pid);
+/// This process's CPU time (getrusage), in microseconds.
+std::int64_t self_cpu_us();
+/// CPU time every core of the machine spent busy (not idle or iowait) since boot, /proc/stat, us.
+std::int64_t machine_busy_us();
+
+// ---------------------------------------------------------------------------------------------
+// Fast DDS.
+
+/// Loads the XML profiles file ("" = the default one), checks the participant profile, and turns
+/// Fast DDS intraprocess delivery off: the benchmarks run several participants in one process,
+/// and with intraprocess delivery Fast DDS 2.9.1 deadlocks in the Writer Liveliness Protocol (two
+/// participants' event threads lock each other's PDP mutex: eProsima/Fast-DDS#3115; seen here with
+/// 17 participants and AUTOMATIC liveliness). Samples between them then go through shared memory,
+/// as between processes.
+void load_profiles(const std::string& file, const std::string& participant_profile);
+
+/// One RAII owner of a DomainParticipant and everything it contains. Topics are created on demand
+/// per (name, type); writers and readers use the XML profiles "<profile_topic>.writer/.reader",
+/// which lets a benchmark topic borrow the QoS of a telegrasp topic.
+class Participant {
+ public:
+  Participant(int domain, const std::string& profile);
+  ~Participant();
+  Participant(const Participant&) = delete;
+  Participant& operator=(const Participant&) = delete;
+
+  template <class PubSubType>
+  dds::DataWriter* writer(const std::string& topic, const std::string& profile_topic) {
+    return make_writer(topic, [] { return new PubSubType(); }, profile_topic);
+  }
+  template <class PubSubType>
+  dds::DataReader* reader(const std::string& topic, const std::string& profile_topic, dds::DataReaderListener* listener) {
+    return make_reader(topic, [] { return new PubSubType(); }, profile_topic, listener);
+  }
+  dds::DomainParticipant* get() const { return participant_; }
+
+ private:
+  using TypeFactory = std::function<dds::TopicDataType*()>;
+  dds::Topic* topic(const std::string& name, const TypeFactory& type);
+  dds::DataWriter* make_writer(const std::string& topic, const TypeFactory& type, const std::string& profile_topic);
+  dds::DataReader* make_reader(const std::string& topic, const TypeFactory& type, const std::string& profile_topic,
+                               dds::DataReaderListener* listener);
+  dds::DomainParticipant* participant_ = nullptr;
+  dds::Publisher* publisher_ = nullptr;
+  dds::Subscriber* subscriber_ = nullptr;
+  std::map<std::string, dds::Topic*> topics_;
+};
+
+/// Matched remote endpoints of a writer / reader.
+int matched_readers(dds::DataWriter* writer);
+int matched_writers(dds::DataReader* reader);
+/// Polls `ready` every 10 ms until it is true, `timeout_s` passes, or a stop is requested.
+bool wait_until(const std::function<bool()>& ready, double timeout_s);
+
+// ---------------------------------------------------------------------------------------------
+// The server.
+
+struct ServerOptions {
+  std::string path;                 ///< telegrasp-server executable.
+  int domain = 0;
+  std::string profile = "loopback";
+  std::string profiles_file;        ///< "" = the server's default.
+  bool late_latch = true;
+  std::vector<std::string> extra;   ///< More arguments (--server-arg).
+  std::string log_path;
+};
+
+/// The command line the server is started with (also printed in reports).
+std::vector<std::string> server_argv(const ServerOptions& o);
+
+/// Every ServerStatus the benchmark receives from its own server, stamped with its arrival time
+/// and the server's CPU times at arrival (so CPU and tick windows line up). Once a server pid is
+/// set, statuses of other processes (another server on the same domain) are ignored but counted:
+/// a Fast DDS 2.9 GUID prefix carries the low 16 bits of the writer's process id in bytes 4..5
+/// (little endian; checked: pid 0x375b -> 01.0f.78.fd.5b.37.fc.9c...).
+class StatusCollector : public dds::DataReaderListener {
+ public:
+  struct Record {
+    std::int64_t received_ns = 0;
+    std::int64_t server_cpu_us = -1;      ///< whole process
+    std::int64_t sim_thread_cpu_us = -1;  ///< the server's main thread (its simulation thread)
+    std::int64_t self_cpu_us = -1;        ///< the benchmark process
+    std::int64_t machine_busy_us = -1;    ///< every process of the machine
+    msg::ServerStatus status;
+  };
+  void set_server_pid(pid_t pid) { server_pid_ = pid; }
+  void on_data_available(dds::DataReader* reader) override;
+  std::size_t count() const;
+  std::size_t foreign() const { return foreign_.load(); }  ///< Statuses from other processes.
+  std::optional<Record> latest() const;
+  std::vector<Record> since(std::int64_t t_ns) const;  ///< Records received at or after t_ns.
+  /// Waits until a record received at or after `after_ns` satisfies `pred` (or any, if empty).
+  std::optional<Record> wait_for(std::int64_t after_ns, double timeout_s,
+                                 const std::function<bool(const msg::ServerStatus&)>& pred = {});
+
+ private:
+  mutable std::mutex mutex_;
+  std::condition_variable cv_;
+  std::vector<Record> records_;
+  std::atomic<pid_t> server_pid_{0};
+  std::atomic<std::size_t> foreign_{0};
+};
+
+/// Checks that no other telegrasp-server answers on the domain (1.5 s), starts the server and
+/// waits for its first ServerStatus on `collector`'s reader; throws std::runtime_error (with the
+/// server's log tail) if the domain is taken, or the server exits or stays silent for `timeout_s`.
+void start_server(ChildProcess& child, const ServerOptions& o, StatusCollector& collector, double timeout_s);
+
+// ---------------------------------------------------------------------------------------------
+// Results.
+
+/// Nearest-rank percentiles of a set of latencies (us).
+struct Summary {
+  std::size_t count = 0;
+  double p50 = 0, p90 = 0, p99 = 0, max = 0, mean = 0;
+};
+Summary summarize(std::vector<double> values);
+
+/// A unit quaternion (w, x, y, z) for a smooth wobble: rotation by `angle` about a tilted axis.
+msg::Quat wobble_quaternion(double angle);
+
+/// Controller sample `seq` of hand `side` of client number `client` at `t` s into the run: the
+/// palm moves smoothly in the air above the table (top z = 0, |x|, |y| <= 2 m), 0.35..0.55 m up,
+/// at x < 0 where no default-layout object stands (objects start at x = 0.35); the orientation
+/// wobbles and the trigger oscillates 0..1 at 0.5 Hz.
+msg::ControllerState controller_sample(const std::string& client_id, int client, int side, std::uint64_t seq, double t);
+
+/// Shell-quoted command line, for reports.
+std::string join_command(const std::vector<std::string>& argv);
+
+}  // namespace telegrasp::bench
