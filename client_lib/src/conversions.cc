@@ -1,5 +1,7 @@
 #include "conversions.h"
 
+#include "telegrasp/idl/eigen_conversions.h"
+
 namespace telegrasp::client_lib {
 
 namespace {
@@ -26,36 +28,10 @@ std::vector<Out> from_msgs(const std::vector<In>& in) {
 
 }  // namespace
 
-msg::Vec3 to_msg(const Eigen::Vector3d& v) {
-  msg::Vec3 m;
-  m.x(v.x());
-  m.y(v.y());
-  m.z(v.z());
-  return m;
-}
-
-Eigen::Vector3d from_msg(const msg::Vec3& v) { return {v.x(), v.y(), v.z()}; }
-
-msg::Pose3 to_msg(const Eigen::Isometry3d& X_AB) {
-  // No normalization: a scaled or sheared linear part gives a non-unit quaternion, which the
-  // server rejects instead of silently accepting a repaired pose.
-  const Eigen::Quaterniond q_AB(X_AB.linear());
-  msg::Pose3 m;
-  m.position(to_msg(Eigen::Vector3d(X_AB.translation())));
-  m.orientation().w(q_AB.w());
-  m.orientation().x(q_AB.x());
-  m.orientation().y(q_AB.y());
-  m.orientation().z(q_AB.z());
-  return m;
-}
-
-Eigen::Isometry3d from_msg(const msg::Pose3& pose) {
-  const msg::Quat& q = pose.orientation();
-  Eigen::Isometry3d X_AB = Eigen::Isometry3d::Identity();
-  X_AB.linear() = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z()).normalized().toRotationMatrix();
-  X_AB.translation() = from_msg(pose.position());
-  return X_AB;
-}
+msg::Vec3 to_msg(const Eigen::Vector3d& v) { return idl::to_msg(v); }
+Eigen::Vector3d from_msg(const msg::Vec3& v) { return idl::to_eigen(v); }
+msg::Pose3 to_msg(const Eigen::Isometry3d& X_AB) { return idl::to_msg(X_AB); }
+Eigen::Isometry3d from_msg(const msg::Pose3& pose) { return idl::to_eigen(pose); }
 
 std::uint8_t to_msg_side(client::HandSide side) { return static_cast<std::uint8_t>(side); }
 

@@ -2,35 +2,6 @@
 
 namespace telegrasp::server {
 
-msg::Vec3 to_msg(const Eigen::Vector3d& v) {
-  msg::Vec3 m;
-  m.x(v.x());
-  m.y(v.y());
-  m.z(v.z());
-  return m;
-}
-
-Eigen::Vector3d to_eigen(const msg::Vec3& v) { return {v.x(), v.y(), v.z()}; }
-
-msg::Pose3 to_msg(const Eigen::Isometry3d& X) {
-  const Eigen::Quaterniond q(X.linear());
-  msg::Pose3 p;
-  p.position(to_msg(Eigen::Vector3d(X.translation())));
-  p.orientation().w(q.w());
-  p.orientation().x(q.x());
-  p.orientation().y(q.y());
-  p.orientation().z(q.z());
-  return p;
-}
-
-Eigen::Isometry3d to_eigen(const msg::Pose3& pose) {
-  const msg::Quat& q = pose.orientation();
-  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-  X.linear() = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z()).normalized().toRotationMatrix();
-  X.translation() = to_eigen(pose.position());
-  return X;
-}
-
 sim::ControllerInput to_sim_input(const msg::ControllerState& state) {
   sim::ControllerInput in;
   in.X_WorldPalm = to_eigen(state.palm());

@@ -2,6 +2,7 @@
 // the two. Pure functions; round-trip tested in tests/server/conversions_test.cc.
 #pragma once
 
+#include "telegrasp/idl/eigen_conversions.h"
 #include "telegrasp/idl/telegrasp.h"
 #include "telegrasp/sim/hand_controller.h"
 #include "telegrasp/sim/world.h"
@@ -20,13 +21,10 @@ struct HandAddress {
   auto operator<=>(const HandAddress&) const = default;
 };
 
-msg::Vec3 to_msg(const Eigen::Vector3d& v);
-Eigen::Vector3d to_eigen(const msg::Vec3& v);
-/// Pose as position + unit quaternion (w, x, y, z).
-msg::Pose3 to_msg(const Eigen::Isometry3d& X);
-/// Precondition: the quaternion is finite and unit length within 1e-3 (validate first); it is
-/// normalised here so the rotation is exact.
-Eigen::Isometry3d to_eigen(const msg::Pose3& pose);
+/// Geometry: idl/include/telegrasp/idl/eigen_conversions.h, shared with the client library.
+/// to_eigen(Pose3) expects a validated (finite, unit within 1e-3) quaternion.
+using idl::to_eigen;
+using idl::to_msg;
 
 /// The sim input a (validated) controller state asks for.
 sim::ControllerInput to_sim_input(const msg::ControllerState& state);

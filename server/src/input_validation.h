@@ -33,6 +33,9 @@ inline std::string_view name(RejectReason r) { return kRejectReasonNames[static_
 /// A unit quaternion is one whose norm is within this of 1.
 inline constexpr double kUnitQuaternionTolerance = 1e-3;
 
+/// True if the pose's numbers are finite and its quaternion is unit within the tolerance.
+bool finite_unit_pose(const msg::Pose3& pose);
+
 /// Checks one sample on its own (not its order or sender): client id, hand side, finite
 /// numbers, unit quaternion, trigger in [0, 1], curls empty or one value in [0, 1] per finger of
 /// the side's rig (`fingers[side]`). Returns true if valid, else false with `reason` set.

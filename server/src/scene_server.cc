@@ -13,13 +13,6 @@ namespace {
 
 constexpr std::size_t kMaxObjects = 128;  // the SceneState bound in telegrasp.idl
 
-bool finite_unit_pose(const msg::Pose3& p) {
-  const msg::Quat& q = p.orientation();
-  for (double v : {p.position().x(), p.position().y(), p.position().z(), q.w(), q.x(), q.y(), q.z()})
-    if (!std::isfinite(v)) return false;
-  return std::abs(std::sqrt(q.w() * q.w() + q.x() * q.x() + q.y() * q.y() + q.z() * q.z()) - 1) <= kUnitQuaternionTolerance;
-}
-
 }  // namespace
 
 std::vector<SceneObjectSpec> default_layout(const std::vector<sim::ObjectModelPtr>& models, double gap,
@@ -84,6 +77,11 @@ sim::ObjectId SceneServer::spawn(const sim::ObjectModelPtr& model, const Eigen::
   return id;
 }
 
+void SceneServer::remove_object(sim::ObjectId id) {
+  world_->remove_object(id);
+  retired_objects_.push_back(id.value);
+}
+
 std::optional<sim::HandId> SceneServer::hand_id(const HandAddress& hand) const {
   auto it = hands_.find(hand);
   if (it == hands_.end()) return std::nullopt;
@@ -119,6 +117,7 @@ void SceneServer::on_inputs(std::vector<InputSample> samples, std::int64_t now_n
 
 void SceneServer::remove_hand(std::map<HandAddress, Hand>::iterator it) {
   world_->remove_hand(it->second.id);
+  retired_hands_.push_back(it->second.id.value);
   mailbox_.forget_hand(it->first);
   sink_.hand_removed(it->first);
   hands_.erase(it);
@@ -140,12 +139,10 @@ void SceneServer::tick(std::int64_t now_ns) {
   world_->step();
   publish_events();
   // Forget the addresses and names of removed hands and objects once their events are out.
-  std::set<int> live_hands;
-  for (const auto& [addr, h] : hands_) live_hands.insert(h.id.value);
-  std::erase_if(address_of_, [&](const auto& kv) { return !live_hands.count(kv.first); });
-  std::set<int> live_objects;
-  for (sim::ObjectId id : world_->objects()) live_objects.insert(id.value);
-  std::erase_if(objects_, [&](const auto& kv) { return !live_objects.count(kv.first); });
+  for (int id : retired_hands_) address_of_.erase(id);
+  for (int id : retired_objects_) objects_.erase(id);
+  retired_hands_.clear();
+  retired_objects_.clear();
 
   for (auto& [id, o] : objects_)
     if (world_->object_pose(sim::ObjectId(id)).translation().z() < kFallenHeight && world_->place_object(sim::ObjectId(id), o.X_WorldSpawn))
@@ -242,11 +239,11 @@ std::string SceneServer::apply_command(const msg::SceneCommand& c) {
       if (std::find(objects.begin(), objects.end(), sim::ObjectId(c.object_id())) == objects.end())
         why = "no object with id " + std::to_string(c.object_id());
       else
-        world_->remove_object(sim::ObjectId(c.object_id()));
+        remove_object(sim::ObjectId(c.object_id()));
       break;
     }
     case msg::SCENE_RESET:
-      for (sim::ObjectId id : world_->objects()) world_->remove_object(id);
+      for (sim::ObjectId id : world_->objects()) remove_object(id);
       spawn_initial_scene();
       break;
     default:

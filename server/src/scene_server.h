@@ -69,6 +69,7 @@ class SceneServer {
   void spawn_initial_scene();
   sim::ObjectId spawn(const sim::ObjectModelPtr& model, const Eigen::Isometry3d& X_WorldObject);
   void remove_hand(std::map<HandAddress, Hand>::iterator it);
+  void remove_object(sim::ObjectId id);
   void publish_events();
   msg::SceneState scene_state() const;
 
@@ -81,7 +82,8 @@ class SceneServer {
   std::unique_ptr<sim::World> world_;
   std::map<HandAddress, Hand> hands_;
   std::map<int, HandAddress> address_of_;  // by HandId; kept one tick after removal for its events
-  std::map<int, Object> objects_;          // by ObjectId
+  std::map<int, Object> objects_;          // by ObjectId; likewise
+  std::vector<int> retired_hands_, retired_objects_;  // removed since the last tick's events
   std::uint64_t next_event_id_ = 1;
   std::uint64_t commands_accepted_ = 0, commands_rejected_ = 0;
 };
