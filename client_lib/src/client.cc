@@ -389,6 +389,7 @@ std::uint64_t Client::publish(const ControllerSample& sample) {
   std::uint64_t& last = impl_->last_sequence[m.hand_side()];
   if (m.sequence_number() == 0) m.sequence_number(last + 1);
   last = std::max(last, m.sequence_number());
+  m.commands_sent(static_cast<std::uint32_t>(impl_->last_command_id));
   if (!impl_->controller_writer->write(&m))
     throw std::runtime_error("cannot write ControllerState " + std::to_string(m.sequence_number()) + " of client " +
                              impl_->options.client_id);

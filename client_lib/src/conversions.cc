@@ -48,6 +48,7 @@ msg::ControllerState to_msg(const client::ControllerSample& sample, const std::s
   m.curls(sample.curls);
   m.buttons(sample.buttons);
   m.tracking_valid(sample.tracking_valid);
+  m.lockstep_tick(sample.lockstep_tick);
   return m;
 }
 
@@ -61,6 +62,7 @@ client::ControllerSample from_msg(const msg::ControllerState& m) {
   s.tracking_valid = m.tracking_valid();
   s.sequence_number = m.sequence_number();
   s.client_time_ns = m.client_time_ns();
+  s.lockstep_tick = m.lockstep_tick();
   return s;
 }
 

@@ -60,6 +60,7 @@ void load_server_config(const std::string& path, ServerSettings& s) {
   if (has("late_latch")) s.late_latch = c.late_latch();
   if (has("status_period_s")) s.status_period_s = c.status_period_s();
   if (has("max_hands")) s.max_hands = c.max_hands();
+  if (has("lockstep")) s.lockstep = c.lockstep();
   validate_settings(s, "server config " + path);
 }
 

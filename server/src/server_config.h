@@ -30,6 +30,9 @@ struct ServerSettings {
   bool late_latch = true;
   double status_period_s = 1.0;
   int max_hands = 256;
+  /// Tick as soon as every hand has answered the last tick (ControllerState.lockstep_tick) instead
+  /// of on the wall clock: deterministic, faster than real time. With no hands the scene waits.
+  bool lockstep = false;
 };
 
 /// Reads a protobuf text file onto `settings` (fields present in the file replace the defaults).

@@ -34,6 +34,9 @@ struct ControllerSample {
   bool tracking_valid = true;          ///< False: the server keeps the last pose.
   std::uint64_t sequence_number = 0;   ///< 0: Client::publish numbers the hand's samples 1, 2, 3 ...
   std::int64_t client_time_ns = 0;     ///< 0: Client::publish stamps steady_clock now.
+  /// For a server in lockstep: the tick of the newest SceneState this sample answers (the server's
+  /// next tick waits for it). Client::publish adds how many commands this client sent before it.
+  std::uint64_t lockstep_tick = 0;
 };
 
 struct HandSkeleton {

@@ -20,6 +20,12 @@ struct CapsuleRecord {
   double nd_mm = 0, signed_distance_mm = 0;
 };
 
+/// A contact of a grasp, in world and object coordinates (m; unit normals).
+struct ContactRecord {
+  std::string phalanx;  ///< "palm" for the palm.
+  Eigen::Vector3d p_world{0, 0, 0}, n_world{0, 0, 0}, p_object{0, 0, 0}, n_object{0, 0, 0};
+};
+
 /// One grasp trial.
 struct Record {
   std::string object;
@@ -32,6 +38,10 @@ struct Record {
   std::vector<CapsuleRecord> capsules;
   double grasp_tick_hand_error_mm = 0;    ///< The tick the grasp rule turned true.
   std::vector<CapsuleRecord> grasp_tick_capsules;
+  // Protocol runs (telegrasp-eval --protocol) only; written when `group` is not empty.
+  std::string group;                      ///< Operator group, e.g. "experienced".
+  int participant = 0;                    ///< 1-based, unique in a run.
+  std::vector<ContactRecord> contacts;    ///< At the grasp tick.
 };
 
 /// The capsule metrics of a grasp, named by the rig's phalanges, in mm.
@@ -54,7 +64,9 @@ struct ObjectRows {
 void print_object_table(const std::vector<ObjectRows>& objects);
 
 /// One grasp record as JSON: {"object","trial","mode","speed_scale","grasped","held_after_lift",
-/// "attempts","time_to_grasp_s","hand_error_mm","capsules":[...],"grasp_tick":{...}}.
+/// "attempts","time_to_grasp_s","hand_error_mm","capsules":[...],"grasp_tick":{...}}, plus
+/// "group","participant","contacts":[{"phalanx","p_world","n_world","p_object","n_object"}] for
+/// protocol runs.
 nlohmann::json record_json(const Record& record);
 
 }  // namespace telegrasp::report

@@ -100,13 +100,24 @@ void print_object_table(const std::vector<ObjectRows>& objects) {
 
 json record_json(const Record& r) {
   const bool known_mode = !r.mode.empty();
-  return {{"object", r.object}, {"trial", r.trial}, {"mode", known_mode ? json(r.mode) : json(nullptr)},
+  json out = {{"object", r.object}, {"trial", r.trial}, {"mode", known_mode ? json(r.mode) : json(nullptr)},
           {"speed_scale", known_mode ? json(r.speed_scale) : json(nullptr)},
           {"grasped", r.grasped}, {"held_after_lift", r.held_after_lift}, {"attempts", r.attempts},
           {"time_to_grasp_s", r.grasped ? json(r.time_to_grasp_s) : json(nullptr)},
           {"hand_error_mm", r.grasped ? json(r.hand_error_mm) : json(nullptr)}, {"capsules", capsule_json(r.capsules)},
           {"grasp_tick", {{"hand_error_mm", r.grasped ? json(r.grasp_tick_hand_error_mm) : json(nullptr)},
                           {"capsules", capsule_json(r.grasp_tick_capsules)}}}};
+  if (!r.group.empty()) {
+    auto vec = [](const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); };
+    json contacts = json::array();
+    for (const ContactRecord& c : r.contacts)
+      contacts.push_back({{"phalanx", c.phalanx}, {"p_world", vec(c.p_world)}, {"n_world", vec(c.n_world)},
+                          {"p_object", vec(c.p_object)}, {"n_object", vec(c.n_object)}});
+    out["group"] = r.group;
+    out["participant"] = r.participant;
+    out["contacts"] = std::move(contacts);
+  }
+  return out;
 }
 
 }  // namespace telegrasp::report

@@ -1,4 +1,6 @@
-// telegrasp-eval: runs scripted grasps on objects in-process and reports success, time and ND.
+// telegrasp-eval's in-process run: scripted grasps on objects with no network; reports success,
+// time and ND.
+#include "commands.h"
 #include "grasp_report.h"
 #include "grasp_svg.h"
 #include "telegrasp/sim/hand_rig.h"
@@ -56,6 +58,12 @@ Options:
   --svg DIR           draw each object's first held grasp (three views) as DIR/<object>_<mode>.svg
   --threads N         worker threads (default 2)
   -h, --help          this text
+
+Other commands:
+  telegrasp-eval --protocol paper [options]        the paper's experiment through the server
+                                                   over DDS, with reports (--protocol paper --help)
+  telegrasp-eval questionnaire FILE.csv [options]  scores the paper's questionnaire
+                                                   (questionnaire --help)
 )";
 
 struct Options {
@@ -215,7 +223,7 @@ Trial run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRig
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int telegrasp::eval::run_in_process(int argc, char** argv) {
   const Options opt = parse(argc, argv);
   std::shared_ptr<const HandRig> rig;
   std::vector<ObjectModelPtr> models;

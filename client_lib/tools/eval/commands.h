@@ -1,0 +1,17 @@
+// The commands of telegrasp-eval; main.cc picks one from the arguments.
+#pragma once
+
+namespace telegrasp::eval {
+
+/// telegrasp-eval [options]: scripted grasps in-process, no network (in_process.cc).
+int run_in_process(int argc, char** argv);
+/// telegrasp-eval --protocol paper [options]: the paper's experiment over DDS (protocol.cc).
+int run_protocol(int argc, char** argv);
+/// telegrasp-eval participant [options]: one bot participant of a protocol run, started by
+/// run_protocol in its own process (participant.cc).
+int run_participant(int argc, char** argv);
+/// telegrasp-eval questionnaire FILE.csv [options]: scores the paper's questionnaire
+/// (questionnaire_main.cc).
+int run_questionnaire(int argc, char** argv);
+
+}  // namespace telegrasp::eval
