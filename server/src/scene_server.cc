@@ -40,6 +40,7 @@ SceneServer::SceneServer(const ServerSettings& settings, std::vector<sim::Object
                          std::shared_ptr<const sim::HandRig> right_rig, std::shared_ptr<const sim::HandRig> left_rig,
                          InputMailbox& mailbox, OutputSink& sink)
     : settings_(settings), mailbox_(mailbox), sink_(sink) {
+  if (settings_.lockstep) settings_.late_latch = false;  // the tick follows the sample at once
   rigs_[idl::kHandLeft] = std::move(left_rig);
   rigs_[idl::kHandRight] = std::move(right_rig);
   for (auto& m : models) {
@@ -95,7 +96,7 @@ void SceneServer::on_inputs(std::vector<InputSample> samples, std::int64_t now_n
     if (it == hands_.end()) {
       const sim::HandId id = world_->add_hand(rigs_[s.hand.side]);
       address_of_[id.value] = s.hand;
-      it = hands_.emplace(s.hand, Hand{id, {}, 0, false, std::nullopt}).first;
+      it = hands_.emplace(s.hand, Hand{id, {}, 0, false, 0, 0, std::nullopt}).first;
     }
     Hand& h = it->second;
     const sim::ControllerInput input = to_sim_input(s.state);
@@ -107,6 +108,8 @@ void SceneServer::on_inputs(std::vector<InputSample> samples, std::int64_t now_n
     h.stamp = {s.state.sequence_number(), s.state.client_time_ns()};
     h.last_received_ns = s.received_ns;
     h.frozen = false;
+    h.answered_tick = s.state.lockstep_tick();
+    h.commands_sent = s.state.commands_sent();
     if (settings_.late_latch) {
       const sim::HandController& hand = world_->hand(h.id);
       const Eigen::Isometry3d X_WorldPalm = input.tracking_valid ? input.X_WorldPalm : hand.state().X_WorldPalm;
@@ -212,7 +215,21 @@ msg::SceneState SceneServer::scene_state() const {
   return m;
 }
 
+bool SceneServer::lockstep_ready() const {
+  bool any_live = false;
+  for (const auto& [addr, h] : hands_) {
+    if (h.frozen) continue;
+    any_live = true;
+    if (h.answered_tick < world_->tick()) return false;
+    auto seen = commands_seen_.find(addr.client_id);
+    if (h.commands_sent > (seen == commands_seen_.end() ? 0 : seen->second)) return false;
+  }
+  return any_live;
+}
+
 std::string SceneServer::apply_command(const msg::SceneCommand& c) {
+  std::uint64_t& seen = commands_seen_[c.client_id().to_string()];
+  seen = std::max(seen, c.command_id());
   std::string why;
   switch (c.kind()) {
     case msg::SCENE_SPAWN: {

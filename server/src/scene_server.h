@@ -43,10 +43,15 @@ class SceneServer {
   void tick(std::int64_t now_ns);
   /// Applies a scene command; returns "" or why it was rejected (counted in the status).
   std::string apply_command(const msg::SceneCommand& command);
+  /// Lockstep: true when some hand is live (not frozen) and every live one has answered the current tick
+  /// (ControllerState.lockstep_tick) and every command its client sent before that answer has
+  /// been applied. Frozen hands are not waited for.
+  bool lockstep_ready() const;
   /// The status message for the current state.
   msg::ServerStatus status(const LoopStats& loop) const;
 
   const sim::World& world() const { return *world_; }
+  std::size_t hand_count() const { return hands_.size(); }
   /// The hand of a client, if present.
   std::optional<sim::HandId> hand_id(const HandAddress& hand) const;
   static constexpr double kTableHalfExtent = 2.0;
@@ -59,6 +64,8 @@ class SceneServer {
     InputStamp stamp;
     std::int64_t last_received_ns = 0;
     bool frozen = false;
+    std::uint64_t answered_tick = 0;   // lockstep: ControllerState.lockstep_tick of the newest sample
+    std::uint32_t commands_sent = 0;   // ... and its commands_sent
     std::optional<msg::GraspState> published_state;  // last GraspState sent (on change only)
   };
   struct Object {
@@ -86,6 +93,7 @@ class SceneServer {
   std::vector<int> retired_hands_, retired_objects_;  // removed since the last tick's events
   std::uint64_t next_event_id_ = 1;
   std::uint64_t commands_accepted_ = 0, commands_rejected_ = 0;
+  std::map<std::string, std::uint64_t> commands_seen_;  // per client: its highest command_id applied
 };
 
 }  // namespace telegrasp::server

@@ -34,10 +34,16 @@ Options (override the --config file):
   --profile NAME      Fast DDS participant profile: loopback (default), lan, wan
   --profiles FILE     Fast DDS XML profiles (default: deploy/fastdds/telegrasp_profiles.xml)
   --objects DIR       models = every mesh in DIR (default: the 30 built-in stand-ins)
+  --fill-standins     with --objects: also the built-in stand-in of each protocol object with no
+                      mesh in DIR
   --empty-scene       start with no objects (spawn them with SceneCommand)
   --tick-hz HZ        simulation rate (default 90)
   --mode M            finger closing: precise (default) | discrete
   --no-late-latch     publish skeletons only at ticks, not also on each sample's arrival
+  --lockstep          tick as soon as every hand has answered the last tick (ControllerState.
+                      lockstep_tick) and its commands have arrived, not on the clock: runs are
+                      deterministic and faster than real time. With no hands the scene waits; a
+                      hand silent for freeze_after_s is frozen and no longer waited for.
   --list-models       print the model names and exit
   -h, --help          this text
 
@@ -62,6 +68,7 @@ double parse_number(const std::string& flag, const std::string& v) {
 struct Flags {
   ServerSettings settings;
   bool list_models = false;
+  bool fill_standins = false;
 };
 
 Flags parse(int argc, char** argv) {
@@ -92,7 +99,9 @@ Flags parse(int argc, char** argv) {
     else if (a == "--empty-scene") { s.empty_scene = true; s.objects.clear(); }
     else if (a == "--tick-hz") s.tick_hz = parse_number(a, value());
     else if (a == "--no-late-latch") s.late_latch = false;
+    else if (a == "--lockstep") s.lockstep = true;
     else if (a == "--list-models") f.list_models = true;
+    else if (a == "--fill-standins") f.fill_standins = true;
     else if (a == "--mode") {
       const std::string m = value();
       if (m == "precise") s.closing_mode = sim::ClosingMode::kPrecise;
@@ -137,6 +146,10 @@ int main(int argc, char** argv) {
     } else {
       std::cerr << "telegrasp-server: loading meshes from " << settings.objects_dir << " ...\n";
       models = sim::load_object_dir(settings.objects_dir);
+      if (flags.fill_standins)
+        for (const auto& o : sim::protocol_objects())
+          if (std::none_of(models.begin(), models.end(), [&](const auto& m) { return m->name == o.name; }))
+            models.push_back(sim::make_standin_model(o));
     }
     if (flags.list_models) {
       for (const auto& m : models) std::cout << m->name << "\n";
@@ -159,26 +172,40 @@ int main(int argc, char** argv) {
     std::signal(SIGTERM, on_signal);
     std::cerr << "telegrasp-server: domain " << settings.domain << ", profile " << settings.profile << ", "
               << scene.world().objects().size() << " objects, " << settings.tick_hz << " Hz"
-              << (settings.late_latch ? ", late-latched skeletons" : "") << "; Ctrl-C to stop\n";
+              << (settings.lockstep ? " in lockstep" : settings.late_latch ? ", late-latched skeletons" : "") << "; Ctrl-C to stop\n";
 
-    // The simulation thread (this one) owns the scene: it wakes at each tick's due time, and in
-    // between whenever a sample or command arrives.
+    // The simulation thread (this one) owns the scene: it wakes at each tick's due time (in
+    // lockstep: when every hand has answered the last tick), and in between whenever a sample or
+    // command arrives.
     const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / settings.tick_hz));
     const auto status_period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(settings.status_period_s));
-    Clock::time_point next_tick = Clock::now() + period, next_status = Clock::now();
+    // Lockstep: when nothing (tick, sample or command) has happened for this long, a tick is taken
+    // anyway: it freezes the hands that did not answer, and later ticks no longer wait for them.
+    const auto stall_after = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(settings.freeze_after_s));
+    Clock::time_point next_tick = Clock::now() + period, next_status = Clock::now(), last_activity = Clock::now();
     std::vector<double> tick_us;
     std::uint64_t missed = 0;
     LoopStats stats;
     while (!g_stop) {
-      mailbox.wait(std::min(next_tick, next_status));
+      mailbox.wait(std::min(settings.lockstep ? last_activity + stall_after : next_tick, next_status));
       const Clock::time_point now = Clock::now();
-      if (auto inputs = mailbox.drain(); !inputs.empty()) scene.on_inputs(std::move(inputs), to_ns(now));
-      for (const msg::SceneCommand& c : node.take_commands()) scene.apply_command(c);
-      if (now >= next_tick) {
+      if (auto inputs = mailbox.drain(); !inputs.empty()) {
+        scene.on_inputs(std::move(inputs), to_ns(now));
+        last_activity = now;
+      }
+      for (const msg::SceneCommand& c : node.take_commands()) {
+        scene.apply_command(c);
+        last_activity = now;
+      }
+      const bool due = settings.lockstep
+                           ? scene.lockstep_ready() || (scene.hand_count() > 0 && now - last_activity >= stall_after)
+                           : now >= next_tick;
+      if (due) {
         scene.tick(to_ns(now));
+        last_activity = now;
         tick_us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - now).count());
         next_tick += period;
-        if (now - next_tick >= period) {  // fell behind by a whole tick or more: count and resync
+        if (!settings.lockstep && now - next_tick >= period) {  // fell behind by a whole tick or more: count and resync
           missed += static_cast<std::uint64_t>((now - next_tick) / period);
           next_tick = now + period;
         }

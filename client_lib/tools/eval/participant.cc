@@ -1,8 +1,371 @@
+// telegrasp-eval participant: one bot participant of a protocol run, in its own process (one DDS
+// participant per process). It drives the right hand of a lockstep server: spawns each protocol
+// object in turn with a SceneCommand, lets the scripted operator grasp, lift, hold and release
+// it, removes it, and records each grasp from the server's GraspEvent. Every decision is a
+// function of the SceneState sequence alone, so with a lockstep server a run is deterministic.
+// Progress: one line per grasp on stdout ("grasp I/N OBJECT held|not-held"), read by the runner.
 #include "commands.h"
+#include "grasp_report.h"
+#include "protocol_common.h"
+#include "telegrasp/client/client.h"
+#include "telegrasp/sim/hand_rig.h"
 
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <condition_variable>
+#include <cstdio>
+#include <fstream>
 #include <iostream>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
 
-int telegrasp::eval::run_participant(int, char**) {
-  std::cerr << "telegrasp-eval: not built yet\n";
-  return 2;
+namespace telegrasp::eval {
+namespace {
+
+namespace client = telegrasp::client;
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+constexpr const char* kUsage = R"(Usage: telegrasp-eval participant [options]
+
+One bot participant of `telegrasp-eval --protocol paper`, which starts it (with a server in
+lockstep) in its own process; run by hand only to debug a protocol run.
+
+Options:
+  --domain N        DDS domain of the server (default 0)
+  --profile NAME    Fast DDS participant profile (default loopback)
+  --profiles FILE   Fast DDS XML profiles (default: the shipped file)
+  --group NAME      experienced | inexperienced (default experienced)
+  --participant P   participant number, 1-based (default 1)
+  --seed S          the run's seed (default 1)
+  --mode M          the server's closing mode, written into the records (default precise)
+  --objects DIR     the server's mesh folder (missing protocol objects: built-in stand-ins)
+  --count N         grasp only the first N protocol objects (default 30)
+  --json FILE       write the grasp records (JSON array) here (default: stdout at the end)
+  --timeout S       give up when the server sends nothing for S seconds (default 20)
+)";
+
+constexpr double kTrialLimit = 30.0;     // s of simulated time before a grasp is cut short
+constexpr double kAppearLimit = 2.0;     // s of simulated time for a spawned object to appear
+constexpr double kEventWait = 2.0;       // s of wall time to wait for the GraspEvent of a grasp seen in SceneState
+constexpr double kDt = 1.0 / 90.0;       // the operator's step; the server's tick is the same by default
+
+struct Options {
+  int domain = 0, participant = 1, count = 30;
+  std::string profile = "loopback", profiles_file, group = "experienced", mode = "precise", objects_dir, json_path;
+  std::uint64_t seed = 1;
+  double timeout_s = 20;
+};
+
+[[noreturn]] void usage_error(const std::string& what) {
+  std::cerr << "telegrasp-eval participant: " << what << "\n";
+  std::exit(2);
 }
+
+Options parse(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) usage_error(a + " needs a value");
+      return argv[++i];
+    };
+    auto number = [&](double lo, double hi) {
+      const std::string v = value();
+      char* end = nullptr;
+      const double x = std::strtod(v.c_str(), &end);
+      if (v.empty() || *end != '\0' || !(x >= lo && x <= hi)) usage_error(a + " expects a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
+      return x;
+    };
+    if (a == "-h" || a == "--help") { std::cout << kUsage; std::exit(0); }
+    else if (a == "--domain") o.domain = static_cast<int>(number(0, 232));
+    else if (a == "--profile") o.profile = value();
+    else if (a == "--profiles") o.profiles_file = value();
+    else if (a == "--group") o.group = value();
+    else if (a == "--participant") o.participant = static_cast<int>(number(1, 100000));
+    else if (a == "--seed") o.seed = static_cast<std::uint64_t>(number(0, 1e15));
+    else if (a == "--mode") o.mode = value();
+    else if (a == "--objects") o.objects_dir = value();
+    else if (a == "--count") o.count = static_cast<int>(number(1, 30));
+    else if (a == "--json") o.json_path = value();
+    else if (a == "--timeout") o.timeout_s = number(0.1, 86400);
+    else usage_error("unknown option '" + a + "'");
+  }
+  return o;
+}
+
+enum class Stage { kSpawn, kAppear, kRun, kRelease };
+
+class Participant {
+ public:
+  Participant(const Options& opt, client::Client& c, std::map<std::string, sim::ObjectModelPtr> models)
+      : opt_(opt), client_(c), models_(std::move(models)),
+        rig_(std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")))),
+        skill_(participant_skill(opt.group, opt.seed, opt.participant)) {
+    const auto& order = paper_object_order();
+    objects_.assign(order.begin(), order.begin() + std::min<std::size_t>(order.size(), static_cast<std::size_t>(opt.count)));
+    input_.X_WorldPalm = home_palm_pose();
+  }
+
+  bool done() const { return index_ >= objects_.size(); }
+
+  // Sends the hand's current input as the answer to `tick`.
+  void publish(std::uint64_t tick) {
+    client::ControllerSample s;
+    s.side = client::HandSide::kRight;
+    s.X_WorldPalm = input_.X_WorldPalm;
+    s.trigger = input_.trigger;
+    if (input_.curls.size() == 5) s.curls = input_.curls;
+    s.tracking_valid = input_.tracking_valid;
+    s.lockstep_tick = tick;
+    client_.publish(s);
+  }
+  const std::vector<report::Record>& records() const { return records_; }
+
+  // The first sample, answering nothing yet: it joins the hand and, after the first spawn
+  // command, lets the waiting lockstep server take its first tick.
+  void start() {
+    send_spawn(0);
+    publish(0);
+  }
+
+  // Answers the SceneState of one tick with the hand's input for the next.
+  void answer(const client::SceneState& scene) {
+    const client::ObjectState* o = nullptr;
+    for (const auto& s : scene.objects)
+      if (s.id == object_id_ || (object_id_ < 0 && s.name == objects_[index_])) o = &s;
+    const bool holding = o && o->held && o->holder.client_id == client_.client_id();
+    if (holding && !rec_.grasped) wait_for_grasp_event();
+    switch (stage_) {
+      case Stage::kSpawn:
+        break;
+      case Stage::kAppear:
+        if (o) {
+          begin_trial(*o, scene);
+        } else if (static_cast<double>(scene.tick - spawn_tick_) * kDt > kAppearLimit) {
+          rec_ = {};
+          rec_.object = objects_[index_];
+          note_ = "did not appear within " + report::fmt(kAppearLimit, 0) + " s of its spawn command (see the server's log)";
+          finish(scene.tick);
+        }
+        break;
+      case Stage::kRun: {
+        if (!o) {
+          note_ = "removed from the scene during the grasp";
+          finish(scene.tick);
+          break;
+        }
+        const double t = static_cast<double>(scene.tick - start_tick_) * kDt;
+        input_ = op_->next(t, holding);
+        if (op_->phase() == sim::OperatorPhase::kHold) z_max_ = std::max(z_max_, o->X_WorldObject.translation().z());
+        if (op_->done() || t > kTrialLimit) {
+          if (!op_->done()) note_ = "cut short after " + report::fmt(kTrialLimit, 0) + " s";
+          input_.trigger = 0;
+          input_.curls.clear();
+          stage_ = Stage::kRelease;
+        }
+        break;
+      }
+      case Stage::kRelease:
+        if (!holding) finish(scene.tick);
+        break;
+    }
+    publish(scene.tick);
+  }
+
+ private:
+  void send_spawn(std::uint64_t tick) {
+    spawn_tick_ = tick;
+    const Placement p = object_placement(opt_.seed, opt_.participant, static_cast<int>(index_));
+    client::SceneCommand c;
+    c.kind = client::SceneCommand::Kind::kSpawn;
+    c.model = objects_[index_];
+    c.on_table = true;
+    c.x = p.x;
+    c.y = p.y;
+    c.yaw = p.yaw;
+    client_.send_command(c);
+    object_id_ = -1;
+    stage_ = Stage::kAppear;
+  }
+
+  void begin_trial(const client::ObjectState& o, const client::SceneState& scene) {
+    object_id_ = o.id;
+    rec_ = {};
+    rec_.object = o.name;
+    note_.clear();
+    z0_ = o.X_WorldObject.translation().z();
+    z_max_ = -1e9;
+    start_tick_ = scene.tick;
+    op_ = std::make_unique<sim::ScriptedOperator>(rig_, skill_, grasp_seed(opt_.seed, opt_.participant, static_cast<int>(index_)),
+                                                  sim::GraspSettings{}, kDt);
+    // Planning takes a while; the lockstep server waits for this answer, so simulated time does not run.
+    op_->begin(*models_.at(o.name), o.X_WorldObject, home_palm_pose(), 0.0);
+    input_ = op_->next(0.0, false);
+    stage_ = Stage::kRun;
+  }
+
+  // SceneState showed the grasp; its GraspEvent (reliable, another topic) may still be on its way.
+  void wait_for_grasp_event() {
+    const auto deadline = Clock::now() + std::chrono::duration<double>(kEventWait);
+    while (true) {
+      for (const client::GraspEvent& e : client_.take_grasp_events())
+        if (e.kind == client::GraspEvent::Kind::kGrasp && e.hand.client_id == client_.client_id() && e.object_id == object_id_ &&
+            !rec_.grasped)
+          take_grasp_event(e);
+      if (rec_.grasped || Clock::now() > deadline) return;
+      std::this_thread::sleep_for(std::chrono::microseconds(100));
+    }
+  }
+
+  void take_grasp_event(const client::GraspEvent& e) {
+    rec_.grasped = true;
+    rec_.time_to_grasp_s = e.time - e.object_spawn_time;
+    rec_.hand_error_mm = rec_.grasp_tick_hand_error_mm = e.hand_error_mm;
+    for (const client::CapsuleReport& c : e.capsules)
+      rec_.capsules.push_back({c.phalanx_name, c.hit, c.blocked, 1000 * c.nd, 1000 * c.signed_distance});
+    rec_.grasp_tick_capsules = rec_.capsules;
+    for (const client::ContactPoint& c : e.contacts) {
+      const bool palm = c.phalanx < 0 || c.phalanx >= static_cast<int>(rig_->phalanges().size());
+      rec_.contacts.push_back({palm ? std::string("palm") : rig_->phalanges()[c.phalanx].name, c.p_WorldContact, c.n_World,
+                               c.p_ObjectContact, c.n_Object});
+    }
+  }
+
+  void finish(std::uint64_t tick) {
+    rec_.mode = opt_.mode;
+    rec_.trial = static_cast<int>(index_);
+    rec_.group = opt_.group;
+    rec_.participant = opt_.participant;
+    rec_.attempts = op_ ? op_->attempts() : 0;
+    rec_.held_after_lift = op_ && op_->held_after_lift() && z_max_ - z0_ > 0.8 * sim::ScriptedOperator::kLiftHeight;
+    records_.push_back(rec_);
+    std::printf("grasp %zu/%zu %s %s%s%s\n", index_ + 1, objects_.size(), rec_.object.c_str(), rec_.held_after_lift ? "held" : "not-held",
+                note_.empty() ? "" : ": ", note_.c_str());
+    std::fflush(stdout);
+    if (object_id_ >= 0) {
+      client::SceneCommand remove;
+      remove.kind = client::SceneCommand::Kind::kRemove;
+      remove.object_id = object_id_;
+      client_.send_command(remove);
+    }
+    op_.reset();
+    input_ = {};
+    input_.X_WorldPalm = home_palm_pose();
+    ++index_;
+    if (!done()) send_spawn(tick);
+    else stage_ = Stage::kSpawn;
+  }
+
+
+  const Options& opt_;
+  client::Client& client_;
+  std::map<std::string, sim::ObjectModelPtr> models_;
+  std::shared_ptr<const sim::HandRig> rig_;
+  sim::OperatorSkill skill_;
+  std::vector<std::string> objects_;
+  std::size_t index_ = 0;
+  Stage stage_ = Stage::kSpawn;
+  int object_id_ = -1;
+  std::uint64_t start_tick_ = 0, spawn_tick_ = 0;
+  double z0_ = 0, z_max_ = -1e9;
+  std::unique_ptr<sim::ScriptedOperator> op_;
+  sim::ControllerInput input_;
+  report::Record rec_;
+  std::string note_;
+  std::vector<report::Record> records_;
+};
+
+}  // namespace
+
+int run_participant(int argc, char** argv) {
+  const Options opt = parse(argc, argv);
+  std::map<std::string, sim::ObjectModelPtr> models;
+  try {
+    models = protocol_models(opt.objects_dir, nullptr);
+    participant_skill(opt.group, opt.seed, opt.participant);
+  } catch (const std::exception& e) {
+    usage_error(e.what());
+  }
+  client::ClientOptions copt;
+  copt.client_id = opt.group + "-" + std::to_string(opt.participant);
+  copt.domain = opt.domain;
+  copt.profile = opt.profile;
+  copt.profiles_file = opt.profiles_file;
+  copt.topics = client::kGraspEvents | client::kSceneStates | client::kServerStatuses;
+  try {
+    client::Client c(copt);
+    if (!c.wait_for_server(std::chrono::milliseconds(static_cast<long>(1000 * opt.timeout_s)))) {
+      std::cerr << "telegrasp-eval participant: no server on domain " << opt.domain << " within " << opt.timeout_s << " s\n";
+      return 1;
+    }
+    // SceneStates arrive on a DDS thread; this thread answers each tick in order.
+    std::mutex mutex;
+    std::condition_variable cv;
+    std::optional<client::SceneState> newest;
+    c.on_scene_state([&](const client::SceneState& s) {
+      std::lock_guard lock(mutex);
+      if (!newest || s.tick > newest->tick) newest = s;
+      cv.notify_one();
+    });
+    // Every protocol object must be a model of the server, else the run would wait for nothing.
+    if (const auto status = c.latest_server_status())
+      for (std::size_t i = 0; i < paper_object_order().size() && static_cast<int>(i) < opt.count; ++i)
+        if (std::find(status->models.begin(), status->models.end(), paper_object_order()[i]) == status->models.end()) {
+          std::cerr << "telegrasp-eval participant: the server has no model named " << paper_object_order()[i]
+                    << " (start it with --objects DIR --fill-standins, or without --objects)\n";
+          return 1;
+        }
+    Participant p(opt, c, std::move(models));
+    p.start();
+    std::uint64_t answered = 0;
+    while (!p.done()) {
+      std::unique_lock lock(mutex);
+      // Controller states are best effort: an answer the server did not get (the very first one
+      // may go out before the server's reader has matched ours) is sent again, unchanged.
+      const auto give_up = Clock::now() + std::chrono::duration<double>(opt.timeout_s);
+      while (!cv.wait_for(lock, std::chrono::milliseconds(100), [&] { return newest && newest->tick > answered; })) {
+        if (Clock::now() > give_up) {
+          std::cerr << "telegrasp-eval participant " << copt.client_id << ": no scene state after tick " << answered << " for "
+                    << opt.timeout_s << " s\n";
+          return 1;
+        }
+        lock.unlock();
+        p.publish(answered);
+        lock.lock();
+      }
+      const client::SceneState scene = *newest;
+      lock.unlock();
+      if (scene.tick != answered + 1 && answered > 0)
+        std::cerr << "telegrasp-eval participant " << copt.client_id << ": scene states " << answered + 1 << ".." << scene.tick - 1
+                  << " missed\n";
+      answered = scene.tick;
+      p.answer(scene);
+    }
+    c.on_scene_state({});
+    json records = json::array();
+    for (const report::Record& r : p.records()) records.push_back(report::record_json(r));
+    if (opt.json_path.empty()) {
+      std::cout << records.dump() << "\n";
+    } else {
+      std::ofstream out(opt.json_path);
+      out << records.dump(1) << "\n";
+      if (!out.flush()) {
+        std::cerr << "telegrasp-eval participant: cannot write " << opt.json_path << "\n";
+        return 1;
+      }
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "telegrasp-eval participant: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace telegrasp::eval

@@ -1,0 +1,75 @@
+#include "protocol_common.h"
+
+#include "telegrasp/sim/standin_objects.h"
+
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <set>
+
+namespace telegrasp::eval {
+namespace {
+
+// One generator per purpose and person, so that adding a draw to one does not shift the others.
+std::mt19937_64 generator(std::uint64_t seed, std::uint64_t purpose, int participant, int index = 0) {
+  std::seed_seq seq{static_cast<std::uint32_t>(seed), static_cast<std::uint32_t>(seed >> 32), static_cast<std::uint32_t>(purpose),
+                    static_cast<std::uint32_t>(participant), static_cast<std::uint32_t>(index)};
+  return std::mt19937_64(seq);
+}
+
+}  // namespace
+
+const std::vector<std::string>& paper_object_order() {
+  static const std::vector<std::string> order = {
+      "014_lemon",          "003_cracker_box",        "004_sugar_box",    "005_tomato_soup_can", "006_mustard_bottle",
+      "007_tuna_fish_can",  "009_gelatin_box",        "010_potted_meat_can", "011_banana",       "012_strawberry",
+      "013_apple",          "002_master_chef_can",    "015_peach",        "016_pear",            "017_orange",
+      "018_plum",           "021_bleach_cleanser",    "030_fork",         "031_spoon",           "032_knife",
+      "033_spatula",        "035_power_drill",        "037_scissors",     "040_large_marker",    "042_adjustable_wrench",
+      "044_flat_screwdriver", "048_hammer",           "055_baseball",     "056_tennis_ball",     "072-a_toy_airplane"};
+  return order;
+}
+
+std::map<std::string, sim::ObjectModelPtr> protocol_models(const std::string& objects_dir, std::vector<std::string>* standins) {
+  std::map<std::string, sim::ObjectModelPtr> models;
+  if (!objects_dir.empty())
+    for (auto& m : sim::load_object_dir(objects_dir)) models.emplace(m->name, std::move(m));
+  for (const auto& o : sim::protocol_objects()) {
+    if (models.count(o.name)) continue;
+    models.emplace(o.name, sim::make_standin_model(o));
+    if (standins) standins->push_back(o.name);
+  }
+  return models;
+}
+
+sim::OperatorSkill participant_skill(const std::string& group, std::uint64_t seed, int participant) {
+  sim::OperatorSkill s = sim::skill_profile(group);
+  auto rng = generator(seed, 1, participant);
+  const double speed = std::exp(std::normal_distribution<double>(0.0, 0.15)(rng));
+  const double precision = std::exp(std::normal_distribution<double>(0.0, 0.2)(rng));
+  s.reach_speed *= speed;
+  s.reaction_time /= speed;
+  s.squeeze_time /= speed;
+  s.position_error *= precision;
+  s.orientation_error *= precision;
+  return s;
+}
+
+Placement object_placement(std::uint64_t seed, int participant, int index) {
+  auto rng = generator(seed, 2, participant, index);
+  Placement p;
+  p.x = std::uniform_real_distribution<double>(0.40, 0.55)(rng);
+  p.y = std::uniform_real_distribution<double>(-0.10, 0.10)(rng);
+  p.yaw = std::uniform_real_distribution<double>(-std::numbers::pi, std::numbers::pi)(rng);
+  return p;
+}
+
+Eigen::Isometry3d home_palm_pose() {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.translation() = Eigen::Vector3d(0.20, -0.20, 0.30);
+  return X;
+}
+
+std::uint64_t grasp_seed(std::uint64_t seed, int participant, int index) { return generator(seed, 3, participant, index)(); }
+
+}  // namespace telegrasp::eval

@@ -1,0 +1,750 @@
+#include "experiment_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#ifndef TELEGRASP_PAPER_RESULTS
+#define TELEGRASP_PAPER_RESULTS "paper_results_per_object.csv"
+#endif
+
+namespace telegrasp::report {
+namespace {
+
+using nlohmann::json;
+
+// ---------------------------------------------------------------------------------------------
+// Statistics
+
+struct Stat {
+  int n = 0;
+  double mean = NAN, sd = NAN;  // sd: sample sd (n - 1), NaN for n < 2.
+};
+
+Stat stat(const std::vector<double>& v) {
+  Stat s;
+  s.n = static_cast<int>(v.size());
+  if (v.empty()) return s;
+  double sum = 0;
+  for (double x : v) sum += x;
+  s.mean = sum / static_cast<double>(v.size());
+  if (v.size() < 2) return s;
+  double sq = 0;
+  for (double x : v) sq += (x - s.mean) * (x - s.mean);
+  s.sd = std::sqrt(sq / static_cast<double>(v.size() - 1));
+  return s;
+}
+
+// A grasp's mean |ND| over the capsules that hit at the grasp tick; NaN when none hit.
+double grasp_nd_abs_mean(const Record& r, int* hits = nullptr) {
+  double sum = 0;
+  int n = 0;
+  for (const CapsuleRecord& c : r.grasp_tick_capsules)
+    if (c.hit) {
+      sum += std::abs(c.nd_mm);
+      ++n;
+    }
+  if (hits) *hits = n;
+  return n ? sum / n : NAN;
+}
+
+// The smallest exact signed distance of a blocked capsule at the grasp tick; NaN when none is.
+double grasp_min_signed_distance(const Record& r) {
+  double m = INFINITY;
+  for (const CapsuleRecord& c : r.grasp_tick_capsules)
+    if (c.blocked) m = std::min(m, c.signed_distance_mm);
+  return std::isfinite(m) ? m : NAN;
+}
+
+// The aggregate of some trials (one mode, group and object, or wider).
+struct Aggregate {
+  int n = 0, grasped = 0, held = 0, capsules_hit = 0;
+  Stat time, nd, hand_error;   // over grasped trials (nd: those with a hit capsule)
+  double nd_pooled = NAN;      // mean |ND| over every hit capsule of those trials
+};
+
+Aggregate aggregate(const std::vector<const Record*>& records) {
+  Aggregate a;
+  std::vector<double> times, nds, hand_errors;
+  double pooled_sum = 0;
+  for (const Record* r : records) {
+    ++a.n;
+    a.held += r->held_after_lift;
+    if (!r->grasped) continue;
+    ++a.grasped;
+    times.push_back(r->time_to_grasp_s);
+    hand_errors.push_back(r->grasp_tick_hand_error_mm);
+    int hits = 0;
+    const double nd = grasp_nd_abs_mean(*r, &hits);
+    if (hits) nds.push_back(nd);
+    a.capsules_hit += hits;
+    pooled_sum += std::isfinite(nd) ? nd * hits : 0;
+  }
+  a.time = stat(times);
+  a.nd = stat(nds);
+  a.hand_error = stat(hand_errors);
+  if (a.capsules_hit) a.nd_pooled = pooled_sum / a.capsules_hit;
+  return a;
+}
+
+json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+json aggregate_fields(const Aggregate& a) {
+  return {{"n", a.n},
+          {"grasped", a.grasped},
+          {"held_after_lift", a.held},
+          {"time_to_grasp_mean_s", num(a.time.mean)},
+          {"time_to_grasp_sd_s", num(a.time.sd)},
+          {"nd_abs_mean_mm", num(a.nd.mean)},
+          {"nd_abs_sd_mm", num(a.nd.sd)},
+          {"nd_abs_grasps", a.nd.n},
+          {"nd_abs_pooled_mean_mm", num(a.nd_pooled)},
+          {"capsules_hit", a.capsules_hit},
+          {"hand_error_mean_mm", num(a.hand_error.mean)},
+          {"hand_error_sd_mm", num(a.hand_error.sd)}};
+}
+
+// ---------------------------------------------------------------------------------------------
+// What a run contains, in a stable order
+
+// The run's modes in run order, then any mode only the records name.
+std::vector<std::string> modes_of(const ExperimentRun& run) {
+  std::vector<std::string> out = run.modes;
+  for (const Record& r : run.records)
+    if (std::find(out.begin(), out.end(), r.mode) == out.end()) out.push_back(r.mode);
+  return out;
+}
+
+// The paper's two groups first (its charts put experienced first), then the others by name.
+std::vector<std::string> groups_of(const ExperimentRun& run) {
+  std::set<std::string> named;
+  for (const auto& [group, count] : run.participants) named.insert(group);
+  for (const Record& r : run.records) named.insert(r.group);
+  std::vector<std::string> out;
+  for (const char* g : {"experienced", "inexperienced"})
+    if (named.erase(g)) out.push_back(g);
+  out.insert(out.end(), named.begin(), named.end());
+  return out;
+}
+
+// The objects that have records: the protocol's order, then objects only the records name.
+std::vector<std::string> objects_of(const ExperimentRun& run) {
+  std::set<std::string> recorded;
+  for (const Record& r : run.records) recorded.insert(r.object);
+  std::vector<std::string> out;
+  for (const std::string& o : run.objects)
+    if (recorded.count(o) && std::find(out.begin(), out.end(), o) == out.end()) out.push_back(o);
+  for (const Record& r : run.records)
+    if (std::find(out.begin(), out.end(), r.object) == out.end()) out.push_back(r.object);
+  return out;
+}
+
+// Records of one mode, group ("" = every group) and object ("" = every object).
+std::vector<const Record*> select(const ExperimentRun& run, const std::string& mode, const std::string& group,
+                                  const std::string& object) {
+  std::vector<const Record*> out;
+  for (const Record& r : run.records)
+    if (r.mode == mode && (group.empty() || r.group == group) && (object.empty() || r.object == object))
+      out.push_back(&r);
+  return out;
+}
+
+const PaperRow* find_paper(const std::vector<PaperRow>& paper, const std::string& object) {
+  for (const PaperRow& p : paper)
+    if (p.object == object) return &p;
+  return nullptr;
+}
+
+// The paper's letter for an object; objects outside the paper's table get their 1-based position
+// on the x axis, so a letter always means the paper's object.
+std::string label_of(const std::vector<PaperRow>& paper, const std::vector<std::string>& objects, std::size_t i) {
+  if (const PaperRow* p = find_paper(paper, objects[i])) return p->label;
+  return "#" + std::to_string(i + 1);
+}
+
+std::string mode_name(const std::string& mode) { return mode.empty() ? "(mode unknown)" : mode; }
+
+// ---------------------------------------------------------------------------------------------
+// Text helpers
+
+std::string number(double v, int prec = 3) { return std::isfinite(v) ? fmt(v, prec) : ""; }
+
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
+  std::string out = "\"";
+  for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+std::string esc(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      case '\'': out += "&#39;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+// "1.23 ± 0.10" with the sd left out when undefined; "-" when the mean is.
+std::string mean_sd(const Stat& s, int prec = 2) {
+  if (!std::isfinite(s.mean)) return "-";
+  return fmt(s.mean, prec) + (std::isfinite(s.sd) ? " &plusmn; " + fmt(s.sd, prec) : "");
+}
+
+// ---------------------------------------------------------------------------------------------
+// SVG grouped bar charts
+
+struct Series {
+  std::string mode, group, legend, colour;
+  std::vector<bool> present;       // per object: false draws no bar (no trials, not in the paper)
+  std::vector<double> values;      // per object; NaN draws an empty bar (trials, but no value)
+  std::vector<std::string> cells;  // per object, the table's text
+};
+
+struct Chart {
+  std::string id, title, y_label;
+  std::vector<std::string> objects, labels;
+  std::vector<Series> series;
+  std::vector<std::pair<std::string, std::vector<std::string>>> table_only;  // extra table columns
+};
+
+const char* group_colour(const std::string& group, std::size_t index) {
+  if (group == "experienced") return "#1f77b4";
+  if (group == "inexperienced") return "#ff7f0e";
+  if (group == "all") return "#555555";
+  static const char* const others[] = {"#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#17becf"};
+  return others[index % 5];
+}
+
+const char* mode_colour(const std::string& mode) {
+  if (mode == "paper") return "#9e9e9e";
+  if (mode == "discrete") return "#d62728";
+  return "#2ca02c";  // precise and anything else
+}
+
+// A round axis maximum and tick step for values up to `max`.
+std::pair<double, double> axis_scale(double max) {
+  if (!(max > 0) || !std::isfinite(max)) return {1, 0.2};
+  const double raw = max / 5;
+  const double mag = std::pow(10, std::floor(std::log10(raw)));
+  double step = mag;
+  for (double m : {1.0, 2.0, 2.5, 5.0, 10.0})
+    if (m * mag >= raw) {
+      step = m * mag;
+      break;
+    }
+  return {std::ceil(max / step - 1e-9) * step, step};
+}
+
+std::string svg_chart(const Chart& c) {
+  const double left = 52, right = 12, top = 34, plot_h = 200, bottom = 34;
+  const std::size_t ns = std::max<std::size_t>(1, c.series.size());
+  const double slot = std::max(16.0, 6.0 * static_cast<double>(ns) + 6);
+  const double bar_w = (slot - 4) / static_cast<double>(ns);
+  const double plot_w = slot * static_cast<double>(std::max<std::size_t>(1, c.objects.size()));
+  const double width = left + plot_w + right, height = top + plot_h + bottom;
+
+  double max = 0;
+  for (const Series& s : c.series)
+    for (std::size_t i = 0; i < s.values.size(); ++i)
+      if (s.present[i] && std::isfinite(s.values[i])) max = std::max(max, s.values[i]);
+  const auto [y_max, y_step] = axis_scale(max);
+  auto y_of = [&](double v) { return top + plot_h * (1 - v / y_max); };
+
+  std::ostringstream o;
+  // No xmlns: inline SVG in HTML needs none, and the page names no URL at all.
+  o << "<svg class=\"chart\" data-chart=\"" << esc(c.id) << "\" viewBox=\"0 0 "
+    << fmt(width, 1) << " " << fmt(height, 1) << "\" width=\"" << fmt(width, 0) << "\" height=\"" << fmt(height, 0)
+    << "\" role=\"img\"><title>" << esc(c.title) << "</title>\n";
+  // Grid and y axis.
+  for (double v = 0; v <= y_max + 1e-9; v += y_step) {
+    const double y = y_of(v);
+    o << "<line class=\"grid\" x1=\"" << fmt(left, 1) << "\" x2=\"" << fmt(left + plot_w, 1) << "\" y1=\"" << fmt(y, 1)
+      << "\" y2=\"" << fmt(y, 1) << "\"/><text class=\"tick\" x=\"" << fmt(left - 4, 1) << "\" y=\"" << fmt(y + 3, 1)
+      << "\" text-anchor=\"end\">" << fmt(v, y_step < 0.1 ? 2 : (y_step < 1 ? 1 : 0)) << "</text>\n";
+  }
+  o << "<text class=\"axis\" transform=\"translate(12," << fmt(top + plot_h / 2, 1) << ") rotate(-90)\" "
+    << "text-anchor=\"middle\">" << esc(c.y_label) << "</text>\n";
+  // Legend, one entry per series.
+  double lx = left;
+  for (const Series& s : c.series) {
+    o << "<rect class=\"legend\" x=\"" << fmt(lx, 1) << "\" y=\"8\" width=\"10\" height=\"10\" fill=\"" << s.colour
+      << "\"/><text class=\"legend\" x=\"" << fmt(lx + 14, 1) << "\" y=\"17\">" << esc(s.legend) << "</text>\n";
+    lx += 24 + 6.5 * static_cast<double>(s.legend.size());
+  }
+  // Bars and x labels; the object's name is in a tooltip, as the paper's axis has only letters.
+  for (std::size_t i = 0; i < c.objects.size(); ++i) {
+    const double x0 = left + slot * static_cast<double>(i) + 2;
+    for (std::size_t k = 0; k < c.series.size(); ++k) {
+      const Series& s = c.series[k];
+      if (!s.present[i]) continue;
+      const double v = s.values[i];
+      const double h = std::isfinite(v) ? std::max(0.0, plot_h * std::min(v, y_max) / y_max) : 0;
+      o << "<rect class=\"bar\" data-chart=\"" << esc(c.id) << "\" data-mode=\"" << esc(s.mode) << "\" data-group=\""
+        << esc(s.group) << "\" data-object=\"" << esc(c.objects[i]) << "\" data-value=\"" << number(v, 4) << "\" x=\""
+        << fmt(x0 + bar_w * static_cast<double>(k), 2) << "\" y=\"" << fmt(top + plot_h - h, 2) << "\" width=\""
+        << fmt(bar_w, 2) << "\" height=\"" << fmt(h, 2) << "\" fill=\"" << s.colour << "\"><title>" << esc(c.labels[i])
+        << " " << esc(c.objects[i]) << ", " << esc(s.legend) << ": "
+        << (std::isfinite(v) ? fmt(v, 3) : std::string("no value")) << "</title></rect>\n";
+    }
+    o << "<text class=\"xlabel\" x=\"" << fmt(x0 + (slot - 4) / 2, 1) << "\" y=\"" << fmt(top + plot_h + 13, 1)
+      << "\" text-anchor=\"middle\"><title>" << esc(c.objects[i]) << "</title>" << esc(c.labels[i]) << "</text>\n";
+  }
+  o << "<line class=\"axisline\" x1=\"" << fmt(left, 1) << "\" x2=\"" << fmt(left + plot_w, 1) << "\" y1=\""
+    << fmt(top + plot_h, 1) << "\" y2=\"" << fmt(top + plot_h, 1) << "\"/>\n"
+    << "<text class=\"axis\" x=\"" << fmt(left + plot_w / 2, 1) << "\" y=\"" << fmt(height - 4, 1)
+    << "\" text-anchor=\"middle\">Object ID</text>\n</svg>\n";
+  return o.str();
+}
+
+std::string chart_table(const Chart& c) {
+  std::ostringstream o;
+  o << "<table class=\"numbers\"><tr><th>id</th><th>object</th>";
+  for (const Series& s : c.series) o << "<th>" << esc(s.legend) << "</th>";
+  for (const auto& [name, cells] : c.table_only) o << "<th>" << esc(name) << "</th>";
+  o << "</tr>\n";
+  for (std::size_t i = 0; i < c.objects.size(); ++i) {
+    o << "<tr><td>" << esc(c.labels[i]) << "</td><td>" << esc(c.objects[i]) << "</td>";
+    for (const Series& s : c.series) o << "<td>" << (s.present[i] ? s.cells[i] : "") << "</td>";
+    for (const auto& [name, cells] : c.table_only) o << "<td>" << cells[i] << "</td>";
+    o << "</tr>\n";
+  }
+  o << "</table>\n";
+  return o.str();
+}
+
+std::string figure(const Chart& c) {
+  return "<figure><figcaption>" + esc(c.title) + "</figcaption>\n" + svg_chart(c) + chart_table(c) + "</figure>\n";
+}
+
+// ---------------------------------------------------------------------------------------------
+// Page parts
+
+const char* kCss = R"(body{font-family:sans-serif;margin:1.5em;color:#222;max-width:none}
+h1{font-size:1.5em}h2{font-size:1.2em;margin-top:2em;border-bottom:1px solid #ccc}h3{font-size:1em}
+table{border-collapse:collapse;margin:.5em 0;font-size:.85em}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}
+th{background:#f2f2f2}td:first-child,th:first-child{text-align:left}
+.row{display:flex;flex-wrap:wrap;gap:2em;align-items:flex-start}.col{flex:0 0 auto}
+figure{margin:0 0 1.5em 0}figcaption{font-weight:bold;margin-bottom:.3em}
+svg.chart{background:#fff;display:block}svg .grid{stroke:#e0e0e0;stroke-width:.5}
+svg .axisline{stroke:#333;stroke-width:1}svg text{font-size:9px;fill:#333}svg .axis{font-size:10px}
+svg .legend{font-size:10px}.caveat{background:#fff8e1;border-left:4px solid #f0ad4e;padding:.5em 1em;max-width:60em}
+.rejected{color:#a00}code{background:#f4f4f4;padding:0 3px}
+)";
+
+std::string page(const std::string& title, const std::string& body) {
+  return "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" + esc(title) +
+         "</title>\n<style>\n" + kCss + "</style>\n</head>\n<body>\n" + body + "</body>\n</html>\n";
+}
+
+std::string unit_caveat(const ExperimentRun& run) {
+  std::string out =
+      "<div class=\"caveat\" id=\"unit-caveat\"><p><b>How our numbers compare with the paper's.</b></p><ul>\n"
+      "<li><b>Time</b> is seconds from the object's spawn to the moment the grasp rule turns true, in both. "
+      "The paper's are ten people with a VR headset (4 experienced, 6 inexperienced); ours are a seeded "
+      "<b>scripted bot</b>, not humans: its groups differ only in the reach pose error and speed it is given.</li>\n"
+      "<li><b>Error.</b> The paper's figures plot \"average error (mm)\" per object and group, averaged over its "
+      "participants; its text defines that error as the \"total error for the hand\", HandError (eq. 2): for each "
+      "finger the mean |ND| of its two capsule triggers (middle and distal phalanx), <i>summed over the five "
+      "fingers</i>, with ND from UE4 sphere traces against the object's collision geometry after the "
+      "once-per-frame overlap test stopped the fingers; a per-hand sum in millimetres. The paper does not say on "
+      "which frame it was taken. "
+      "Ours, in the error charts, is the <b>mean |ND| over the capsules that hit</b> (a per-capsule mean, not a "
+      "sum over fingers), in mm, by the exact metric of GRASPING.md section 4 (sphere sweep against the exact "
+      "mesh), taken at the grasp tick and averaged per grasp, then over the grasps of the object and group. "
+      "Our HandError (the paper's per-hand sum, same tick) is in the tables for the paper-vs-ours charts. "
+      "The two error columns therefore differ in metric, geometry and closing method: compare their shape across "
+      "objects, not their values.</li>\n";
+  if (!run.standin_objects.empty())
+    out += "<li>" + std::to_string(run.standin_objects.size()) +
+           " object(s) were procedural stand-ins, not YCB meshes (listed in the run summary): their geometry "
+           "differs from the paper's objects.</li>\n";
+  return out + "</ul></div>\n";
+}
+
+std::string questionnaire_section(const QuestionnaireSummary& q) {
+  std::ostringstream o;
+  o << "<h2 id=\"questionnaire\">Questionnaire</h2>\n<p>Source: <code>" << esc(q.source) << "</code>; "
+    << q.participants.size() << " participant(s) scored, " << q.rejected.size() << " row(s) rejected. "
+    << "Scores (-3..3): Motor Control = ((Q1+Q2)-(Q3+Q4))/4, Finger Movement Realism = (Q5+Q6+Q7)/3, "
+    << "Interaction Realism = ((Q8+Q9)-(Q10+Q11)+Q12+Q13+Q14)/7, Embodiment = (MC+FMR+2&middot;IR)/4; "
+    << "Q3, Q4, Q10 and Q11 are reversed items. Group values are mean &plusmn; sample sd; the paper's Table 2 "
+    << "value is in brackets.</p>\n";
+  o << "<table class=\"numbers\"><tr><th>group</th><th>n</th><th>Motor Control</th><th>Finger Movement "
+       "Realism</th><th>Interaction Realism</th><th>Embodiment</th></tr>\n";
+  for (const QuestionnaireGroup& g : q.groups) {
+    const PaperQuestionnaireRow* paper = paper_questionnaire_row(g.group);
+    auto col = [&](const ScoreStat& st, double QuestionnaireScores::*field) {
+      std::string text = mean_sd({st.n, st.mean, st.sd});
+      if (paper) text += " [" + fmt(paper->scores.*field) + "]";
+      return "<td>" + text + "</td>";
+    };
+    o << "<tr><td>" << esc(g.group) << "</td><td>" << g.n << "</td>"
+      << col(g.motor_control, &QuestionnaireScores::motor_control)
+      << col(g.finger_movement_realism, &QuestionnaireScores::finger_movement_realism)
+      << col(g.interaction_realism, &QuestionnaireScores::interaction_realism)
+      << col(g.embodiment, &QuestionnaireScores::embodiment) << "</tr>\n";
+  }
+  o << "</table>\n<p>The paper reports an embodiment score of 1.97 (experienced) and 2.19 (inexperienced).</p>\n";
+  o << "<details><summary>Per participant</summary><table class=\"numbers\"><tr><th>id</th><th>group</th>";
+  for (int i = 1; i <= kQuestionCount; ++i) o << "<th>Q" << i << "</th>";
+  o << "<th>MC</th><th>FMR</th><th>IR</th><th>Embodiment</th></tr>\n";
+  for (const QuestionnaireParticipant& p : q.participants) {
+    o << "<tr><td>" << esc(p.id) << "</td><td>" << esc(p.group) << "</td>";
+    for (int a : p.answers) o << "<td>" << a << "</td>";
+    o << "<td>" << fmt(p.scores.motor_control) << "</td><td>" << fmt(p.scores.finger_movement_realism) << "</td><td>"
+      << fmt(p.scores.interaction_realism) << "</td><td>" << fmt(p.scores.embodiment) << "</td></tr>\n";
+  }
+  o << "</table></details>\n";
+  if (!q.rejected.empty()) {
+    o << "<p class=\"rejected\">Rejected rows (not scored):</p><ul class=\"rejected\">\n";
+    for (const RejectedRow& r : q.rejected) o << "<li>" << esc(r.message) << "</li>\n";
+    o << "</ul>\n";
+  }
+  return o.str();
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+std::string default_paper_results_path() { return TELEGRASP_PAPER_RESULTS; }
+
+std::vector<PaperRow> load_paper_results(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open the paper's results file");
+  const std::vector<std::string> columns = {"label", "object", "time_s_experienced", "time_s_inexperienced",
+                                            "err_experienced", "err_inexperienced"};
+  std::vector<std::size_t> index;  // file column of each of `columns`
+  std::vector<PaperRow> out;
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.find_first_not_of(" \t") == std::string::npos || line[line.find_first_not_of(" \t")] == '#') continue;
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    for (std::string cell; std::getline(ss, cell, ',');) {
+      const auto a = cell.find_first_not_of(" \t"), b = cell.find_last_not_of(" \t");
+      cells.push_back(a == std::string::npos ? "" : cell.substr(a, b - a + 1));
+    }
+    if (!line.empty() && line.back() == ',') cells.push_back("");
+    const std::string where = path + " line " + std::to_string(line_no);
+    if (index.empty()) {  // the header
+      for (const std::string& name : columns) {
+        const auto it = std::find(cells.begin(), cells.end(), name);
+        if (it == cells.end()) throw std::runtime_error(where + ": header has no column '" + name + "'");
+        index.push_back(static_cast<std::size_t>(it - cells.begin()));
+      }
+      continue;
+    }
+    auto cell = [&](std::size_t k) -> const std::string& {
+      if (index[k] >= cells.size())
+        throw std::runtime_error(where + " column " + std::to_string(index[k] + 1) + " (" + columns[k] +
+                                 "): missing");
+      return cells[index[k]];
+    };
+    auto number_at = [&](std::size_t k) {
+      const std::string& text = cell(k);
+      char* end = nullptr;
+      const double v = std::strtod(text.c_str(), &end);
+      if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(v) || v < 0)
+        throw std::runtime_error(where + " column " + std::to_string(index[k] + 1) + " (" + columns[k] + "): '" +
+                                 text + "' is not a non-negative number");
+      return v;
+    };
+    PaperRow row;
+    row.label = cell(0);
+    row.object = cell(1);
+    if (row.label.empty() || row.object.empty())
+      throw std::runtime_error(where + ": label and object must not be empty");
+    row.time_experienced = number_at(2);
+    row.time_inexperienced = number_at(3);
+    row.err_experienced = number_at(4);
+    row.err_inexperienced = number_at(5);
+    out.push_back(std::move(row));
+  }
+  if (index.empty()) throw std::runtime_error(path + ": no header row");
+  return out;
+}
+
+json aggregate_json(const ExperimentRun& run) {
+  const std::vector<std::string> modes = modes_of(run), groups = groups_of(run), objects = objects_of(run);
+  json out;
+  out["run"] = {{"protocol", run.protocol},     {"command_line", run.command_line}, {"seed", run.seed},
+                {"wall_seconds", run.wall_seconds}, {"created", run.created},       {"modes", run.modes},
+                {"objects", run.objects},        {"standin_objects", run.standin_objects},
+                {"participants", run.participants}, {"records", run.records.size()}};
+  out["metrics"] = {
+      {"time_to_grasp_s", "spawn to grasp, mean and sample sd over grasped trials"},
+      {"nd_abs_mean_mm", "per grasp: mean |ND| over the capsules that hit at the grasp tick; then mean and sample "
+                         "sd over grasps (this is what the charts plot)"},
+      {"nd_abs_pooled_mean_mm", "mean |ND| over every hit capsule of the grasped trials, at the grasp tick"},
+      {"hand_error_mean_mm", "the paper's HandError (sum over fingers of the per-finger mean |ND|) at the grasp tick"}};
+  json by_mgo = json::array(), by_mg = json::array(), by_mo = json::array(), worst = json::array();
+  for (const std::string& mode : modes) {
+    for (const std::string& group : groups) {
+      for (const std::string& object : objects) {
+        const auto records = select(run, mode, group, object);
+        if (records.empty()) continue;
+        json row = {{"mode", mode}, {"group", group}, {"object", object}};
+        row.update(aggregate_fields(aggregate(records)));
+        by_mgo.push_back(std::move(row));
+      }
+      const auto records = select(run, mode, group, "");
+      if (records.empty()) continue;
+      json row = {{"mode", mode}, {"group", group}};
+      row.update(aggregate_fields(aggregate(records)));
+      by_mg.push_back(std::move(row));
+    }
+    // Per object over both groups, and the objects that were slowest and least plausible.
+    std::vector<std::pair<std::string, Aggregate>> per_object;
+    for (const std::string& object : objects) {
+      const auto records = select(run, mode, "", object);
+      if (records.empty()) continue;
+      per_object.emplace_back(object, aggregate(records));
+      json row = {{"mode", mode}, {"group", "all"}, {"object", object}};
+      row.update(aggregate_fields(per_object.back().second));
+      by_mo.push_back(std::move(row));
+    }
+    auto worst_by = [&](double (*key)(const Aggregate&), const char* field) {
+      std::vector<std::pair<std::string, double>> ranked;
+      for (const auto& [object, a] : per_object)
+        if (std::isfinite(key(a))) ranked.emplace_back(object, key(a));
+      std::stable_sort(ranked.begin(), ranked.end(), [](const auto& x, const auto& y) { return x.second > y.second; });
+      json list = json::array();
+      for (std::size_t i = 0; i < ranked.size() && i < 5; ++i)
+        list.push_back({{"object", ranked[i].first}, {field, ranked[i].second}});
+      return list;
+    };
+    worst.push_back({{"mode", mode},
+                     {"by_time", worst_by([](const Aggregate& a) { return a.time.mean; }, "time_to_grasp_mean_s")},
+                     {"by_nd", worst_by([](const Aggregate& a) { return a.nd.mean; }, "nd_abs_mean_mm")}});
+  }
+  out["by_mode_group_object"] = std::move(by_mgo);
+  out["by_mode_group"] = std::move(by_mg);
+  out["by_mode_object"] = std::move(by_mo);
+  out["worst_objects"] = std::move(worst);
+  return out;
+}
+
+void write_text_file(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw std::runtime_error(path + ": cannot open for writing");
+  out << text;
+  out.close();
+  if (!out) throw std::runtime_error(path + ": write failed");
+}
+
+std::string write_csv(const ExperimentRun& run, const std::string& path) {
+  std::ostringstream grasps;
+  grasps << "mode,group,participant,object,trial,grasped,held_after_lift,attempts,time_to_grasp_s,hand_error_mm,"
+            "nd_abs_mean_mm,capsules_hit,min_signed_distance_mm,contacts\n";
+  for (const Record& r : run.records) {
+    int hits = 0;
+    const double nd = grasp_nd_abs_mean(r, &hits);
+    // Metrics exist only for a grasp; an empty cell is "no value", never zero.
+    grasps << csv_field(r.mode) << ',' << csv_field(r.group) << ',' << r.participant << ',' << csv_field(r.object)
+           << ',' << r.trial << ',' << (r.grasped ? 1 : 0) << ',' << (r.held_after_lift ? 1 : 0) << ',' << r.attempts
+           << ',' << (r.grasped ? number(r.time_to_grasp_s, 4) : "") << ','
+           << (r.grasped ? number(r.grasp_tick_hand_error_mm, 4) : "") << ',' << (r.grasped ? number(nd, 4) : "")
+           << ',' << hits << ',' << (r.grasped ? number(grasp_min_signed_distance(r), 4) : "") << ','
+           << r.contacts.size() << '\n';
+  }
+  write_text_file(path, grasps.str());
+
+  const json agg = aggregate_json(run);
+  std::ostringstream by_object;
+  by_object << "mode,group,object,n,grasped,held_after_lift,time_to_grasp_mean_s,time_to_grasp_sd_s,nd_abs_mean_mm,"
+               "nd_abs_sd_mm,nd_abs_grasps,nd_abs_pooled_mean_mm,capsules_hit,hand_error_mean_mm,hand_error_sd_mm\n";
+  auto cell = [](const json& v) { return v.is_null() ? std::string() : number(v.get<double>(), 4); };
+  auto write_rows = [&](const json& rows) {
+    for (const json& r : rows)
+      by_object << csv_field(r["mode"].get<std::string>()) << ',' << csv_field(r["group"].get<std::string>()) << ','
+                << csv_field(r["object"].get<std::string>()) << ',' << r["n"] << ',' << r["grasped"] << ','
+                << r["held_after_lift"] << ',' << cell(r["time_to_grasp_mean_s"]) << ','
+                << cell(r["time_to_grasp_sd_s"]) << ',' << cell(r["nd_abs_mean_mm"]) << ',' << cell(r["nd_abs_sd_mm"])
+                << ',' << r["nd_abs_grasps"] << ',' << cell(r["nd_abs_pooled_mean_mm"]) << ',' << r["capsules_hit"]
+                << ',' << cell(r["hand_error_mean_mm"]) << ',' << cell(r["hand_error_sd_mm"]) << '\n';
+  };
+  write_rows(agg["by_mode_group_object"]);
+  write_rows(agg["by_mode_object"]);
+  const std::filesystem::path p(path);
+  const std::string second = (p.parent_path() / (p.stem().string() + "_by_object.csv")).string();
+  write_text_file(second, by_object.str());
+  return second;
+}
+
+std::string html_report(const ExperimentRun& run, const std::vector<PaperRow>& paper,
+                        const QuestionnaireSummary* questionnaire) {
+  const std::vector<std::string> modes = modes_of(run), groups = groups_of(run), objects = objects_of(run);
+  std::vector<std::string> labels;
+  for (std::size_t i = 0; i < objects.size(); ++i) labels.push_back(label_of(paper, objects, i));
+
+  // Aggregates per mode, group ("all" = both) and object, computed once.
+  std::map<std::string, std::map<std::string, std::vector<Aggregate>>> agg;
+  std::map<std::string, std::map<std::string, std::vector<bool>>> has;
+  for (const std::string& mode : modes) {
+    std::vector<std::string> with_all = groups;
+    with_all.push_back("all");
+    for (const std::string& group : with_all)
+      for (const std::string& object : objects) {
+        const auto records = select(run, mode, group == "all" ? "" : group, object);
+        agg[mode][group].push_back(aggregate(records));
+        has[mode][group].push_back(!records.empty());
+      }
+  }
+  auto time_cell = [](const Aggregate& a) {
+    return mean_sd(a.time) + " (" + std::to_string(a.grasped) + "/" + std::to_string(a.n) + ")";
+  };
+  auto nd_cell = [](const Aggregate& a) { return mean_sd(a.nd, 3) + " (" + std::to_string(a.nd.n) + ")"; };
+  auto series_of = [&](const std::string& mode, const std::string& group, const std::string& legend,
+                       const std::string& colour, bool time) {
+    Series s{mode, group, legend, colour, has[mode][group], {}, {}};
+    for (const Aggregate& a : agg[mode][group]) {
+      s.values.push_back(time ? a.time.mean : a.nd.mean);
+      s.cells.push_back(time ? time_cell(a) : nd_cell(a));
+    }
+    return s;
+  };
+
+  std::ostringstream body;
+  body << "<h1>telegrasp: the paper's grasping experiment (" << esc(run.protocol) << ")</h1>\n";
+
+  // Run summary.
+  body << "<h2>Run</h2>\n<table class=\"numbers\">\n<tr><th>command</th><td><code>" << esc(run.command_line)
+       << "</code></td></tr>\n<tr><th>created</th><td>" << esc(run.created) << "</td></tr>\n<tr><th>seed</th><td>"
+       << run.seed << "</td></tr>\n<tr><th>wall time</th><td>" << fmt(run.wall_seconds, 1)
+       << " s</td></tr>\n<tr><th>modes</th><td>";
+  for (std::size_t i = 0; i < modes.size(); ++i) body << (i ? ", " : "") << esc(mode_name(modes[i]));
+  body << "</td></tr>\n<tr><th>participants</th><td>";
+  {
+    bool first = true;
+    for (const auto& [group, count] : run.participants) {
+      body << (first ? "" : ", ") << esc(group) << ": " << count;
+      first = false;
+    }
+  }
+  body << "</td></tr>\n<tr><th>objects</th><td>" << objects.size() << " with records of " << run.objects.size()
+       << " in the protocol; " << run.records.size() << " grasp trials</td></tr>\n<tr><th>stand-in fallbacks</th><td>";
+  if (run.standin_objects.empty()) body << "none";
+  for (std::size_t i = 0; i < run.standin_objects.size(); ++i) body << (i ? ", " : "") << esc(run.standin_objects[i]);
+  body << "</td></tr>\n</table>\n";
+
+  // Overall per mode and group: the discrete-vs-precise comparison at a glance.
+  body << "<h2>Overall per mode and group</h2>\n<table class=\"numbers\"><tr><th>mode</th><th>group</th><th>trials</th>"
+          "<th>grasped</th><th>held after lift</th><th>time to grasp (s)</th><th>mean |ND| (mm)</th>"
+          "<th>HandError (mm)</th></tr>\n";
+  for (const std::string& mode : modes)
+    for (const std::string& group : groups) {
+      const auto records = select(run, mode, group, "");
+      if (records.empty()) continue;
+      const Aggregate a = aggregate(records);
+      body << "<tr><td>" << esc(mode_name(mode)) << "</td><td>" << esc(group) << "</td><td>" << a.n << "</td><td>"
+           << a.grasped << "</td><td>" << a.held << "</td><td>" << mean_sd(a.time) << "</td><td>" << mean_sd(a.nd, 3)
+           << "</td><td>" << mean_sd(a.hand_error) << "</td></tr>\n";
+    }
+  body << "</table>\n";
+  const json aggregates = aggregate_json(run);
+  body << "<p>Worst objects (both groups): ";
+  for (const json& w : aggregates["worst_objects"]) {
+    body << "<br><b>" << esc(mode_name(w["mode"].get<std::string>())) << "</b> by time: ";
+    for (const json& o : w["by_time"])
+      body << esc(o["object"].get<std::string>()) << " (" << fmt(o["time_to_grasp_mean_s"].get<double>()) << " s) ";
+    body << "; by |ND|: ";
+    for (const json& o : w["by_nd"])
+      body << esc(o["object"].get<std::string>()) << " (" << fmt(o["nd_abs_mean_mm"].get<double>(), 3) << " mm) ";
+  }
+  body << "</p>\n" << unit_caveat(run);
+
+  // Charts (1) to (3): one column per mode, so discrete and precise sit side by side.
+  struct Kind {
+    const char* id;
+    const char* title;
+    const char* y_label;
+    bool time, overall;
+  };
+  const Kind kinds[] = {
+      {"time_by_group", "Mean time to grasp per object and group", "Time [s]", true, false},
+      {"nd_by_group", "Mean |ND| per object and group (capsules that hit, grasp tick)", "|ND| [mm]", false, false},
+      {"time_overall", "Mean time to grasp per object, all participants", "Time [s]", true, true},
+      {"nd_overall", "Mean |ND| per object, all participants", "|ND| [mm]", false, true},
+  };
+  for (const Kind& kind : kinds) {
+    body << "<h2>" << kind.title << "</h2>\n<div class=\"row\">\n";
+    for (const std::string& mode : modes) {
+      Chart c{std::string(kind.id) + "." + mode, kind.title + std::string(", ") + mode_name(mode), kind.y_label,
+              objects, labels, {}, {}};
+      if (kind.overall) {
+        c.series.push_back(series_of(mode, "all", "All participants", group_colour("all", 0), kind.time));
+      } else {
+        for (std::size_t g = 0; g < groups.size(); ++g)
+          c.series.push_back(series_of(mode, groups[g], groups[g], group_colour(groups[g], g), kind.time));
+      }
+      body << "<div class=\"col\"><h3>" << esc(mode_name(mode)) << "</h3>\n" << figure(c) << "</div>\n";
+    }
+    body << "</div>\n";
+  }
+
+  // Chart (4): the paper's published numbers beside ours, per group, every mode in one chart.
+  body << "<h2>The paper's per-object results beside ours</h2>\n";
+  if (paper.empty()) body << "<p>No paper results given.</p>\n";
+  for (const std::string& group : groups) {
+    const bool experienced = group == "experienced";
+    if (paper.empty() || (!experienced && group != "inexperienced")) continue;
+    body << "<div class=\"row\">\n";
+    for (const bool time : {true, false}) {
+      Chart c{std::string(time ? "paper_time." : "paper_error.") + group,
+              (time ? "Time to grasp, paper vs ours, " : "Error, paper's HandError vs our mean |ND|, ") + group,
+              time ? "Time [s]" : "Error [mm]", objects, labels, {}, {}};
+      Series p{"paper", group, "paper", mode_colour("paper"), {}, {}, {}};
+      std::vector<std::string> hand_error_cells(objects.size());
+      for (const std::string& object : objects) {
+        const PaperRow* row = find_paper(paper, object);
+        const double v = !row ? NAN
+                         : time ? (experienced ? row->time_experienced : row->time_inexperienced)
+                                : (experienced ? row->err_experienced : row->err_inexperienced);
+        p.present.push_back(row != nullptr);
+        p.values.push_back(v);
+        p.cells.push_back(number(v, 3));
+      }
+      c.series.push_back(std::move(p));
+      for (const std::string& mode : modes) {
+        c.series.push_back(series_of(mode, group, "ours, " + mode_name(mode), mode_colour(mode), time));
+        if (!time) {
+          std::vector<std::string> cells;
+          for (const Aggregate& a : agg[mode][group]) cells.push_back(mean_sd(a.hand_error));
+          c.table_only.emplace_back("our HandError, " + mode_name(mode), std::move(cells));
+        }
+      }
+      body << "<div class=\"col\">\n" << figure(c) << "</div>\n";
+    }
+    body << "</div>\n";
+  }
+  body << "<p>Paper: Oprea et al. 2019, figures \"average elapsed time\" and \"average error (mm)\" per object "
+          "(<code>paper_results_per_object.csv</code>). Table cells of ours: mean &plusmn; sample sd (grasped/trials "
+          "for time; grasps with a hit capsule for |ND|).</p>\n";
+
+  if (questionnaire) body << questionnaire_section(*questionnaire);
+  return page("telegrasp experiment report", body.str());
+}
+
+std::string questionnaire_html_report(const QuestionnaireSummary& questionnaire) {
+  return page("telegrasp questionnaire", "<h1>telegrasp: questionnaire scores</h1>\n" +
+                                             questionnaire_section(questionnaire));
+}
+
+}  // namespace telegrasp::report

@@ -1,0 +1,352 @@
+// Tests experiment_report.h on a handmade protocol run with known means: the aggregates, the two
+// CSV files, the HTML report's bars (one per object per group per mode per chart), that the page
+// is self-contained and states the unit caveat, and loading the paper's per-object numbers.
+#include "experiment_report.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <sstream>
+#include <string>
+
+#include <unistd.h>
+
+namespace telegrasp::report {
+namespace {
+
+constexpr double kTol = 1e-9;
+
+// A grasp record; `nd_hit` are the ND (mm, signed) of capsules that hit at the grasp tick, and a
+// capsule that did not hit is added to check it is left out of every |ND| mean.
+Record grasp(const std::string& mode, const std::string& group, int participant, const std::string& object, int trial,
+             double time_s, double hand_error_mm, std::vector<double> nd_hit) {
+  Record r;
+  r.mode = mode;
+  r.group = group;
+  r.participant = participant;
+  r.object = object;
+  r.trial = trial;
+  r.attempts = 1;
+  r.grasped = r.held_after_lift = true;
+  r.time_to_grasp_s = time_s;
+  r.grasp_tick_hand_error_mm = hand_error_mm;
+  r.hand_error_mm = 99;  // the settled hand: not what the experiment report uses
+  for (double nd : nd_hit) r.grasp_tick_capsules.push_back({"index_dist", true, true, nd, nd - 0.01});
+  r.grasp_tick_capsules.push_back({"pinky_dist", false, false, 0, 7});
+  r.capsules = {{"index_dist", true, true, 50, 50}};  // settled: must not be used either
+  r.contacts.resize(2);
+  return r;
+}
+
+Record miss(const std::string& mode, const std::string& group, int participant, const std::string& object, int trial) {
+  Record r;
+  r.mode = mode;
+  r.group = group;
+  r.participant = participant;
+  r.object = object;
+  r.trial = trial;
+  r.attempts = 3;
+  return r;
+}
+
+// Two modes, two groups; 004_sugar_box is in the protocol but has no records; 999_custom is not
+// in the paper's table; nobody inexperienced grasped 999_custom.
+ExperimentRun handmade_run() {
+  ExperimentRun run;
+  run.protocol = "paper";
+  run.command_line = "telegrasp-eval --protocol paper --mode both";
+  run.seed = 7;
+  run.wall_seconds = 12.5;
+  run.created = "2024-05-01T10:00:00Z";
+  run.modes = {"precise", "discrete"};
+  run.objects = {"014_lemon", "003_cracker_box", "004_sugar_box", "999_custom"};
+  run.standin_objects = {"999_custom"};
+  run.participants = {{"experienced", 1}, {"inexperienced", 1}};
+  auto& r = run.records;
+  // precise, experienced, lemon: times 1 and 2 -> mean 1.5, sd sqrt(0.5);
+  // per-grasp |ND| means (|1| + |-3|)/2 = 2 and 4 -> mean 3, sd sqrt(2); pooled (1+3+4)/3 = 8/3;
+  // HandError 5 and 7 -> 6.
+  r.push_back(grasp("precise", "experienced", 1, "014_lemon", 0, 1.0, 5.0, {1.0, -3.0}));
+  r.push_back(grasp("precise", "experienced", 1, "014_lemon", 1, 2.0, 7.0, {4.0}));
+  // precise, inexperienced, lemon: one grasp (3 s, |ND| 0.5) and one miss -> n 2, grasped 1.
+  r.push_back(grasp("precise", "inexperienced", 2, "014_lemon", 0, 3.0, 2.0, {-0.5}));
+  r.push_back(miss("precise", "inexperienced", 2, "014_lemon", 1));
+  r.push_back(grasp("precise", "experienced", 1, "003_cracker_box", 0, 1.2, 3.0, {1.0}));
+  r.push_back(grasp("precise", "inexperienced", 2, "003_cracker_box", 0, 1.4, 3.0, {2.0}));
+  r.push_back(grasp("precise", "experienced", 1, "999_custom", 0, 0.8, 1.0, {0.2}));
+  // discrete: the same objects, one trial each; inexperienced never grasps the cracker box.
+  r.push_back(grasp("discrete", "experienced", 1, "014_lemon", 0, 1.1, 9.0, {3.0}));
+  r.push_back(grasp("discrete", "inexperienced", 2, "014_lemon", 0, 1.3, 9.0, {5.0}));
+  r.push_back(grasp("discrete", "experienced", 1, "003_cracker_box", 0, 1.5, 9.0, {2.0}));
+  r.push_back(miss("discrete", "inexperienced", 2, "003_cracker_box", 0));
+  r.push_back(grasp("discrete", "experienced", 1, "999_custom", 0, 0.9, 9.0, {1.0}));
+  return run;
+}
+
+const nlohmann::json& find_row(const nlohmann::json& rows, const std::string& mode, const std::string& group,
+                               const std::string& object = "") {
+  for (const nlohmann::json& r : rows)
+    if (r["mode"] == mode && r["group"] == group && (object.empty() || r["object"] == object)) return r;
+  static const nlohmann::json none;
+  ADD_FAILURE() << "no row " << mode << "/" << group << "/" << object;
+  return none;
+}
+
+std::vector<PaperRow> paper() { return load_paper_results(default_paper_results_path()); }
+
+// The attributes of every <rect class="bar" ...> in `html`.
+std::vector<std::map<std::string, std::string>> bars(const std::string& html) {
+  std::vector<std::map<std::string, std::string>> out;
+  const std::regex rect(R"(<rect class="bar"([^>]*)>)"), attr(R"(([\w-]+)="([^"]*)\")");
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), rect); it != std::sregex_iterator(); ++it) {
+    const std::string attrs = (*it)[1];
+    std::map<std::string, std::string> m;
+    for (auto a = std::sregex_iterator(attrs.begin(), attrs.end(), attr); a != std::sregex_iterator(); ++a)
+      m[(*a)[1]] = (*a)[2];
+    out.push_back(std::move(m));
+  }
+  return out;
+}
+
+int count_bars(const std::vector<std::map<std::string, std::string>>& all, const std::string& chart,
+               const std::string& mode, const std::string& group, const std::string& object) {
+  int n = 0;
+  for (const auto& b : all)
+    n += b.at("data-chart") == chart && b.at("data-mode") == mode && b.at("data-group") == group &&
+         b.at("data-object") == object;
+  return n;
+}
+
+std::vector<std::string> read_lines(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+TEST(ExperimentReportTest, AggregatesHaveTheHandComputedMeans) {
+  const nlohmann::json j = aggregate_json(handmade_run());
+  const auto& lemon = find_row(j["by_mode_group_object"], "precise", "experienced", "014_lemon");
+  EXPECT_EQ(lemon["n"], 2);
+  EXPECT_EQ(lemon["grasped"], 2);
+  EXPECT_NEAR(lemon["time_to_grasp_mean_s"].get<double>(), 1.5, kTol);
+  EXPECT_NEAR(lemon["time_to_grasp_sd_s"].get<double>(), std::sqrt(0.5), kTol);
+  EXPECT_NEAR(lemon["nd_abs_mean_mm"].get<double>(), 3.0, kTol);
+  EXPECT_NEAR(lemon["nd_abs_sd_mm"].get<double>(), std::sqrt(2.0), kTol);
+  EXPECT_NEAR(lemon["nd_abs_pooled_mean_mm"].get<double>(), 8.0 / 3.0, kTol);
+  EXPECT_EQ(lemon["capsules_hit"], 3);
+  EXPECT_NEAR(lemon["hand_error_mean_mm"].get<double>(), 6.0, kTol);
+
+  // The miss counts as a trial but adds no time; one grasp has no sd.
+  const auto& lemon_inexp = find_row(j["by_mode_group_object"], "precise", "inexperienced", "014_lemon");
+  EXPECT_EQ(lemon_inexp["n"], 2);
+  EXPECT_EQ(lemon_inexp["grasped"], 1);
+  EXPECT_EQ(lemon_inexp["held_after_lift"], 1);
+  EXPECT_NEAR(lemon_inexp["time_to_grasp_mean_s"].get<double>(), 3.0, kTol);
+  EXPECT_TRUE(lemon_inexp["time_to_grasp_sd_s"].is_null());
+  EXPECT_NEAR(lemon_inexp["nd_abs_mean_mm"].get<double>(), 0.5, kTol);
+
+  // No grasp at all: the means are null, not zero.
+  const auto& cracker_miss = find_row(j["by_mode_group_object"], "discrete", "inexperienced", "003_cracker_box");
+  EXPECT_EQ(cracker_miss["grasped"], 0);
+  EXPECT_TRUE(cracker_miss["time_to_grasp_mean_s"].is_null());
+  EXPECT_TRUE(cracker_miss["nd_abs_mean_mm"].is_null());
+
+  // Per object, both groups: lemon precise times 1, 2, 3 -> 2; per-grasp |ND| 2, 4, 0.5 -> 6.5/3.
+  const auto& lemon_all = find_row(j["by_mode_object"], "precise", "all", "014_lemon");
+  EXPECT_EQ(lemon_all["n"], 4);
+  EXPECT_NEAR(lemon_all["time_to_grasp_mean_s"].get<double>(), 2.0, kTol);
+  EXPECT_NEAR(lemon_all["nd_abs_mean_mm"].get<double>(), 6.5 / 3.0, kTol);
+
+  // Per mode and group over every object: precise experienced times 1, 2, 1.2, 0.8 -> 1.25.
+  const auto& exp_precise = find_row(j["by_mode_group"], "precise", "experienced");
+  EXPECT_EQ(exp_precise["n"], 4);
+  EXPECT_NEAR(exp_precise["time_to_grasp_mean_s"].get<double>(), 1.25, kTol);
+
+  // The sugar box has no records, so no rows; worst objects by time (precise): lemon 2.0 first.
+  for (const auto& r : j["by_mode_group_object"]) EXPECT_NE(r["object"], "004_sugar_box");
+  ASSERT_EQ(j["worst_objects"].size(), 2u);
+  EXPECT_EQ(j["worst_objects"][0]["mode"], "precise");
+  EXPECT_EQ(j["worst_objects"][0]["by_time"][0]["object"], "014_lemon");
+  EXPECT_EQ(j["worst_objects"][0]["by_nd"][0]["object"], "014_lemon");
+  EXPECT_EQ(j["run"]["seed"], 7);
+}
+
+TEST(ExperimentReportTest, CsvHasOneRowPerGraspAndPerModeGroupObject) {
+  const ExperimentRun run = handmade_run();
+  const auto dir = std::filesystem::temp_directory_path() / ("telegrasp_report_test_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "grasps.csv").string();
+  const std::string second = write_csv(run, path);
+  EXPECT_EQ(second, (dir / "grasps_by_object.csv").string());
+
+  const auto grasps = read_lines(path);
+  ASSERT_EQ(grasps.size(), 1 + run.records.size());
+  EXPECT_EQ(grasps[0],
+            "mode,group,participant,object,trial,grasped,held_after_lift,attempts,time_to_grasp_s,hand_error_mm,"
+            "nd_abs_mean_mm,capsules_hit,min_signed_distance_mm,contacts");
+  // The first lemon grasp: |ND| (1 + 3)/2 = 2 over 2 hit capsules, smallest signed distance -3.01.
+  EXPECT_EQ(grasps[1], "precise,experienced,1,014_lemon,0,1,1,1,1.0000,5.0000,2.0000,2,-3.0100,2");
+  // A miss has empty metrics, not zeros.
+  EXPECT_EQ(grasps[4], "precise,inexperienced,2,014_lemon,1,0,0,3,,,,0,,0");
+
+  // 2 modes x (2 groups + "all") x objects with records: precise 3 + 2 (no inexperienced custom)
+  // + 3 all; discrete the same: 16 rows.
+  const auto by_object = read_lines(second);
+  ASSERT_EQ(by_object.size(), 1u + 16u);
+  EXPECT_EQ(by_object[0].rfind("mode,group,object,n,grasped,held_after_lift,time_to_grasp_mean_s,", 0), 0u);
+  EXPECT_EQ(by_object[1].rfind("precise,experienced,014_lemon,2,2,2,1.5000,0.7071,3.0000,", 0), 0u) << by_object[1];
+  std::filesystem::remove_all(dir);
+}
+
+TEST(ExperimentReportTest, HtmlHasOneBarPerObjectPerGroupPerModePerChart) {
+  const ExperimentRun run = handmade_run();
+  const std::string html = html_report(run, paper(), nullptr);
+  const auto all = bars(html);
+  ASSERT_FALSE(all.empty());
+
+  const std::vector<std::string> recorded = {"014_lemon", "003_cracker_box", "999_custom"};
+  for (const std::string mode : {"precise", "discrete"}) {
+    for (const std::string kind : {"time_by_group", "nd_by_group"}) {
+      const std::string chart = kind + "." + mode;
+      for (const std::string& object : recorded) {
+        EXPECT_EQ(count_bars(all, chart, mode, "experienced", object), 1) << chart << " " << object;
+        // Nobody inexperienced tried the custom object: no bar, not a zero bar.
+        EXPECT_EQ(count_bars(all, chart, mode, "inexperienced", object), object == "999_custom" ? 0 : 1)
+            << chart << " " << object;
+      }
+      // Objects absent from the run get no bar.
+      EXPECT_EQ(count_bars(all, chart, mode, "experienced", "004_sugar_box"), 0);
+    }
+    for (const std::string kind : {"time_overall", "nd_overall"})
+      for (const std::string& object : recorded)
+        EXPECT_EQ(count_bars(all, kind + "." + mode, mode, "all", object), 1) << kind << " " << object;
+  }
+  // Paper vs ours: per group a paper bar for the paper's objects only, and a bar per mode.
+  for (const std::string group : {"experienced", "inexperienced"})
+    for (const std::string kind : {"paper_time.", "paper_error."}) {
+      const std::string chart = kind + group;
+      EXPECT_EQ(count_bars(all, chart, "paper", group, "014_lemon"), 1) << chart;
+      EXPECT_EQ(count_bars(all, chart, "paper", group, "003_cracker_box"), 1) << chart;
+      EXPECT_EQ(count_bars(all, chart, "paper", group, "999_custom"), 0) << chart;
+      EXPECT_EQ(count_bars(all, chart, "paper", group, "004_sugar_box"), 0) << chart;
+      EXPECT_EQ(count_bars(all, chart, "precise", group, "014_lemon"), 1) << chart;
+      EXPECT_EQ(count_bars(all, chart, "discrete", group, "014_lemon"), 1) << chart;
+    }
+
+  // Total: per mode 5 + 5 group bars, 3 + 3 overall; paper charts 4 x (2 paper + 2 modes x 2 or 3).
+  //   modes: 2 x 16 = 32; paper_*.experienced: 2 x (2 + 3 + 3) = 16; inexperienced: 2 x (2 + 2 + 2) = 12.
+  EXPECT_EQ(all.size(), 32u + 16u + 12u);
+
+  // Values: the bar is the mean the aggregates computed; an undefined value is an empty bar.
+  for (const auto& b : all) {
+    if (b.at("data-chart") == "time_by_group.precise" && b.at("data-group") == "experienced" &&
+        b.at("data-object") == "014_lemon") {
+      EXPECT_NEAR(std::stod(b.at("data-value")), 1.5, 1e-4);
+    }
+    if (b.at("data-chart") == "nd_by_group.precise" && b.at("data-group") == "experienced" &&
+        b.at("data-object") == "014_lemon") {
+      EXPECT_NEAR(std::stod(b.at("data-value")), 3.0, 1e-4);
+    }
+    if (b.at("data-chart") == "paper_time.experienced" && b.at("data-mode") == "paper" &&
+        b.at("data-object") == "014_lemon") {
+      EXPECT_NEAR(std::stod(b.at("data-value")), 1.344, 1e-4);
+    }
+    if (b.at("data-chart") == "time_by_group.discrete" && b.at("data-group") == "inexperienced" &&
+        b.at("data-object") == "003_cracker_box") {
+      EXPECT_EQ(b.at("data-value"), "");
+      EXPECT_EQ(b.at("height"), "0.00");
+    }
+  }
+  // The x axis uses the paper's letters, the object's name in a tooltip; other objects a number.
+  EXPECT_NE(html.find("<title>014_lemon</title>a</text>"), std::string::npos);
+  EXPECT_NE(html.find("<title>003_cracker_box</title>b</text>"), std::string::npos);
+  EXPECT_NE(html.find("<title>999_custom</title>#3</text>"), std::string::npos);
+}
+
+TEST(ExperimentReportTest, HtmlIsSelfContainedAndStatesTheCaveat) {
+  std::istringstream answers(
+      "id,group,Q1,Q2,Q3,Q4,Q5,Q6,Q7,Q8,Q9,Q10,Q11,Q12,Q13,Q14\n"
+      "p1,experienced,3,3,3,3,3,3,3,3,3,3,3,3,3,3\n"
+      "p2,experienced,3,3,3,9,3,3,3,3,3,3,3,3,3,3\n");
+  const QuestionnaireSummary q = score_questionnaire(answers, "answers.csv");
+  const std::string html = html_report(handmade_run(), paper(), &q);
+
+  EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
+  EXPECT_NE(html.find("</html>"), std::string::npos);
+  // Nothing to fetch: no URL, script, external stylesheet or image.
+  EXPECT_EQ(html.find("http://"), std::string::npos);
+  EXPECT_EQ(html.find("https://"), std::string::npos);
+  EXPECT_EQ(html.find("<script"), std::string::npos);
+  EXPECT_EQ(html.find("<link"), std::string::npos);
+  EXPECT_EQ(html.find("<img"), std::string::npos);
+  EXPECT_NE(html.find("<style>"), std::string::npos);
+  // The unit caveat: what the paper's error is, what ours is, and that ours is a bot.
+  EXPECT_NE(html.find("id=\"unit-caveat\""), std::string::npos);
+  EXPECT_NE(html.find("HandError"), std::string::npos);
+  EXPECT_NE(html.find("summed over the five fingers"), std::string::npos);
+  EXPECT_NE(html.find("mean |ND| over the capsules that hit"), std::string::npos);
+  EXPECT_NE(html.find("scripted bot"), std::string::npos);
+  EXPECT_NE(html.find("procedural stand-ins"), std::string::npos);
+  // Run summary and questionnaire section, the rejected row named.
+  EXPECT_NE(html.find("seed</th><td>7<"), std::string::npos);
+  EXPECT_NE(html.find("999_custom"), std::string::npos);
+  EXPECT_NE(html.find("id=\"questionnaire\""), std::string::npos);
+  EXPECT_NE(html.find("[1.97]"), std::string::npos);
+  EXPECT_NE(html.find("answers.csv line 3 (participant p2): Q4 = 9 is outside -3..3"), std::string::npos);
+
+  // The questionnaire-only page has the section and no bars.
+  const std::string qpage = questionnaire_html_report(q);
+  EXPECT_NE(qpage.find("id=\"questionnaire\""), std::string::npos);
+  EXPECT_TRUE(bars(qpage).empty());
+  EXPECT_EQ(qpage.find("http"), std::string::npos);
+}
+
+TEST(PaperResultsTest, ShippedFileHasThirtyObjectsInThePapersOrder) {
+  const std::vector<PaperRow> rows = paper();
+  ASSERT_EQ(rows.size(), 30u);
+  EXPECT_EQ(rows[0].label, "a");
+  EXPECT_EQ(rows[0].object, "014_lemon");
+  EXPECT_DOUBLE_EQ(rows[0].time_experienced, 1.344);
+  EXPECT_DOUBLE_EQ(rows[0].err_inexperienced, 0.708);
+  EXPECT_EQ(rows[29].label, "ad");
+  EXPECT_EQ(rows[29].object, "072_a_toy_airplane");
+  EXPECT_DOUBLE_EQ(rows[29].err_experienced, 2.537);
+}
+
+TEST(PaperResultsTest, BadNumberNamesFileLineAndColumn) {
+  const auto path = std::filesystem::temp_directory_path() / ("telegrasp_paper_bad_" + std::to_string(::getpid()) + ".csv");
+  {
+    std::ofstream out(path);
+    out << "label,object,time_s_experienced,time_s_inexperienced,err_experienced,err_inexperienced\n"
+        << "a,014_lemon,1.344,1.830,0.654,0.708\n"
+        << "b,003_cracker_box,1.220,1.8x3,1.207,1.453\n";
+  }
+  try {
+    load_paper_results(path.string());
+    FAIL() << "expected an error for 1.8x3";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), path.string() + " line 3 column 4 (time_s_inexperienced): '1.8x3' is not a "
+                                                     "non-negative number");
+  }
+  {
+    std::ofstream out(path);
+    out << "label,object,time_s_experienced,err_experienced,err_inexperienced\n";
+  }
+  try {
+    load_paper_results(path.string());
+    FAIL() << "expected an error for the missing column";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("line 1: header has no column 'time_s_inexperienced'"), std::string::npos)
+        << e.what();
+  }
+  std::filesystem::remove(path);
+  EXPECT_THROW(load_paper_results("/nonexistent/paper.csv"), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace telegrasp::report
