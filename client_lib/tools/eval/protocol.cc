@@ -317,8 +317,11 @@ int run_protocol(int argc, char** argv) {
     paper = report::load_paper_results(report::default_paper_results_path());
     // The paper's table writes 072_a_toy_airplane; the protocol's name is YCB's 072-a_toy_airplane.
     for (report::PaperRow& row : paper)
-      if (!sim::find_protocol_object(row.object))
-        if (const auto o = sim::find_protocol_object(row.object.substr(0, 3))) row.object = o->name;
+      for (const sim::ProtocolObject& o : sim::protocol_objects()) {
+        std::string underscored = o.name;
+        std::replace(underscored.begin(), underscored.end(), '-', '_');
+        if (underscored == row.object) row.object = o.name;
+      }
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-eval: " << e.what() << "\n";
     return 2;
