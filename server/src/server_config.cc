@@ -22,6 +22,40 @@ class ErrorCollector : public google::protobuf::io::ErrorCollector {
   std::string text;
 };
 
+// Applies the fields present in `c` onto `s`, then validates; errors start with `origin`.
+void apply_config(const proto::ServerConfig& c, ServerSettings& s, const std::string& origin) {
+  const auto* d = c.GetDescriptor();
+  const auto* r = c.GetReflection();
+  // Every scalar is `optional`: a field written in the file, even as 0, replaces the default.
+  auto has = [&](const char* field) { return r->HasField(c, d->FindFieldByName(field)); };
+  if (has("domain")) s.domain = c.domain();
+  if (has("profile")) s.profile = c.profile();
+  if (has("profiles_file")) s.profiles_file = c.profiles_file();
+  if (has("tick_hz")) s.tick_hz = c.tick_hz();
+  if (has("objects_dir")) s.objects_dir = c.objects_dir();
+  if (has("fill_standins")) s.fill_standins = c.fill_standins();
+  for (const auto& o : c.objects()) {
+    if (o.model().empty()) throw std::runtime_error(origin + ": objects.model must name a model");
+    s.objects.push_back({o.model(), o.x(), o.y(), o.yaw()});
+  }
+  if (has("empty_scene")) s.empty_scene = c.empty_scene();
+  if (has("right_rig")) s.right_rig = c.right_rig();
+  if (has("left_rig")) s.left_rig = c.left_rig();
+  if (has("closing_mode")) {
+    if (c.closing_mode() == "precise") s.closing_mode = sim::ClosingMode::kPrecise;
+    else if (c.closing_mode() == "discrete") s.closing_mode = sim::ClosingMode::kDiscrete;
+    else throw std::runtime_error(origin + ": closing_mode must be precise or discrete, got '" + c.closing_mode() + "'");
+  }
+  if (has("freeze_after_s")) s.freeze_after_s = c.freeze_after_s();
+  if (has("remove_after_s")) s.remove_after_s = c.remove_after_s();
+  if (has("late_latch")) s.late_latch = c.late_latch();
+  if (has("status_period_s")) s.status_period_s = c.status_period_s();
+  if (has("max_hands")) s.max_hands = c.max_hands();
+  if (has("lockstep")) s.lockstep = c.lockstep();
+  if (has("record")) s.record_path = c.record();
+  validate_settings(s, origin);
+}
+
 }  // namespace
 
 void load_server_config(const std::string& path, ServerSettings& s) {
@@ -34,34 +68,7 @@ void load_server_config(const std::string& path, ServerSettings& s) {
   ErrorCollector errors;
   parser.RecordErrorsTo(&errors);
   if (!parser.ParseFromString(buffer.str(), &c)) throw std::runtime_error("server config " + path + ": " + errors.text);
-  const auto* d = c.GetDescriptor();
-  const auto* r = c.GetReflection();
-  // Every scalar is `optional`: a field written in the file, even as 0, replaces the default.
-  auto has = [&](const char* field) { return r->HasField(c, d->FindFieldByName(field)); };
-  if (has("domain")) s.domain = c.domain();
-  if (has("profile")) s.profile = c.profile();
-  if (has("profiles_file")) s.profiles_file = c.profiles_file();
-  if (has("tick_hz")) s.tick_hz = c.tick_hz();
-  if (has("objects_dir")) s.objects_dir = c.objects_dir();
-  for (const auto& o : c.objects()) {
-    if (o.model().empty()) throw std::runtime_error("server config " + path + ": objects.model must name a model");
-    s.objects.push_back({o.model(), o.x(), o.y(), o.yaw()});
-  }
-  if (has("empty_scene")) s.empty_scene = c.empty_scene();
-  if (has("right_rig")) s.right_rig = c.right_rig();
-  if (has("left_rig")) s.left_rig = c.left_rig();
-  if (has("closing_mode")) {
-    if (c.closing_mode() == "precise") s.closing_mode = sim::ClosingMode::kPrecise;
-    else if (c.closing_mode() == "discrete") s.closing_mode = sim::ClosingMode::kDiscrete;
-    else throw std::runtime_error("server config " + path + ": closing_mode must be precise or discrete, got '" + c.closing_mode() + "'");
-  }
-  if (has("freeze_after_s")) s.freeze_after_s = c.freeze_after_s();
-  if (has("remove_after_s")) s.remove_after_s = c.remove_after_s();
-  if (has("late_latch")) s.late_latch = c.late_latch();
-  if (has("status_period_s")) s.status_period_s = c.status_period_s();
-  if (has("max_hands")) s.max_hands = c.max_hands();
-  if (has("lockstep")) s.lockstep = c.lockstep();
-  validate_settings(s, "server config " + path);
+  apply_config(c, s, "server config " + path);
 }
 
 void validate_settings(const ServerSettings& s, const std::string& origin) {
@@ -77,6 +84,42 @@ void validate_settings(const ServerSettings& s, const std::string& origin) {
   for (const auto& o : s.objects)
     if (!std::isfinite(o.x) || !std::isfinite(o.y) || !std::isfinite(o.yaw)) fail("objects '" + o.model + "': x, y, yaw must be finite");
   if (s.empty_scene && !s.objects.empty()) fail("empty_scene and objects exclude each other");
+}
+
+
+proto::ServerConfig to_proto(const ServerSettings& s) {
+  proto::ServerConfig c;
+  c.set_domain(s.domain);
+  c.set_profile(s.profile);
+  c.set_profiles_file(s.profiles_file);
+  c.set_tick_hz(s.tick_hz);
+  c.set_objects_dir(s.objects_dir);
+  c.set_fill_standins(s.fill_standins);
+  for (const auto& o : s.objects) {
+    proto::SceneObject* p = c.add_objects();
+    p->set_model(o.model);
+    p->set_x(o.x);
+    p->set_y(o.y);
+    p->set_yaw(o.yaw);
+  }
+  c.set_empty_scene(s.empty_scene);
+  c.set_right_rig(s.right_rig);
+  c.set_left_rig(s.left_rig);
+  c.set_closing_mode(s.closing_mode == sim::ClosingMode::kDiscrete ? "discrete" : "precise");
+  c.set_freeze_after_s(s.freeze_after_s);
+  c.set_remove_after_s(s.remove_after_s);
+  c.set_late_latch(s.late_latch);
+  c.set_status_period_s(s.status_period_s);
+  c.set_max_hands(s.max_hands);
+  c.set_lockstep(s.lockstep);
+  c.set_record(s.record_path);
+  return c;
+}
+
+ServerSettings settings_from_proto(const proto::ServerConfig& config, const std::string& origin) {
+  ServerSettings s;
+  apply_config(config, s, origin);
+  return s;
 }
 
 }  // namespace telegrasp::server

@@ -8,6 +8,10 @@
 
 namespace telegrasp::server {
 
+namespace proto {
+class ServerConfig;
+}
+
 /// One object of the initial scene, resting on the table at (x, y) turned by yaw.
 struct SceneObjectSpec {
   std::string model;
@@ -21,6 +25,9 @@ struct ServerSettings {
   std::string profiles_file;
   double tick_hz = 90;
   std::string objects_dir;
+  /// With objects_dir: also the built-in stand-in of every protocol object that has no mesh there
+  /// (protocol runs with a partial mesh set).
+  bool fill_standins = false;
   std::vector<SceneObjectSpec> objects;  ///< Empty and !empty_scene: every model in a grid.
   bool empty_scene = false;
   std::string right_rig, left_rig;       ///< "": the built-in human rigs.
@@ -33,6 +40,8 @@ struct ServerSettings {
   /// Tick as soon as every hand has answered the last tick (ControllerState.lockstep_tick) instead
   /// of on the wall clock: deterministic, faster than real time. With no hands the scene waits.
   bool lockstep = false;
+  /// Write a recording of the run here (recording.h); "": none.
+  std::string record_path;
 };
 
 /// Reads a protobuf text file onto `settings` (fields present in the file replace the defaults).
@@ -42,5 +51,11 @@ void load_server_config(const std::string& path, ServerSettings& settings);
 /// Checks ranges and combinations; throws std::runtime_error naming the field (`origin` says
 /// where the value came from, e.g. the file name or "command line").
 void validate_settings(const ServerSettings& settings, const std::string& origin);
+
+/// The settings as a configuration message with every field set (a recording's header).
+proto::ServerConfig to_proto(const ServerSettings& settings);
+/// Default settings with the fields present in `config` applied, then validated. Throws
+/// std::runtime_error starting with `origin` and naming the field that is wrong.
+ServerSettings settings_from_proto(const proto::ServerConfig& config, const std::string& origin);
 
 }  // namespace telegrasp::server

@@ -1,11 +1,10 @@
 // telegrasp-server: the authoritative grasp simulation, driven by VR clients over DDS.
 #include "dds_node.h"
 #include "input_mailbox.h"
+#include "recording.h"
 #include "scene_server.h"
+#include "scene_setup.h"
 #include "server_config.h"
-#include "telegrasp/sim/hand_rig.h"
-#include "telegrasp/sim/object_model.h"
-#include "telegrasp/sim/standin_objects.h"
 
 #include <algorithm>
 #include <atomic>
@@ -13,6 +12,7 @@
 #include <csignal>
 #include <cstdlib>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -44,6 +44,8 @@ Options (override the --config file):
                       lockstep_tick) and its commands have arrived, not on the clock: runs are
                       deterministic and faster than real time. With no hands the scene waits; a
                       hand silent for freeze_after_s is frozen and no longer waited for.
+  --record FILE       write every accepted input and every output to FILE (a binary protobuf
+                      stream, server/proto/recording.proto); telegrasp-replay re-runs it
   --list-models       print the model names and exit
   -h, --help          this text
 
@@ -68,7 +70,6 @@ double parse_number(const std::string& flag, const std::string& v) {
 struct Flags {
   ServerSettings settings;
   bool list_models = false;
-  bool fill_standins = false;
 };
 
 Flags parse(int argc, char** argv) {
@@ -101,7 +102,8 @@ Flags parse(int argc, char** argv) {
     else if (a == "--no-late-latch") s.late_latch = false;
     else if (a == "--lockstep") s.lockstep = true;
     else if (a == "--list-models") f.list_models = true;
-    else if (a == "--fill-standins") f.fill_standins = true;
+    else if (a == "--fill-standins") s.fill_standins = true;
+    else if (a == "--record") s.record_path = value();
     else if (a == "--mode") {
       const std::string m = value();
       if (m == "precise") s.closing_mode = sim::ClosingMode::kPrecise;
@@ -138,36 +140,27 @@ std::int64_t to_ns(Clock::time_point t) {
 int main(int argc, char** argv) {
   const Flags flags = parse(argc, argv);
   const ServerSettings& settings = flags.settings;
-  std::vector<sim::ObjectModelPtr> models;
-  std::shared_ptr<const sim::HandRig> right, left;
+  SceneAssets assets;
   try {
-    if (settings.objects_dir.empty()) {
-      for (const auto& o : sim::protocol_objects()) models.push_back(sim::make_standin_model(o));
-    } else {
-      std::cerr << "telegrasp-server: loading meshes from " << settings.objects_dir << " ...\n";
-      models = sim::load_object_dir(settings.objects_dir);
-      if (flags.fill_standins)
-        for (const auto& o : sim::protocol_objects())
-          if (std::none_of(models.begin(), models.end(), [&](const auto& m) { return m->name == o.name; }))
-            models.push_back(sim::make_standin_model(o));
-    }
+    if (!settings.objects_dir.empty()) std::cerr << "telegrasp-server: loading meshes from " << settings.objects_dir << " ...\n";
+    assets = load_scene_assets(settings);
     if (flags.list_models) {
-      for (const auto& m : models) std::cout << m->name << "\n";
+      for (const auto& m : assets.models) std::cout << m->name << "\n";
       return 0;
     }
-    right = std::make_shared<const sim::HandRig>(
-        sim::HandRig::load(settings.right_rig.empty() ? sim::HandRig::builtin_path("human_right") : settings.right_rig));
-    left = std::make_shared<const sim::HandRig>(
-        sim::HandRig::load(settings.left_rig.empty() ? sim::HandRig::builtin_path("human_left") : settings.left_rig));
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-server: " << e.what() << "\n";
     return 1;
   }
 
-  InputMailbox mailbox({left->fingers().size(), right->fingers().size()}, settings.max_hands);
+  InputMailbox mailbox({assets.left_rig->fingers().size(), assets.right_rig->fingers().size()}, settings.max_hands);
   try {
     DdsNode node(settings.domain, settings.profile, settings.profiles_file, mailbox);
-    SceneServer scene(settings, models, right, left, mailbox, node);
+    // Declared before the scene, so the scene goes first and the recorder then closes the file.
+    std::optional<Recorder> recorder;
+    if (!settings.record_path.empty()) recorder.emplace(settings.record_path, settings, assets, node);
+    OutputSink& sink = recorder ? static_cast<OutputSink&>(*recorder) : node;
+    SceneServer scene(settings, assets.models, assets.right_rig, assets.left_rig, mailbox, sink);
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
     std::cerr << "telegrasp-server: domain " << settings.domain << ", profile " << settings.profile << ", "
@@ -190,10 +183,12 @@ int main(int argc, char** argv) {
       mailbox.wait(std::min(settings.lockstep ? last_activity + stall_after : next_tick, next_status));
       const Clock::time_point now = Clock::now();
       if (auto inputs = mailbox.drain(); !inputs.empty()) {
+        if (recorder) recorder->inputs(inputs, to_ns(now));
         scene.on_inputs(std::move(inputs), to_ns(now));
         last_activity = now;
       }
       for (const msg::SceneCommand& c : node.take_commands()) {
+        if (recorder) recorder->command(c, to_ns(now));
         scene.apply_command(c);
         last_activity = now;
       }
@@ -201,6 +196,7 @@ int main(int argc, char** argv) {
                            ? scene.lockstep_ready() || (scene.hand_count() > 0 && now - last_activity >= stall_after)
                            : now >= next_tick;
       if (due) {
+        if (recorder) recorder->tick(to_ns(now));
         scene.tick(to_ns(now));
         last_activity = now;
         tick_us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - now).count());
@@ -212,7 +208,7 @@ int main(int argc, char** argv) {
       }
       if (now >= next_status) {
         stats = summarize(tick_us, missed);
-        node.publish(scene.status(stats));
+        sink.publish(scene.status(stats));
         next_status += status_period;
         if (next_status <= now) next_status = now + status_period;
       }

@@ -81,6 +81,8 @@ Options:
                          participant that finds a used scene on its domain fails the run)
   --profile NAME         Fast DDS participant profile (default loopback)
   --profiles FILE        Fast DDS XML profiles (default: the shipped file)
+  --record DIR           each server records its run (telegrasp-server --record) to
+                         DIR/<mode>-p<participant>.tgrec, for telegrasp-replay
   --keep-logs DIR        keep each server's and participant's log and records in DIR
   -h, --help             this text
 
@@ -91,7 +93,7 @@ Exit status: 0 when every grasp was run (held or not), 1 if a run failed, 2 for 
 struct Options {
   int experienced = 4, inexperienced = 6, count = 30, jobs = 2, domain = -1;
   std::vector<std::string> modes{"precise"};
-  std::string objects_dir, json_path, csv_path, report_path, questionnaire_path, profile = "loopback", profiles_file, logs_dir;
+  std::string objects_dir, json_path, csv_path, report_path, questionnaire_path, profile = "loopback", profiles_file, logs_dir, record_dir;
   std::uint64_t seed = 1;
 };
 
@@ -151,6 +153,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--profile") o.profile = value();
     else if (a == "--profiles") o.profiles_file = value();
     else if (a == "--keep-logs") o.logs_dir = value();
+    else if (a == "--record") o.record_dir = value();
     else usage_error("unknown option '" + a + "'");
   }
   if (o.domain < 0) o.domain = 100 + static_cast<int>(getpid() % 101);
@@ -332,6 +335,11 @@ int run_protocol(int argc, char** argv) {
     std::cerr << "telegrasp-eval: " << server_bin << " not found: the protocol runs the server built next to telegrasp-eval\n";
     return 2;
   }
+  if (!opt.record_dir.empty()) {
+    std::error_code ec;
+    fs::create_directories(opt.record_dir, ec);
+    if (ec) usage_error("--record " + opt.record_dir + ": " + ec.message());
+  }
   fs::path work;
   if (!opt.logs_dir.empty()) {
     work = opt.logs_dir;
@@ -379,6 +387,7 @@ int run_protocol(int argc, char** argv) {
     }
     if (!opt.profiles_file.empty())
       for (const char* a : {"--profiles", opt.profiles_file.c_str()}) server.push_back(a), bot.push_back(a);
+    if (!opt.record_dir.empty()) server.insert(server.end(), {"--record", (fs::path(opt.record_dir) / (name + ".tgrec")).string()});
     j.server = spawn(server, (work / (name + ".server.log")).string(), false);
     j.bot = spawn(bot, (work / (name + ".participant.log")).string(), true);
     slot_busy[static_cast<std::size_t>(slot)] = true;

@@ -1,0 +1,141 @@
+// telegrasp-replay: re-runs a telegrasp-server recording in-process and reports the first
+// divergence, or exports every grasp's contacts as CSV.
+#include "replay.h"
+
+#include <nlohmann/json.hpp>
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <string>
+
+namespace {
+
+using namespace telegrasp::server;
+
+constexpr const char* kUsage = R"(Usage: telegrasp-replay FILE [options]
+
+Re-runs a recording made with `telegrasp-server --record FILE`: the scene is rebuilt from the
+recording's header (settings, rigs, models) and driven by the recorded inputs, commands and
+ticks; every message it publishes is compared, in order, with the recorded one (ServerStatus
+is skipped: it holds wall-clock timings). Prints "identical: ..." or the first divergence: the
+record, tick, message type, hand or object, and the first differing field.
+
+Options:
+  --objects DIR            the mesh folder, if not where the recording says (the meshes are
+                           checked against the recorded sizes and hashes)
+  --export-contacts CSV    instead of replaying, write every grasp's contacts to CSV, one row
+                           per contact (world and object frames, phalanx, ND); needs no meshes
+  --json FILE              also write the result as JSON
+  -h, --help               this text
+
+Exit status:
+  0  identical (or contacts exported)
+  1  the replay diverges from the recording
+  2  bad usage, or the recording's header cannot be read or the scene rebuilt
+  3  the recording is truncated or corrupt: everything before the damage was replayed
+     (exported) and reported
+)";
+
+[[noreturn]] void usage_error(const std::string& what) {
+  std::cerr << "telegrasp-replay: " << what << "\n(see telegrasp-replay --help)\n";
+  std::exit(2);
+}
+
+// Progress on stderr for files big enough to take a while; at most once a second.
+class Progress {
+ public:
+  void operator()(const RecordingReader& r) {
+    if (r.file_size() < (8u << 20)) return;
+    const auto now = std::chrono::steady_clock::now();
+    const bool last = r.offset() >= r.file_size() || r.damage() || r.complete();
+    if (!last && now - last_ < std::chrono::seconds(1)) return;
+    last_ = now;
+    std::fprintf(stderr, "%stelegrasp-replay: %3.0f%% (%llu records)%s", tty_ ? "\r" : "",
+                 100.0 * static_cast<double>(r.offset()) / static_cast<double>(r.file_size()),
+                 static_cast<unsigned long long>(r.records()), tty_ && !last ? "" : "\n");
+  }
+
+ private:
+  bool tty_ = isatty(fileno(stderr));
+  std::chrono::steady_clock::time_point last_{};
+};
+
+nlohmann::json damage_json(const std::optional<RecordingDamage>& d) {
+  if (!d) return nullptr;
+  return {{"record", d->record}, {"byte", d->byte}, {"truncated", d->truncated}, {"message", d->message}};
+}
+
+void write_json(const std::string& path, const nlohmann::json& j) {
+  std::ofstream out(path);
+  out << j.dump(2) << "\n";
+  if (!out) {
+    std::cerr << "telegrasp-replay: " << path << ": cannot write the JSON result\n";
+    std::exit(2);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string recording, objects_dir, csv_path, json_path;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) usage_error(a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "-h" || a == "--help") {
+      std::cout << kUsage;
+      return 0;
+    } else if (a == "--objects") {
+      objects_dir = value();
+    } else if (a == "--export-contacts") {
+      csv_path = value();
+    } else if (a == "--json") {
+      json_path = value();
+    } else if (!a.empty() && a[0] == '-') {
+      usage_error("unknown option '" + a + "'");
+    } else if (recording.empty()) {
+      recording = a;
+    } else {
+      usage_error("one recording at a time (got '" + recording + "' and '" + a + "')");
+    }
+  }
+  if (recording.empty()) usage_error("no recording given");
+
+  Progress progress;
+  try {
+    if (!csv_path.empty()) {
+      const ContactExport e = export_contacts_csv(recording, csv_path);
+      std::cout << "exported " << e.rows << " contacts of " << e.events << " grasps to " << csv_path << "\n";
+      if (e.damage) std::cout << e.damage->message << "\n";
+      if (!json_path.empty())
+        write_json(json_path, {{"recording", recording}, {"csv", csv_path}, {"grasps", e.events}, {"contacts", e.rows},
+                               {"damage", damage_json(e.damage)}, {"exit_code", e.damage ? 3 : 0}});
+      return e.damage ? 3 : 0;
+    }
+    ReplayOptions options;
+    options.objects_dir = objects_dir;
+    options.progress = [&](const RecordingReader& r) { progress(r); };
+    const ReplayResult r = replay_recording(recording, options);
+    std::cout << r.summary();
+    if (!json_path.empty()) {
+      nlohmann::json d = nullptr;
+      if (r.divergence)
+        d = {{"record", r.divergence->record}, {"tick", r.divergence->tick}, {"type", r.divergence->type},
+             {"key", r.divergence->key}, {"field", r.divergence->field}, {"message", r.divergence->message}};
+      write_json(json_path, {{"recording", recording}, {"identical", !r.divergence}, {"records", r.records}, {"ticks", r.ticks},
+                             {"outputs_compared", r.outputs_compared}, {"statuses_skipped", r.statuses_skipped},
+                             {"divergence", d}, {"damage", damage_json(r.damage)}, {"warnings", r.warnings},
+                             {"exit_code", r.exit_code()}});
+    }
+    return r.exit_code();
+  } catch (const std::exception& e) {  // RecordingError: the header, the assets, the CSV file
+    std::cerr << "telegrasp-replay: " << e.what() << "\n";
+    return 2;
+  }
+}
