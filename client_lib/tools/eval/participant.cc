@@ -100,7 +100,7 @@ Options parse(int argc, char** argv) {
   return o;
 }
 
-enum class Stage { kSpawn, kAppear, kRun, kRelease };
+enum class Stage { kAppear, kRun, kRelease, kDone };
 
 class Participant {
  public:
@@ -126,6 +126,7 @@ class Participant {
     s.lockstep_tick = tick;
     client_.publish(s);
   }
+
   const std::vector<report::Record>& records() const { return records_; }
 
   // The first sample, answering nothing yet: it joins the hand and, after the first spawn
@@ -143,7 +144,7 @@ class Participant {
     const bool holding = o && o->held && o->holder.client_id == client_.client_id();
     if (holding && !rec_.grasped) wait_for_grasp_event();
     switch (stage_) {
-      case Stage::kSpawn:
+      case Stage::kDone:
         break;
       case Stage::kAppear:
         if (o) {
@@ -260,7 +261,7 @@ class Participant {
     input_.X_WorldPalm = home_palm_pose();
     ++index_;
     if (!done()) send_spawn(tick);
-    else stage_ = Stage::kSpawn;
+    else stage_ = Stage::kDone;
   }
 
 
@@ -271,7 +272,7 @@ class Participant {
   sim::OperatorSkill skill_;
   std::vector<std::string> objects_;
   std::size_t index_ = 0;
-  Stage stage_ = Stage::kSpawn;
+  Stage stage_ = Stage::kAppear;
   int object_id_ = -1;
   std::uint64_t start_tick_ = 0, spawn_tick_ = 0;
   double z0_ = 0, z_max_ = -1e9;
