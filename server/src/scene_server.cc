@@ -91,6 +91,12 @@ std::optional<sim::HandId> SceneServer::hand_id(const HandAddress& hand) const {
 
 void SceneServer::on_inputs(std::vector<InputSample> samples, std::int64_t now_ns) {
   (void)now_ns;
+  // Lockstep: a sample answering an older tick than the current one means its client missed the
+  // current SceneState (best effort); it is sent again, else both sides would wait for each other.
+  if (settings_.lockstep && std::any_of(samples.begin(), samples.end(), [&](const InputSample& s) {
+        return hands_.count(s.hand) && s.state.lockstep_tick() < world_->tick();
+      }))
+    sink_.publish(scene_state());
   for (InputSample& s : samples) {
     auto it = hands_.find(s.hand);
     if (it == hands_.end()) {

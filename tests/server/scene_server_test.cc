@@ -288,5 +288,70 @@ TEST(SceneServerResetTest, ResetRestoresTheConfiguredScene) {
   EXPECT_THROW(SceneServer(settings, standins(), rig("human_right"), rig("human_left"), mailbox, sink), std::runtime_error);
 }
 
+// Lockstep: the scene waits for every live hand's answer to the current tick and for the commands
+// its client sent before that answer; a frozen hand is not waited for; a client answering an
+// older tick (it missed the SceneState) gets the current SceneState again.
+struct LockstepTest : SceneServerTest {
+  void SetUp() override {
+    settings.lockstep = true;
+    SceneServerTest::SetUp();
+  }
+  void answer(const std::string& client, std::uint64_t tick, std::uint32_t commands_sent) {
+    msg::ControllerState s = to_state(client, 1, ++seq, sim::ControllerInput{});
+    s.lockstep_tick(tick);
+    s.commands_sent(commands_sent);
+    ASSERT_TRUE(mailbox.offer(s, kParticipant, now));
+    scene->on_inputs(mailbox.drain(), now);
+  }
+};
+
+TEST_F(LockstepTest, WaitsForEveryLiveHandAndItsCommands) {
+  EXPECT_FALSE(scene->lockstep_ready()) << "no hands: the scene waits";
+  answer("alice", 0, 1);
+  EXPECT_FALSE(scene->lockstep_ready()) << "alice's spawn command has not arrived yet";
+  msg::SceneCommand c;
+  c.client_id("alice");
+  c.command_id(1);
+  c.kind(msg::SCENE_SPAWN);
+  c.model("014_lemon");
+  c.on_table(true);
+  c.x(0.45);
+  EXPECT_EQ(scene->apply_command(c), "");
+  EXPECT_TRUE(scene->lockstep_ready());
+  EXPECT_TRUE(sink.skeletons.empty()) << "no late latching in lockstep";
+  tick();
+  EXPECT_FALSE(scene->lockstep_ready()) << "tick 1 is not answered yet";
+  {
+    ParticipantKey bob{2};
+    msg::ControllerState s = to_state("bob", 1, 1, sim::ControllerInput{});
+    s.lockstep_tick(1);
+    ASSERT_TRUE(mailbox.offer(s, bob, now));
+    scene->on_inputs(mailbox.drain(), now);
+  }
+  EXPECT_FALSE(scene->lockstep_ready()) << "bob answered, alice not";
+  answer("alice", 1, 1);
+  EXPECT_TRUE(scene->lockstep_ready());
+  // Alice goes silent: once frozen, only bob is waited for.
+  now += static_cast<std::int64_t>(1e9 * (settings.freeze_after_s + 0.01));
+  scene->tick(now);
+  ParticipantKey bob{2};
+  msg::ControllerState s = to_state("bob", 1, 2, sim::ControllerInput{});
+  s.lockstep_tick(2);
+  ASSERT_TRUE(mailbox.offer(s, bob, now));
+  scene->on_inputs(mailbox.drain(), now);
+  EXPECT_TRUE(scene->lockstep_ready());
+}
+
+TEST_F(LockstepTest, AnAnswerToAnOlderTickGetsTheSceneStateAgain) {
+  answer("alice", 0, 0);
+  tick();
+  ASSERT_EQ(sink.scenes.size(), 1u);
+  answer("alice", 0, 0);  // sent again: it never saw tick 1's SceneState
+  ASSERT_EQ(sink.scenes.size(), 2u);
+  EXPECT_EQ(sink.scenes[1].tick(), 1u);
+  answer("alice", 1, 0);
+  EXPECT_EQ(sink.scenes.size(), 2u);
+}
+
 }  // namespace
 }  // namespace telegrasp::server
