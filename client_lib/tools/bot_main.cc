@@ -1,6 +1,7 @@
 // telegrasp-bot: the scripted operator of sim/ driving one or two hands of a telegrasp server
 // over DDS. It grasps every object of the server's scene --trials times, records each grasp
 // from the server's GraspEvent, and prints the same table and JSON records as telegrasp-eval.
+#include "cli.h"
 #include "grasp_report.h"
 #include "telegrasp/client/client.h"
 #include "telegrasp/sim/hand_rig.h"
@@ -98,17 +99,6 @@ struct Options {
   std::exit(2);
 }
 
-long parse_int(const std::string& flag, const std::string& v, long lo, long hi) {
-  try {
-    std::size_t used = 0;
-    const long x = std::stol(v, &used);
-    if (used != v.size() || x < lo || x > hi) throw std::out_of_range("");
-    return x;
-  } catch (const std::exception&) {
-    usage_error(flag + " expects a whole number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
-  }
-}
-
 Options parse(int argc, char** argv) {
   Options o;
   for (int i = 1; i < argc; ++i) {
@@ -135,11 +125,11 @@ Options parse(int argc, char** argv) {
         usage_error("--skill expects perfect, experienced or inexperienced, got '" + o.skill + "'");
       }
     }
-    else if (a == "--trials") o.trials = static_cast<int>(parse_int(a, value(), 1, 10000));
-    else if (a == "--seed") o.seed = static_cast<std::uint64_t>(parse_int(a, value(), 0, 1L << 62));
+    else if (a == "--trials") o.trials = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 10000, usage_error));
+    else if (a == "--seed") o.seed = static_cast<std::uint64_t>(telegrasp::cli::parse_whole(a, value(), 0, 1L << 62, usage_error));
     else if (a == "--objects") o.objects_dir = value();
     else if (a == "--json") o.json_path = value();
-    else if (a == "--domain") o.domain = static_cast<int>(parse_int(a, value(), 0, 232));
+    else if (a == "--domain") o.domain = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 0, 232, usage_error));
     else if (a == "--profile") o.profile = value();
     else if (a == "--profiles") o.profiles_file = value();
     else if (a == "--timeout") {

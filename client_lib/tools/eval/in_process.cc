@@ -1,5 +1,6 @@
 // telegrasp-eval's in-process run: scripted grasps on objects with no network; reports success,
 // time and ND.
+#include "cli.h"
 #include "commands.h"
 #include "grasp_report.h"
 #include "grasp_svg.h"
@@ -80,17 +81,6 @@ struct Options {
   std::exit(2);
 }
 
-long parse_int(const std::string& flag, const std::string& v, long lo, long hi) {
-  try {
-    std::size_t used = 0;
-    const long x = std::stol(v, &used);
-    if (used != v.size() || x < lo || x > hi) throw std::out_of_range("");
-    return x;
-  } catch (const std::exception&) {
-    usage_error(flag + " expects a whole number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
-  }
-}
-
 Options parse(int argc, char** argv) {
   Options o;
   for (int i = 1; i < argc; ++i) {
@@ -111,9 +101,9 @@ Options parse(int argc, char** argv) {
       else if (m == "origin") o.selection = SelectionMetric::kOrigin;
       else usage_error("--selection expects surface or origin, got '" + m + "'");
     }
-    else if (a == "--trials") o.trials = static_cast<int>(parse_int(a, value(), 1, 100000));
-    else if (a == "--threads") o.threads = static_cast<int>(parse_int(a, value(), 1, 64));
-    else if (a == "--seed") o.seed = static_cast<std::uint64_t>(parse_int(a, value(), 0, 1L << 62));
+    else if (a == "--trials") o.trials = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 100000, usage_error));
+    else if (a == "--threads") o.threads = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 64, usage_error));
+    else if (a == "--seed") o.seed = static_cast<std::uint64_t>(telegrasp::cli::parse_whole(a, value(), 0, 1L << 62, usage_error));
     else if (a == "--mode") {
       const std::string m = value();
       if (m == "precise") o.modes = {ClosingMode::kPrecise};

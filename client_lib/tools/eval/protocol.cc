@@ -2,6 +2,7 @@
 // (mode, participant) pair is a job: a telegrasp-server in lockstep on its own DDS domain and a
 // participant process (participant.cc) driving it. Jobs run in parallel, as many as --jobs.
 // Records come from the GraspEvent topic, via the participants.
+#include "cli.h"
 #include "commands.h"
 #include "experiment_report.h"
 #include "grasp_report.h"
@@ -102,17 +103,6 @@ struct Options {
   std::exit(2);
 }
 
-long parse_long(const std::string& flag, const std::string& v, long lo, long hi) {
-  try {
-    std::size_t used = 0;
-    const long x = std::stol(v, &used);
-    if (used != v.size() || x < lo || x > hi) throw std::out_of_range("");
-    return x;
-  } catch (const std::exception&) {
-    usage_error(flag + " expects a whole number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
-  }
-}
-
 Options parse(int argc, char** argv) {
   Options o;
   o.jobs = std::max(1u, std::thread::hardware_concurrency());
@@ -129,10 +119,10 @@ Options parse(int argc, char** argv) {
       const std::string v = value();
       const auto comma = v.find(',');
       if (comma == std::string::npos) {
-        o.experienced = o.inexperienced = static_cast<int>(parse_long(a, v, 0, 100));
+        o.experienced = o.inexperienced = static_cast<int>(cli::parse_whole(a, v, 0, 100, usage_error));
       } else {
-        o.experienced = static_cast<int>(parse_long(a, v.substr(0, comma), 0, 100));
-        o.inexperienced = static_cast<int>(parse_long(a, v.substr(comma + 1), 0, 100));
+        o.experienced = static_cast<int>(cli::parse_whole(a, v.substr(0, comma), 0, 100, usage_error));
+        o.inexperienced = static_cast<int>(cli::parse_whole(a, v.substr(comma + 1), 0, 100, usage_error));
       }
       if (o.experienced + o.inexperienced == 0) usage_error("--participants: at least one participant");
     } else if (a == "--mode") {
@@ -142,14 +132,14 @@ Options parse(int argc, char** argv) {
       else usage_error("--mode expects precise, discrete or both, got '" + m + "'");
     }
     else if (a == "--objects") o.objects_dir = value();
-    else if (a == "--count") o.count = static_cast<int>(parse_long(a, value(), 1, 30));
-    else if (a == "--seed") o.seed = static_cast<std::uint64_t>(parse_long(a, value(), 0, 1L << 50));
-    else if (a == "--jobs") o.jobs = static_cast<int>(parse_long(a, value(), 1, 64));
+    else if (a == "--count") o.count = static_cast<int>(cli::parse_whole(a, value(), 1, 30, usage_error));
+    else if (a == "--seed") o.seed = static_cast<std::uint64_t>(cli::parse_whole(a, value(), 0, 1L << 50, usage_error));
+    else if (a == "--jobs") o.jobs = static_cast<int>(cli::parse_whole(a, value(), 1, 64, usage_error));
     else if (a == "--json") o.json_path = value();
     else if (a == "--csv") o.csv_path = value();
     else if (a == "--report") o.report_path = value();
     else if (a == "--questionnaire") o.questionnaire_path = value();
-    else if (a == "--domain") o.domain = static_cast<int>(parse_long(a, value(), 0, 232));
+    else if (a == "--domain") o.domain = static_cast<int>(cli::parse_whole(a, value(), 0, 232, usage_error));
     else if (a == "--profile") o.profile = value();
     else if (a == "--profiles") o.profiles_file = value();
     else if (a == "--keep-logs") o.logs_dir = value();
