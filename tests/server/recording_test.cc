@@ -2,6 +2,7 @@
 // Recorder (no DDS) replays with zero divergence; an altered input diverges where it should;
 // truncated and corrupted files keep exactly the records before the damage; the header carries
 // the settings; the contacts CSV holds every grasp contact; fill_standins completes a mesh folder.
+#include "controller_state.h"
 #include "recording.h"
 #include "replay.h"
 #include "scene_server.h"
@@ -55,18 +56,6 @@ void write_bytes(const std::string& path, const std::string& bytes) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   out << bytes;
   ASSERT_TRUE(out.good()) << path;
-}
-
-msg::ControllerState to_state(const std::string& client, std::uint8_t side, std::uint64_t seq, const sim::ControllerInput& in) {
-  msg::ControllerState s;
-  s.client_id(client);
-  s.hand_side(side);
-  s.sequence_number(seq);
-  s.client_time_ns(static_cast<std::int64_t>(seq) * 1000);
-  s.palm(to_msg(in.X_WorldPalm));
-  s.trigger(in.trigger);
-  s.tracking_valid(true);
-  return s;
 }
 
 // What the Recorder forwarded, to check the recording against.

@@ -1,6 +1,7 @@
 // Tests server/src/scene_server with a recording sink instead of DDS: hands joining, late
 // latching, grasp events once each, contacts consistent with the published object pose, silent
 // hands frozen then removed with their object dropped, scene commands and the default layout.
+#include "controller_state.h"
 #include "scene_server.h"
 
 #include "telegrasp/sim/scripted_operator.h"
@@ -38,18 +39,6 @@ std::vector<sim::ObjectModelPtr> standins() {
   std::vector<sim::ObjectModelPtr> out;
   for (const auto& o : sim::protocol_objects()) out.push_back(sim::make_standin_model(o));
   return out;
-}
-
-msg::ControllerState to_state(const std::string& client, std::uint8_t side, std::uint64_t seq, const sim::ControllerInput& in) {
-  msg::ControllerState s;
-  s.client_id(client);
-  s.hand_side(side);
-  s.sequence_number(seq);
-  s.client_time_ns(static_cast<std::int64_t>(seq) * 1000);
-  s.palm(to_msg(in.X_WorldPalm));
-  s.trigger(in.trigger);
-  s.tracking_valid(true);
-  return s;
 }
 
 // A server with an empty scene, driven by hand with explicit clock values.

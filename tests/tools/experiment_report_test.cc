@@ -348,5 +348,26 @@ TEST(PaperResultsTest, BadNumberNamesFileLineAndColumn) {
   EXPECT_THROW(load_paper_results("/nonexistent/paper.csv"), std::runtime_error);
 }
 
+// record_from_json reads back exactly what record_json wrote, protocol fields included.
+TEST(GraspRecordJsonTest, RoundTrips) {
+  Record r;
+  r.object = "014_lemon";
+  r.mode = "precise";
+  r.speed_scale = 2;
+  r.trial = 3;
+  r.attempts = 2;
+  r.grasped = r.held_after_lift = true;
+  r.time_to_grasp_s = 1.25;
+  r.hand_error_mm = r.grasp_tick_hand_error_mm = 7.5;
+  r.capsules = r.grasp_tick_capsules = {{"index_dist", true, true, -0.25, 0.01}, {"thumb_mid", false, false, 0, 3.5}};
+  r.group = "experienced";
+  r.participant = 4;
+  r.contacts = {{"palm", {0.1, 0.2, 0.3}, {0, 0, 1}, {-0.01, 0.02, 0.03}, {1, 0, 0}}};
+  const Record back = record_from_json(record_json(r));
+  EXPECT_EQ(record_json(back), record_json(r));
+  EXPECT_EQ(back.participant, 4);
+  EXPECT_EQ(back.contacts.at(0).p_object, Eigen::Vector3d(-0.01, 0.02, 0.03));
+}
+
 }  // namespace
 }  // namespace telegrasp::report

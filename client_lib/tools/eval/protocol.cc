@@ -239,37 +239,6 @@ void draw_progress(int done, int total, double seconds, int running) {
   std::fflush(stderr);
 }
 
-report::Record record_from_json(const json& j) {
-  report::Record r;
-  r.object = j.at("object").get<std::string>();
-  r.mode = j.at("mode").is_null() ? "" : j.at("mode").get<std::string>();
-  r.trial = j.at("trial").get<int>();
-  r.attempts = j.at("attempts").get<int>();
-  r.grasped = j.at("grasped").get<bool>();
-  r.held_after_lift = j.at("held_after_lift").get<bool>();
-  if (r.grasped) {
-    r.time_to_grasp_s = j.at("time_to_grasp_s").get<double>();
-    r.hand_error_mm = j.at("hand_error_mm").get<double>();
-    r.grasp_tick_hand_error_mm = j.at("grasp_tick").at("hand_error_mm").get<double>();
-  }
-  auto capsules = [](const json& arr) {
-    std::vector<report::CapsuleRecord> out;
-    for (const json& c : arr)
-      out.push_back({c.at("phalanx").get<std::string>(), c.at("hit").get<bool>(), c.at("blocked").get<bool>(),
-                     c.at("nd_mm").is_null() ? 0.0 : c.at("nd_mm").get<double>(), c.at("signed_distance_mm").get<double>()});
-    return out;
-  };
-  r.capsules = capsules(j.at("capsules"));
-  r.grasp_tick_capsules = capsules(j.at("grasp_tick").at("capsules"));
-  r.group = j.at("group").get<std::string>();
-  r.participant = j.at("participant").get<int>();
-  auto vec = [](const json& v) { return Eigen::Vector3d(v.at(0).get<double>(), v.at(1).get<double>(), v.at(2).get<double>()); };
-  for (const json& c : j.at("contacts"))
-    r.contacts.push_back({c.at("phalanx").get<std::string>(), vec(c.at("p_world")), vec(c.at("n_world")), vec(c.at("p_object")),
-                          vec(c.at("n_object"))});
-  return r;
-}
-
 // The three slowest and the three least exact objects of each mode, from aggregate_json.
 void print_worst_objects(const json& aggregates) {
   for (const json& w : aggregates.value("worst_objects", json::array())) {
@@ -398,7 +367,7 @@ int run_protocol(int argc, char** argv) {
     }
     try {
       std::ifstream in(work / (name + ".json"));
-      for (const json& r : json::parse(in)) j.records.push_back(record_from_json(r));
+      for (const json& r : json::parse(in)) j.records.push_back(report::record_from_json(r));
     } catch (const std::exception& e) {
       j.failed = true;
       j.error = "participant " + std::to_string(j.participant) + " (" + j.mode + "): unreadable records: " + e.what();

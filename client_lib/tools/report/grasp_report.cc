@@ -120,4 +120,37 @@ json record_json(const Record& r) {
   return out;
 }
 
+Record record_from_json(const json& j) {
+  Record r;
+  r.object = j.at("object").get<std::string>();
+  r.mode = j.at("mode").is_null() ? "" : j.at("mode").get<std::string>();
+  if (!r.mode.empty()) r.speed_scale = j.at("speed_scale").get<double>();
+  r.trial = j.at("trial").get<int>();
+  r.attempts = j.at("attempts").get<int>();
+  r.grasped = j.at("grasped").get<bool>();
+  r.held_after_lift = j.at("held_after_lift").get<bool>();
+  if (r.grasped) {
+    r.time_to_grasp_s = j.at("time_to_grasp_s").get<double>();
+    r.hand_error_mm = j.at("hand_error_mm").get<double>();
+    r.grasp_tick_hand_error_mm = j.at("grasp_tick").at("hand_error_mm").get<double>();
+  }
+  auto capsules = [](const json& arr) {
+    std::vector<CapsuleRecord> out;
+    for (const json& c : arr)
+      out.push_back({c.at("phalanx").get<std::string>(), c.at("hit").get<bool>(), c.at("blocked").get<bool>(),
+                     c.at("nd_mm").is_null() ? 0.0 : c.at("nd_mm").get<double>(), c.at("signed_distance_mm").get<double>()});
+    return out;
+  };
+  r.capsules = capsules(j.at("capsules"));
+  r.grasp_tick_capsules = capsules(j.at("grasp_tick").at("capsules"));
+  if (!j.contains("group")) return r;  // not a protocol record
+  r.group = j.at("group").get<std::string>();
+  r.participant = j.at("participant").get<int>();
+  auto vec = [](const json& v) { return Eigen::Vector3d(v.at(0).get<double>(), v.at(1).get<double>(), v.at(2).get<double>()); };
+  for (const json& c : j.at("contacts"))
+    r.contacts.push_back({c.at("phalanx").get<std::string>(), vec(c.at("p_world")), vec(c.at("n_world")), vec(c.at("p_object")),
+                          vec(c.at("n_object"))});
+  return r;
+}
+
 }  // namespace telegrasp::report

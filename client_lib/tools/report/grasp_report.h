@@ -69,4 +69,8 @@ void print_object_table(const std::vector<ObjectRows>& objects);
 /// protocol runs.
 nlohmann::json record_json(const Record& record);
 
+/// The inverse of record_json (protocol runs read their participants' records back with it).
+/// Throws nlohmann::json::exception naming a missing or mistyped key.
+Record record_from_json(const nlohmann::json& j);
+
 }  // namespace telegrasp::report
