@@ -2,6 +2,7 @@
 #include "telegrasp/sim/scripted_operator.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -34,34 +35,25 @@ Eigen::Isometry3d palm_frame(const Eigen::Vector3d& x, const Eigen::Vector3d& z)
   return X;
 }
 
-struct Trial {
-  int blocked = 0;
-  bool grasped = false;
-  bool penetrating = false;  // a blocked capsule ended inside the object (the hand started in it)
-  bool below_table = false;  // a capsule ended under the table top
-  bool opposed = false;      // two contact normals oppose (n_i . n_j < -0.5): the object is pinched, not pressed
-  double hand_error_mm = 0;
-};
+}  // namespace
 
-// Closes the hand at a fixed palm pose on a static object and reports what it grasped.
-Trial close_offline(const std::shared_ptr<const HandRig>& rig, const GraspSettings& settings,
-                    const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject,
-                    const Eigen::Isometry3d& X_WorldPalm, double dt, double table_height) {
-  HandController hand(rig, settings);
+OfflineClosing close_offline(const std::shared_ptr<const HandRig>& rig, const GraspSettings& settings,
+                             const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject,
+                             const Eigen::Isometry3d& X_WorldPalm, double dt, double table_height) {
+  OfflineClosing out{HandController(rig, settings)};
+  HandController& hand = out.hand;
   const ObjectView view{ObjectId(0), X_WorldObject, &model};
   ControllerInput input;
   input.X_WorldPalm = X_WorldPalm;
   const int ticks = static_cast<int>(std::ceil(0.5 / dt));
-  Trial out;
   for (int i = 0; i <= ticks; ++i) {
     input.trigger = std::min(1.0, static_cast<double>(i) / (0.7 * ticks));
     hand.tick(input, dt, {&view, 1});
     if (hand.state().grasped.valid()) out.grasped = true;
   }
   for (std::uint8_t b : hand.state().blocked) out.blocked += b;
-  const GraspMetrics m = hand.measure(view);
-  out.hand_error_mm = m.hand_error_mm;
-  for (const CapsuleMetric& c : m.capsules) out.penetrating |= c.blocked && c.signed_distance < -0.1e-3;
+  out.metrics = hand.measure(view);
+  for (const CapsuleMetric& c : out.metrics.capsules) out.penetrating |= c.blocked && c.signed_distance < -0.1e-3;
   const std::vector<Contact> contacts = hand.contacts();
   for (std::size_t i = 0; i < contacts.size(); ++i)
     for (std::size_t j = i + 1; j < contacts.size(); ++j) out.opposed |= contacts[i].n_World.dot(contacts[j].n_World) < -0.5;
@@ -74,7 +66,81 @@ Trial close_offline(const std::shared_ptr<const HandRig>& rig, const GraspSettin
   return out;
 }
 
+namespace {
+
+// Mean |ND| in mm over the capsules whose sweep hit, and their number.
+std::pair<double, int> nd_mean_mm(const GraspMetrics& m) {
+  double sum = 0;
+  int hits = 0;
+  for (const CapsuleMetric& c : m.capsules)
+    if (c.hit) { sum += 1000.0 * std::abs(c.nd); ++hits; }
+  return {hits > 0 ? sum / hits : 0.0, hits};
+}
+
+// The palm box (centre and corners) lies outside the object.
+bool palm_clear(const HandRig& rig, const ObjectModel& model, const Eigen::Isometry3d& X_ObjectPalm) {
+  const Eigen::Vector3d& h = rig.palm_half_extent();
+  for (int corner = 0; corner < 9; ++corner) {
+    const Eigen::Vector3d p = corner == 8 ? Eigen::Vector3d::Zero()
+        : Eigen::Vector3d(corner & 1 ? h.x() : -h.x(), corner & 2 ? h.y() : -h.y(), corner & 4 ? h.z() : -h.z());
+    if (model.distance.signed_distance(X_ObjectPalm * p) < 0) return false;
+  }
+  return true;
+}
+
 }  // namespace
+
+NdSearchResult nd_pose_search(const std::shared_ptr<const HandRig>& rig, const ObjectModel& model,
+                              const Eigen::Isometry3d& X_WorldObject, const NdSearchSettings& search, double dt,
+                              double table_height) {
+  std::mt19937_64 rng(search.seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  // Draws one at a time: the order of arguments' evaluation is the compiler's choice.
+  auto draws = [&] {
+    std::array<double, 7> d;
+    for (double& x : d) x = n(rng);
+    return d;
+  };
+  const GraspSettings precise;
+  const Eigen::Vector3d p_WorldCenter = X_WorldObject * (0.5 * (model.p_ObjectMin + model.p_ObjectMax));
+  NdSearchResult out;
+  // Closes at X_WorldPalm and keeps the grasp if clean and better; false if the hand is in the object.
+  auto try_pose = [&](const Eigen::Isometry3d& X_WorldPalm) {
+    ++out.poses_tried;
+    if (!palm_clear(*rig, model, X_WorldObject.inverse() * X_WorldPalm)) return false;
+    OfflineClosing c = close_offline(rig, precise, model, X_WorldObject, X_WorldPalm, dt, table_height);
+    if (c.penetrating) return false;
+    const auto [mean, hits] = nd_mean_mm(c.metrics);
+    if (c.grasped && !c.below_table && hits >= search.min_hits) {
+      ++out.clean_grasps;
+      if (!out.best || mean < out.nd_mean_mm) {
+        out.nd_mean_mm = mean;
+        out.best = std::move(c);
+      }
+    }
+    return true;
+  };
+  for (int i = 0; i < search.random_poses; ++i) {
+    const auto d = draws();
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.linear() = Eigen::Quaterniond(d[0], d[1], d[2], d[3]).normalized().toRotationMatrix();
+    X.translation() = p_WorldCenter + 0.02 * Eigen::Vector3d(d[4], d[5], d[6]) - X.linear() * rig->p_PalmGraspCenter();
+    for (double back = 0; back <= 0.12; back += 0.005) {
+      Eigen::Isometry3d Y = X;
+      Y.translation() += back * X.linear().col(2);
+      if (try_pose(Y)) break;
+    }
+  }
+  for (int i = 0; i < search.refinements && out.best; ++i) {
+    const auto d = draws();
+    Eigen::Isometry3d X = out.best->hand.state().X_WorldPalm;
+    X.translation() += 0.002 * Eigen::Vector3d(d[0], d[1], d[2]);
+    const Eigen::Vector3d axis(d[3], d[4], d[5]);
+    if (axis.norm() > 1e-9) X.linear() = Eigen::AngleAxisd(2.0 * kDeg * d[6], axis.normalized()) * X.linear();
+    try_pose(X);
+  }
+  return out;
+}
 
 OperatorSkill skill_profile(const std::string& name) {
   if (name == "perfect") return {"perfect", 0.0, 0.0, 0.8, 0.0, 0.25};
@@ -140,14 +206,14 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
   GraspPlan best = candidates.front();
   double best_score = -1e300;
   for (GraspPlan& plan : candidates) {
-    const Trial t = close_offline(rig, planning, model, X_WorldObject, plan.X_WorldPalm, dt, table_height);
+    const OfflineClosing t = close_offline(rig, planning, model, X_WorldObject, plan.X_WorldPalm, dt, table_height);
     plan.predicted_grasp = t.grasped && !t.penetrating;
     plan.predicted_blocked = t.blocked;
     // A clean grasp first (no capsule in the object), then opposing contacts (a pinch or wrap
     // rather than a press), then clear of the table, then the most capsules in contact, then
     // the smallest HandError.
     const double score = (plan.predicted_grasp ? 1e6 : 0) + (t.opposed ? 1e5 : 0) + (t.penetrating ? 0 : 5e4) +
-                         (t.below_table ? 0 : 1e4) + 100.0 * t.blocked - t.hand_error_mm;
+                         (t.below_table ? 0 : 1e4) + 100.0 * t.blocked - t.metrics.hand_error_mm;
     if (score > best_score) { best_score = score; best = plan; }
   }
   return best;

@@ -118,5 +118,65 @@ void fast_close_on(const ObjectModelPtr& knife) {
   EXPECT_GE(blocked, 2);
 }
 
+NdSearchResult nd_search(const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject, int refinements, int min_hits = 4) {
+  NdSearchSettings search;
+  search.random_poses = 40;
+  search.refinements = refinements;
+  search.min_hits = min_hits;
+  search.seed = 11;
+  return nd_pose_search(rig("human_right"), model, X_WorldObject, search, 1.0 / 90);
+}
+
+// The kept grasp meets every condition of a clean grasp, and its reported mean |ND| is the one
+// measured on it.
+TEST(ScriptedOperatorTest, NdPoseSearchKeepsACleanGrasp) {
+  auto model = standin("004_sugar_box");
+  const Eigen::Isometry3d X_WorldObject = World::resting_pose(*model, 0.45, 0.0, 0.3);
+  const NdSearchResult r = nd_search(*model, X_WorldObject, 20);
+  ASSERT_TRUE(r.best.has_value());
+  EXPECT_GE(r.poses_tried, 40);
+  EXPECT_LE(r.clean_grasps, r.poses_tried);
+  EXPECT_TRUE(r.best->grasped);
+  EXPECT_FALSE(r.best->below_table);
+  const HandController& hand = r.best->hand;
+  const ObjectView view{ObjectId(0), X_WorldObject, model.get()};
+  const GraspMetrics m = hand.measure(view);
+  double sum = 0;
+  int hits = 0;
+  for (const CapsuleMetric& c : m.capsules) {
+    if (c.blocked) {
+      EXPECT_GE(c.signed_distance, -0.1e-3);
+    }
+    if (c.hit) { sum += 1000 * std::abs(c.nd); ++hits; }
+  }
+  EXPECT_GE(hits, 4);
+  EXPECT_NEAR(r.nd_mean_mm, sum / hits, 1e-9);
+  // The palm's centre is outside the box.
+  EXPECT_GT(model->distance.signed_distance(X_WorldObject.inverse() * hand.state().X_WorldPalm.translation()), 0);
+}
+
+// Refinement starts from the random phase's best (the same draws come first) and keeps only
+// improvements; equal seeds give bit-identical results.
+TEST(ScriptedOperatorTest, NdPoseSearchRefinesAndRepeats) {
+  auto model = standin("013_apple");
+  const Eigen::Isometry3d X_WorldObject = World::resting_pose(*model, 0.45, 0.0, 0.3);
+  const NdSearchResult coarse = nd_search(*model, X_WorldObject, 0);
+  const NdSearchResult fine = nd_search(*model, X_WorldObject, 30);
+  const NdSearchResult again = nd_search(*model, X_WorldObject, 30);
+  ASSERT_TRUE(coarse.best && fine.best && again.best);
+  EXPECT_LE(fine.nd_mean_mm, coarse.nd_mean_mm);
+  EXPECT_EQ(fine.poses_tried, coarse.poses_tried + 30);
+  EXPECT_EQ(fine.nd_mean_mm, again.nd_mean_mm);
+  EXPECT_TRUE(fine.best->hand.state().X_WorldPalm.matrix() == again.best->hand.state().X_WorldPalm.matrix());
+}
+
+// Asking for more hits than the rig has capsules finds nothing, and says so.
+TEST(ScriptedOperatorTest, NdPoseSearchWithNoCleanGraspKeepsNothing) {
+  auto model = standin("013_apple");
+  const NdSearchResult r = nd_search(*model, World::resting_pose(*model, 0.45, 0.0, 0.3), 5, 11);
+  EXPECT_FALSE(r.best.has_value());
+  EXPECT_EQ(r.clean_grasps, 0);
+}
+
 }  // namespace
 }  // namespace telegrasp::sim

@@ -14,4 +14,8 @@ int run_participant(int argc, char** argv);
 /// (questionnaire_main.cc).
 int run_questionnaire(int argc, char** argv);
 
+/// telegrasp-eval nd-bound [options]: the lowest ND an oracle pose search finds for a rig
+/// (nd_bound.cc).
+int run_nd_bound(int argc, char** argv);
+
 }  // namespace telegrasp::eval

@@ -65,6 +65,8 @@ Other commands:
                                                    over DDS, with reports (--protocol paper --help)
   telegrasp-eval questionnaire FILE.csv [options]  scores the paper's questionnaire
                                                    (questionnaire --help)
+  telegrasp-eval nd-bound [options]                the lowest ND an oracle pose search finds
+                                                   for the rig on each object (nd-bound --help)
 )";
 
 struct Options {

@@ -5,7 +5,6 @@
 #include <cstdio>
 
 namespace telegrasp::report {
-namespace {
 
 using nlohmann::json;
 
@@ -17,7 +16,6 @@ json capsule_json(const std::vector<CapsuleRecord>& capsules) {
   return out;
 }
 
-// Linear interpolation between the closest ranks; NaN for no values.
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return std::nan("");
   std::sort(v.begin(), v.end());
@@ -27,7 +25,6 @@ double percentile(std::vector<double> v, double p) {
   return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
 }
 
-}  // namespace
 
 std::vector<CapsuleRecord> capsule_records(const sim::GraspMetrics& metrics, const sim::HandRig& rig) {
   std::vector<CapsuleRecord> out;

@@ -47,8 +47,15 @@ struct Record {
 /// The capsule metrics of a grasp, named by the rig's phalanges, in mm.
 std::vector<CapsuleRecord> capsule_records(const sim::GraspMetrics& metrics, const sim::HandRig& rig);
 
+/// The capsules as a JSON array of {"phalanx","hit","blocked","nd_mm" (null without hit),"signed_distance_mm"}.
+nlohmann::json capsule_json(const std::vector<CapsuleRecord>& capsules);
+
 /// Success counts and metric statistics over `records` (keys as in telegrasp-eval's JSON summary).
 nlohmann::json summarize(const std::vector<const Record*>& records);
+
+/// The p-quantile of `v` (p in [0, 1]), interpolated linearly between the closest ranks; NaN
+/// for no values.
+double percentile(std::vector<double> v, double p);
 
 /// `v` with `prec` decimals, "-" if not finite.
 std::string fmt(double v, int prec = 2);

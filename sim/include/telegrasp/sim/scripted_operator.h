@@ -41,6 +41,48 @@ struct GraspPlan {
   bool predicted_grasp = false;              ///< The offline closing grasped, with no penetration.
 };
 
+/// What closing the hand fully at a fixed palm pose on a static object gave (no physics): the
+/// trigger ramps 0 -> 1 over 0.35 s and stays closed for 0.15 s more.
+struct OfflineClosing {
+  HandController hand;         ///< The hand at the end of the close.
+  bool grasped = false;        ///< The grasp rule turned true during the close.
+  int blocked = 0;             ///< Capsules blocked at the end.
+  bool penetrating = false;    ///< A blocked capsule ended below -0.1 mm (the hand started in the object).
+  bool below_table = false;    ///< A capsule ended under the table top.
+  bool opposed = false;        ///< Two contact normals oppose (n_i . n_j < -0.5): a pinch or wrap, not a press.
+  GraspMetrics metrics{};      ///< ND and exact signed distances at the end.
+};
+OfflineClosing close_offline(const std::shared_ptr<const HandRig>& rig, const GraspSettings& settings,
+                             const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject,
+                             const Eigen::Isometry3d& X_WorldPalm, double dt, double table_height = 0.0);
+
+/// A search for the palm pose whose offline closing gives the lowest ND (see nd_pose_search).
+struct NdSearchSettings {
+  int random_poses = 400;  ///< Random orientations and grasp-centre positions around the object.
+  int refinements = 300;   ///< Small moves (2 mm, 2 deg) from the best pose, kept when better.
+  int min_hits = 5;        ///< Capsules whose ND sweep must hit for a grasp to count.
+  std::uint64_t seed = 1;
+};
+
+/// The pose an ND search kept.
+struct NdSearchResult {
+  std::optional<OfflineClosing> best;  ///< Empty if no clean grasp was found.
+  double nd_mean_mm = 0;               ///< Mean |ND| over the capsules of `best` whose sweep hit.
+  int poses_tried = 0, clean_grasps = 0;
+};
+
+/// An oracle operator: tries palm poses all around the object (random orientations, grasp centre
+/// within ~2 cm of the object's centre, each backed off along the back of the hand until the hand
+/// is clear of the object), then refines the best by small random moves, closing the hand offline
+/// with precise closing at each. Keeps the clean grasp with the lowest mean |ND|: the grasp rule
+/// holds, no blocked capsule ends below -0.1 mm, the palm box is outside the object, no capsule
+/// under the table top at `table_height`, and at least `min_hits` capsules whose sweep hits.
+/// A random search: its result is an upper estimate of the lowest ND the rig can reach on the
+/// object, whoever operates it. Deterministic for a given seed.
+NdSearchResult nd_pose_search(const std::shared_ptr<const HandRig>& rig, const ObjectModel& model,
+                              const Eigen::Isometry3d& X_WorldObject, const NdSearchSettings& search, double dt,
+                              double table_height = 0.0);
+
 /// Plans a grasp by closing the hand offline (no physics) at candidate poses around the object
 /// (top and side approaches, both axes, offsets, heights) with precise closing, and keeping the
 /// best: a grasp with no capsule ending inside the object, then opposing contact normals (a pinch

@@ -1,0 +1,200 @@
+// telegrasp-eval nd-bound: how low can ND go for this rig on these objects, whoever operates it?
+// An oracle searches palm poses around each object (random, then refined locally), closes the
+// hand at each with precise closing, and keeps the clean grasp with the lowest mean |ND|.
+#include "cli.h"
+#include "commands.h"
+#include "grasp_report.h"
+#include "grasp_svg.h"
+#include "telegrasp/sim/hand_rig.h"
+#include "telegrasp/sim/object_model.h"
+#include "telegrasp/sim/scripted_operator.h"
+#include "telegrasp/sim/standin_objects.h"
+#include "telegrasp/sim/world.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <mutex>
+#include <numbers>
+#include <optional>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace {
+
+using namespace telegrasp::sim;
+using nlohmann::json;
+using telegrasp::report::capsule_json;
+using telegrasp::report::capsule_records;
+using telegrasp::report::fmt;
+using telegrasp::report::percentile;
+
+constexpr const char* kUsage = R"(Usage: telegrasp-eval nd-bound [options]
+
+A lower bound on the ND error metric for a rig, whoever operates it. For each object an
+oracle tries palm poses all around it (random orientations and positions, each backed off
+along the palm normal until the hand is clear of the object, then the best refined by small
+moves), closes the hand fully at each with precise closing, and keeps the clean grasp with
+the lowest mean |ND|. Clean: the grasp rule holds, no blocked capsule ends below -0.1 mm,
+the palm is outside the object, no finger under the table, at least --min-hits capsules
+whose ND sweep hits. It prints per object the kept grasp's |ND| statistics and, over all
+kept grasps, the median and 95th percentile of |ND|: the numbers a scripted or human
+operator's grasps are measured by. A random search finds an upper estimate of that bound.
+
+Options:
+  --objects DIR    every mesh file in DIR; default: the 30 built-in stand-ins
+  --rig FILE       hand rig text file (default: built-in human_right)
+  --poses N        random poses per object (default 400)
+  --refine N       local refinement steps from the best pose (default 300)
+  --min-hits K     capsules whose sweep must hit (default 5)
+  --seed S         random seed (default 1)
+  --json FILE      write each object's kept grasp (capsules as in telegrasp-eval) and the summary
+  --svg DIR        draw each object's kept grasp as DIR/<object>_nd_bound.svg
+  --threads N      worker threads (default 2)
+  -h, --help       this text
+)";
+
+struct Options {
+  std::string objects_dir, rig_path, json_path, svg_dir;
+  int poses = 400, refine = 300, min_hits = 5, threads = 2;
+  std::uint64_t seed = 1;
+};
+
+[[noreturn]] void usage_error(const std::string& what) {
+  std::cerr << "telegrasp-eval nd-bound: " << what << "\n(see telegrasp-eval nd-bound --help)\n";
+  std::exit(2);
+}
+
+Options parse(int argc, char** argv) {
+  using telegrasp::cli::parse_whole;
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) usage_error(a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "-h" || a == "--help") { std::cout << kUsage; std::exit(0); }
+    else if (a == "--objects") o.objects_dir = value();
+    else if (a == "--rig") o.rig_path = value();
+    else if (a == "--json") o.json_path = value();
+    else if (a == "--svg") o.svg_dir = value();
+    else if (a == "--poses") o.poses = static_cast<int>(parse_whole(a, value(), 1, 1000000, usage_error));
+    else if (a == "--refine") o.refine = static_cast<int>(parse_whole(a, value(), 0, 1000000, usage_error));
+    else if (a == "--min-hits") o.min_hits = static_cast<int>(parse_whole(a, value(), 1, 1000, usage_error));
+    else if (a == "--threads") o.threads = static_cast<int>(parse_whole(a, value(), 1, 64, usage_error));
+    else if (a == "--seed") o.seed = static_cast<std::uint64_t>(parse_whole(a, value(), 0, 1L << 62, usage_error));
+    else usage_error("unknown option '" + a + "'");
+  }
+  return o;
+}
+
+constexpr double kDt = 1.0 / 90.0;
+
+}  // namespace
+
+int telegrasp::eval::run_nd_bound(int argc, char** argv) {
+  const Options opt = parse(argc, argv);
+  std::shared_ptr<const HandRig> rig;
+  std::vector<ObjectModelPtr> models;
+  try {
+    rig = std::make_shared<const HandRig>(HandRig::load(opt.rig_path.empty() ? HandRig::builtin_path("human_right") : opt.rig_path));
+    if (opt.objects_dir.empty()) {
+      for (const auto& o : protocol_objects()) models.push_back(make_standin_model(o));
+    } else {
+      std::cerr << "loading meshes from " << opt.objects_dir << " ...\n";
+      models = load_object_dir(opt.objects_dir);
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "telegrasp-eval nd-bound: " << e.what() << "\n";
+    return 1;
+  }
+  std::ofstream json_out;
+  if (!opt.json_path.empty()) {
+    json_out.open(opt.json_path);
+    if (!json_out) {
+      std::cerr << "telegrasp-eval nd-bound: cannot write --json file " << opt.json_path << "\n";
+      return 1;
+    }
+  }
+  if (!opt.svg_dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(opt.svg_dir, ec);
+    if (!std::filesystem::is_directory(opt.svg_dir)) {
+      std::cerr << "telegrasp-eval nd-bound: cannot create --svg folder " << opt.svg_dir << "\n";
+      return 1;
+    }
+  }
+
+  NdSearchSettings search;
+  search.random_poses = opt.poses;
+  search.refinements = opt.refine;
+  search.min_hits = opt.min_hits;
+  std::vector<NdSearchResult> kept(models.size());
+  std::vector<Eigen::Isometry3d> poses(models.size());
+  std::atomic<std::size_t> next{0}, finished{0};
+  std::mutex log_mutex;
+  auto worker = [&] {
+    for (std::size_t j = next++; j < models.size(); j = next++) {
+      poses[j] = World::resting_pose(*models[j], 0.45, 0.0, 0.0);
+      NdSearchSettings s = search;
+      s.seed = opt.seed * 1000003ULL + j;
+      kept[j] = nd_pose_search(rig, *models[j], poses[j], s, kDt);
+      std::lock_guard lock(log_mutex);
+      std::cerr << "[" << ++finished << "/" << models.size() << "] " << models[j]->name << ": " << kept[j].clean_grasps
+                << " clean grasps of " << kept[j].poses_tried << " poses\n";
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int i = 0; i < opt.threads; ++i) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+
+  std::printf("\n== nd-bound: rig %s, %d random poses + %d refinements per object, >= %d hits ==\n", rig->name().c_str(),
+              opt.poses, opt.refine, opt.min_hits);
+  std::printf("%-28s %7s %7s %9s %9s %9s %5s %8s\n", "object", "tried", "clean", "|ND|mean", "|ND|med", "|ND|max",
+              "hits", "blocked");
+  json objects = json::array();
+  std::vector<double> pooled;
+  for (std::size_t j = 0; j < models.size(); ++j) {
+    const NdSearchResult& k = kept[j];
+    json o = {{"object", models[j]->name}, {"poses_tried", k.poses_tried}, {"clean_grasps", k.clean_grasps}};
+    if (!k.best) {
+      std::printf("%-28s %7d %7d %9s\n", models[j]->name.c_str(), k.poses_tried, k.clean_grasps, "no clean grasp");
+      o["kept"] = nullptr;
+      objects.push_back(o);
+      continue;
+    }
+    std::vector<double> v;
+    for (const CapsuleMetric& c : k.best->metrics.capsules)
+      if (c.hit) v.push_back(1000.0 * std::abs(c.nd));
+    pooled.insert(pooled.end(), v.begin(), v.end());
+    std::printf("%-28s %7d %7d %9s %9s %9s %5zu %8d\n", models[j]->name.c_str(), k.poses_tried, k.clean_grasps,
+                fmt(k.nd_mean_mm, 3).c_str(), fmt(percentile(v, 0.5), 3).c_str(), fmt(percentile(v, 1.0), 3).c_str(),
+                v.size(), k.best->blocked);
+    const Eigen::Isometry3d X_ObjectPalm = poses[j].inverse() * k.best->hand.state().X_WorldPalm;
+    const Eigen::Quaterniond q(X_ObjectPalm.linear());
+    o["kept"] = {{"nd_mean_mm", k.nd_mean_mm}, {"hand_error_mm", k.best->metrics.hand_error_mm},
+                 {"blocked", k.best->blocked}, {"capsules", capsule_json(capsule_records(k.best->metrics, *rig))},
+                 {"p_object_palm", {X_ObjectPalm.translation().x(), X_ObjectPalm.translation().y(), X_ObjectPalm.translation().z()}},
+                 {"q_object_palm_wxyz", {q.w(), q.x(), q.y(), q.z()}}};
+    objects.push_back(o);
+    if (!opt.svg_dir.empty()) {
+      const ObjectView view{ObjectId(0), poses[j], models[j].get()};
+      const std::string title = models[j]->name + ", nd-bound (oracle pose): mean |ND| " + fmt(k.nd_mean_mm, 2) + " mm";
+      std::ofstream(opt.svg_dir + "/" + models[j]->name + "_nd_bound.svg") << render_svg(snapshot(k.best->hand, view, title));
+    }
+  }
+  const json summary = {{"objects", models.size()}, {"capsules_hit", pooled.size()},
+                        {"nd_abs_median_mm", percentile(pooled, 0.5)}, {"nd_abs_p95_mm", percentile(pooled, 0.95)}};
+  std::printf("over the kept grasps: %zu capsules hit, |ND| median %s mm, 95th percentile %s mm\n", pooled.size(),
+              fmt(percentile(pooled, 0.5), 3).c_str(), fmt(percentile(pooled, 0.95), 3).c_str());
+  if (!opt.json_path.empty()) json_out << json{{"objects", objects}, {"summary", summary}}.dump(1) << "\n";
+  return 0;
+}
