@@ -29,17 +29,6 @@ double distance_to_bounds(const ObjectModel& model, const Eigen::Vector3d& p) {
 // for their closest point need look no farther than this beyond the radius.
 constexpr double kTouchReach = 1e-3;
 
-// Exact capsule signed distance; for a capsule known to touch, a bounded search finds the closest
-// point fast, and only a capsule overlapping the solid needs the full computation.
-double capsule_signed_distance(const MeshDistance& mesh, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                               double radius, bool touching, std::uint32_t hint) {
-  if (touching) {
-    const SegmentQuery q = mesh.closest_to_segment(a, b, radius + kTouchReach, hint);
-    if (q.found && q.distance > 0 && (q.point_on_segment - q.point_on_mesh).dot(q.normal) > 0) return q.distance - radius;
-  }
-  return mesh.capsule_signed_distance(a, b, radius, hint);
-}
-
 }  // namespace
 
 std::string validate_input(const ControllerInput& input, const HandRig& rig) {
@@ -67,6 +56,11 @@ bool HandController::TouchCache::matches(ObjectId o, const Capsule& c, bool touc
   return object.valid() && object == o && touching == touch && a == c.a && b == c.b;
 }
 
+bool HandController::ClosestCache::matches(ObjectId o, const MeshDistance& m, const Eigen::Vector3d& pa,
+                                           const Eigen::Vector3d& pb) const {
+  return object.valid() && object == o && mesh == &m && a == pa && b == pb;
+}
+
 HandController::HandController(std::shared_ptr<const HandRig> rig, GraspSettings settings)
     : rig_(std::move(rig)), settings_(settings) {
   if (!(settings_.contact_tolerance > 0) || !std::isfinite(settings_.contact_tolerance))
@@ -79,6 +73,7 @@ HandController::HandController(std::shared_ptr<const HandRig> rig, GraspSettings
   state_.blocked.assign(n, 0);
   state_.blocked_angle.assign(n, 0.0);
   touch_cache_.assign(n, {});
+  closest_.assign(n, {});
   hint_.assign(n, MeshDistance::kNoHint);
   gap_bound_.assign(n, -kInf);
   forward_kinematics(*rig_, state_.q, &state_.X_PalmPhalanx);
@@ -250,7 +245,8 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
     if (state_.blocked[chain[k].value]) held = static_cast<int>(k);
 
   // Finger movement: rate-limited steps toward the targets; held joints may only open.
-  std::vector<double> delta(n, 0.0);
+  std::vector<double>& delta = work_.delta;
+  delta.assign(n, 0.0);
   bool moving = false, closing = false;
   for (std::size_t k = 0; k < n; ++k) {
     const PhalanxSpec& s = specs[chain[k].value];
@@ -286,14 +282,16 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
     return;
   }
 
-  std::vector<double> q0(n);
+  std::vector<double>& q0 = work_.q0;
+  q0.resize(n);
   for (std::size_t k = 0; k < n; ++k) q0[k] = state_.q[chain[k].value];
   auto set_fraction = [&](double s) {
     for (std::size_t k = 0; k < n; ++k) state_.q[chain[k].value] = q0[k] + s * delta[k];
     update_finger_poses(finger);
   };
   // Free capsules this step can move into the object.
-  std::vector<std::size_t> affected;
+  std::vector<std::size_t>& affected = work_.affected;
+  affected.clear();
   for (std::size_t m = static_cast<std::size_t>(held + 1); m < n; ++m)
     if (specs[chain[m].value].capsule && !state_.blocked[chain[m].value]) affected.push_back(m);
 
@@ -326,7 +324,8 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
 
   // Precise: conservative advancement along the step s in [0, 1]. A capsule point moves at most
   // rate(m) per unit s, so advancing by (gap - tol/2) / rate never crosses the surface.
-  std::vector<double> rate(n, 0.0);
+  std::vector<double>& rate = work_.rate;
+  rate.assign(n, 0.0);
   for (std::size_t m : affected)
     for (std::size_t k = 0; k <= m; ++k) rate[m] += std::abs(delta[k]) * reach_[chain[k].value][chain[m].value];
 
@@ -353,7 +352,10 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
         continue;
       }
       const SegmentQuery hit = mesh.closest_to_segment(c.a, c.b, c.radius + horizon, hint);
-      if (hit.found) hint = hit.triangle;
+      if (hit.found) {
+        hint = hit.triangle;
+        closest_[chain[m].value] = {object->id, &mesh, c.a, c.b, hit};
+      }
       const bool inside = !hit.found || hit.distance == 0 || (hit.point_on_segment - hit.point_on_mesh).dot(hit.normal) < 0;
       const double gap = inside ? -c.radius - (hit.found ? hit.distance : kInf) : hit.distance - c.radius;
       bound = gap;
@@ -491,7 +493,9 @@ ObjectId HandController::release() {
 }
 
 std::vector<double> HandController::shape_key() const {
-  std::vector<double> key = state_.q;
+  std::vector<double> key;
+  key.reserve(state_.q.size() + state_.blocked.size() + 2);
+  key.assign(state_.q.begin(), state_.q.end());
   key.insert(key.end(), state_.blocked.begin(), state_.blocked.end());
   key.push_back(state_.palm_contact);
   key.push_back(state_.grasped.value);
@@ -513,12 +517,24 @@ std::optional<Eigen::Isometry3d> HandController::grasped_object_pose() const {
   return state_.X_WorldPalm * state_.X_PalmObject;
 }
 
+SegmentQuery HandController::closest_pair(PhalanxId id, ObjectId object, const MeshDistance& mesh,
+                                          const Eigen::Vector3d& a, const Eigen::Vector3d& b, double reach) const {
+  ClosestCache& cache = closest_[id.value];
+  if (cache.matches(object, mesh, a, b)) return cache.pair;
+  SegmentQuery q;
+  if (std::isfinite(reach)) q = mesh.closest_to_segment(a, b, reach, hint_[id.value]);
+  if (!q.found) q = mesh.closest_to_segment(a, b, kInf, hint_[id.value]);
+  if (q.found) cache = {object, &mesh, a, b, q};
+  return q;
+}
+
 GraspMetrics HandController::measure(const ObjectView& object) const {
   GraspMetrics out;
   const ObjectModel& model = *object.model;
   const Eigen::Isometry3d X_ObjectPalm = object.X_WorldObject.inverse() * state_.X_WorldPalm;
   std::vector<double> finger_sum(rig_->fingers().size(), 0.0);
   std::vector<int> finger_count(rig_->fingers().size(), 0);
+  out.capsules.reserve(rig_->capsule_phalanges().size());
   for (PhalanxId id : rig_->capsule_phalanges()) {
     const PhalanxSpec& spec = rig_->phalanges()[id.value];
     const CapsuleSpec& cap = *spec.capsule;
@@ -534,8 +550,16 @@ GraspMetrics HandController::measure(const ObjectView& object) const {
     m.hit = hit.hit;
     // ND = ((Ip - Sp) . (CTc - Sp)) / |CTc - Sp| - |CTc - Sp|
     if (hit.hit) m.nd = (hit.point - sp).dot(dir) - length;
-    m.signed_distance = capsule_signed_distance(model.distance, X_ObjectPhalanx * cap.p_PhalanxA,
-                                                X_ObjectPhalanx * cap.p_PhalanxB, cap.radius, m.blocked, hint_[id.value]);
+    // Exact capsule signed distance. Outside the solid it is the gap to the closest point (for a
+    // blocked capsule, touching, a bounded search finds it fast); only a capsule reaching into the
+    // solid needs the full computation.
+    const Eigen::Vector3d a = X_ObjectPhalanx * cap.p_PhalanxA;
+    const Eigen::Vector3d b = X_ObjectPhalanx * cap.p_PhalanxB;
+    const double reach = m.blocked ? cap.radius + kTouchReach : kInf;
+    const SegmentQuery q = closest_pair(id, object.id, model.distance, a, b, reach);
+    m.signed_distance = q.distance > 0 && (q.point_on_segment - q.point_on_mesh).dot(q.normal) > 0
+                            ? q.distance - cap.radius
+                            : model.distance.capsule_signed_distance(a, b, cap.radius, hint_[id.value]);
     if (m.hit) {
       finger_count[spec.finger] += 1;
       finger_sum[spec.finger] += std::abs(m.nd);
@@ -552,6 +576,7 @@ GraspMetrics HandController::measure(const ObjectView& object) const {
 void HandController::refresh_contacts() const {
   const ObjectModel& model = *held_model_;
   contacts_.clear();
+  contacts_.reserve(rig_->capsule_phalanges().size() + 1);
   contacts_key_ = shape_key();
   const Eigen::Isometry3d X_ObjectPalm = state_.X_PalmObject.inverse();
   const auto metrics = hold_metrics();
@@ -569,12 +594,15 @@ void HandController::refresh_contacts() const {
     if (!state_.blocked[id.value]) continue;
     const Capsule c = capsule_in_object(id, X_ObjectPalm);
     // A blocked capsule touches: its closest point lies within reach of a bounded search.
-    SegmentQuery q = model.distance.closest_to_segment(c.a, c.b, c.radius + kTouchReach, hint_[id.value]);
-    if (!q.found) q = model.distance.closest_to_segment(c.a, c.b, kInf, hint_[id.value]);
+    const SegmentQuery q = closest_pair(id, state_.grasped, model.distance, c.a, c.b, c.radius + kTouchReach);
     add(id, q.point_on_mesh, q.normal);
   }
   if (state_.palm_contact) {
-    const PointQuery q = model.distance.closest_point(X_ObjectPalm * rig_->palm_contact().p_PalmCenter);
+    // The palm volume touches: its centre lies within its radius of the surface, or inside.
+    const PalmSphere& palm = rig_->palm_contact();
+    const Eigen::Vector3d c = X_ObjectPalm * palm.p_PalmCenter;
+    PointQuery q = model.distance.closest_point(c, palm.radius);
+    if (!q.found) q = model.distance.closest_point(c);
     add(PhalanxId(), q.point_on_mesh, q.normal);
   }
 }

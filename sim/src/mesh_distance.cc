@@ -4,6 +4,9 @@
 // four triangles per leaf where SAH agrees), triangle data stored in leaf order, and the
 // angle-weighted pseudo-normals of Baerentzen & Aanaes (2005) for the sign of the distance.
 // Traversals are iterative with a fixed stack, nearest child first, pruned by the current best.
+// Segment searches prune a box or triangle by the plane through the segment point nearest its
+// centre (separated_beyond): a finger capsule lies along the surface, many millimetres above many
+// small triangles, where bounding balls or inflated boxes let almost every nearby one through.
 //
 // Conventions:
 //  * A point exactly on the surface (distance 0) has signed distance 0 and counts as inside
@@ -429,30 +432,46 @@ inline bool ray_ball_entry(const Vector3d& o, const Vector3d& d, const Vector3d&
   return t_enter <= t_max;
 }
 
+/// Largest w.(q - c) over the points q of the box [lo, hi] centred on c.
+inline double box_support(const Vector3d& w, const float* lo, const float* hi) {
+  return 0.5 * ((double{hi[0]} - lo[0]) * std::abs(w[0]) + (double{hi[1]} - lo[1]) * std::abs(w[1]) +
+                (double{hi[2]} - lo[2]) * std::abs(w[2]));
+}
+
+/// True when a set whose points q all have w.(q - c) <= support is provably farther than e from a
+/// convex query (point or segment), where w = p* - c points from c to the query's closest point p*
+/// (w2 = |w|^2): the whole query lies beyond the plane through p* normal to w, and the set reaches
+/// at most support / |w| from c toward it, so the gap is at least (w2 - support) / |w|. The
+/// tolerance absorbs the rounding of p*.
+inline bool separated_beyond(double w2, double support, double e) {
+  const double g = w2 - support - 1e-14 * w2;  // gap * |w|, less the tolerance's share
+  const double reach = e * (1 + 1e-12) + 1e-15;
+  return g > 0 && g * g > reach * reach * w2;
+}
+
+/// Largest w.(q - c) over the points q of the triangle with corners v.
+inline double triangle_support(const Vector3d& w, const Corners& v, const Vector3d& c) {
+  return std::max({w.dot(v[0] - c), w.dot(v[1] - c), w.dot(v[2] - c)});
+}
+
 /// A segment a + s d (s in [0, 1]) with the quantities its box tests reuse.
 struct SegmentProbe {
   SegmentProbe(const Vector3d& a_in, const Vector3d& b_in)
-      : a(a_in), b(b_in), d(b_in - a_in), dd(d.squaredNorm()), inv(safe_inverse(d)),
-        lo(a_in.cwiseMin(b_in)), hi(a_in.cwiseMax(b_in)) {}
+      : a(a_in), b(b_in), d(b_in - a_in), dd(d.squaredNorm()), lo(a_in.cwiseMin(b_in)), hi(a_in.cwiseMax(b_in)) {}
   Vector3d a, b, d;
   double dd;
-  Vector3d inv, lo, hi;
+  Vector3d lo, hi;
 
-  /// Squared distance from c to the segment.
-  [[nodiscard]] double distance_sq(const Vector3d& c) const {
-    return (a + segment_param(c, a, d, dd) * d - c).squaredNorm();
-  }
+  /// The closest point of the segment to c, minus c.
+  [[nodiscard]] Vector3d offset_from(const Vector3d& c) const { return a + segment_param(c, a, d, dd) * d - c; }
 
-  /// False when the box [lo, hi] (enclosed by the ball of `radius` about its centre) is provably
-  /// farther than e from the segment; `key` gets the squared centre distance for ordering.
-  bool may_reach(const float* blo, const float* bhi, float radius, double e, double& key) const {
+  /// False when the box [lo, hi] is provably farther than e from the segment; `key` gets the
+  /// squared centre distance for ordering.
+  bool may_reach(const float* blo, const float* bhi, double e, double& key) const {
     if (!std::isinf(e) && box_box_sq(lo, hi, blo, bhi) > e * e) return false;
-    key = distance_sq(box_centre(blo, bhi));
-    if (std::isinf(e)) return true;
-    const double reach = e + radius;
-    if (key > reach * reach) return false;
-    double te = 0;
-    return ray_hits_box(a, inv, blo, bhi, e, 0.0, 1.0, te);
+    const Vector3d w = offset_from(box_centre(blo, bhi));
+    key = w.squaredNorm();
+    return std::isinf(e) || !separated_beyond(key, box_support(w, blo, bhi), e);
   }
 };
 
@@ -492,9 +511,9 @@ double half_area(const Vector3d& lo, const Vector3d& hi) {
 }  // namespace
 
 /// Depth-first walk of the BVH, nearer child first. `reach(node, key)` says whether a node may
-/// hold an answer and sets its ordering key (smaller first); a deferred node is asked again when
-/// resumed, so a reach that tightens as answers are found prunes it then. `leaf(node)` handles a
-/// leaf's triangles and returns true to end the walk.
+/// hold an answer and sets its ordering key (smaller first). A deferred node is not asked again
+/// when resumed: most still pass, and its children are asked with the tightened reach anyway.
+/// `leaf(node)` handles a leaf's triangles and returns true to end the walk.
 template <class Reach, class Leaf>
 void MeshDistance::traverse(Reach&& reach, Leaf&& leaf) const {
   double key0 = 0;
@@ -524,12 +543,8 @@ void MeshDistance::traverse(Reach&& reach, Leaf&& leaf) const {
         continue;
       }
     }
-    bool resumed = false;
-    while (!resumed && top > 0) {
-      node = stack[--top];
-      resumed = reach(nodes_[node], key0);
-    }
-    if (!resumed) return;
+    if (top == 0) return;
+    node = stack[--top];
   }
 }
 
@@ -839,12 +854,16 @@ MeshDistance::Candidate MeshDistance::nearest_to_segment(const Eigen::Vector3d& 
       best_d = std::sqrt(d2);
     }
   }
-  traverse([&](const Node& n, double& key) { return seg.may_reach(n.lo, n.hi, n.radius, best_d, key); },
+  traverse([&](const Node& n, double& key) { return seg.may_reach(n.lo, n.hi, best_d, key); },
            [&](const Node& nd) {
              for (std::uint32_t s = nd.first; s < nd.first + nd.count; ++s) {
                const auto& bs = bounding_spheres_[s];
+               const Vector3d centroid(bs[0], bs[1], bs[2]);
+               const Vector3d w = seg.offset_from(centroid);
+               const double w2 = w.squaredNorm();
                const double reach = best_d + bs[3];
-               if (seg.distance_sq(Vector3d(bs[0], bs[1], bs[2])) > reach * reach) continue;
+               if (w2 > reach * reach) continue;
+               if (separated_beyond(w2, triangle_support(w, corners_[s], centroid), best_d)) continue;
                double t = 0;
                Vector3d q;
                const double d2 =
@@ -892,20 +911,24 @@ bool MeshDistance::capsule_overlaps(const Eigen::Vector3d& a, const Eigen::Vecto
     if (segment_triangle_sq(a, b, seg.d, seg.dd, corners_[s], face_normals_[s], r2, t, q) <= r2) return true;
   }
   bool overlaps = false;
-  traverse([&](const Node& n, double& key) { return seg.may_reach(n.lo, n.hi, n.radius, r, key); },
+  traverse([&](const Node& n, double& key) { return seg.may_reach(n.lo, n.hi, r, key); },
            [&](const Node& nd) {
              for (std::uint32_t s = nd.first; s < nd.first + nd.count; ++s) {
                const auto& bs = bounding_spheres_[s];
-               const double c2 = seg.distance_sq(Vector3d(bs[0], bs[1], bs[2]));
+               const Vector3d centroid(bs[0], bs[1], bs[2]);
+               const Vector3d w = seg.offset_from(centroid);
+               const double c2 = w.squaredNorm();
                const double reach = r + bs[3];
                if (c2 > reach * reach) continue;
-               double t = 0;
-               Vector3d q;
                // The centroid lies on the triangle, so c2 <= r2 settles it without the exact test.
-               if (c2 <= r2 || segment_triangle_sq(a, b, seg.d, seg.dd, corners_[s], face_normals_[s], r2, t, q) <= r2) {
-                 overlaps = true;
-                 return true;
+               if (c2 > r2) {
+                 if (separated_beyond(c2, triangle_support(w, corners_[s], centroid), r)) continue;
+                 double t = 0;
+                 Vector3d q;
+                 if (segment_triangle_sq(a, b, seg.d, seg.dd, corners_[s], face_normals_[s], r2, t, q) > r2) continue;
                }
+               overlaps = true;
+               return true;
              }
              return false;
            });

@@ -453,5 +453,57 @@ TEST(HandControllerTest, GraspsAndReleases) {
   EXPECT_FALSE(hand.state().grasped.valid());
 }
 
+// Capsule `id`'s segment end points in the object frame, for the hand at X_ObjectPalm.
+std::pair<Eigen::Vector3d, Eigen::Vector3d> capsule_in(const HandController& hand, PhalanxId id,
+                                                       const Eigen::Isometry3d& X_ObjectPalm) {
+  const CapsuleSpec& cap = *hand.rig().phalanges()[id.value].capsule;
+  const Eigen::Isometry3d X_ObjectPhalanx = X_ObjectPalm * hand.state().X_PalmPhalanx[id.value];
+  return {X_ObjectPhalanx * cap.p_PhalanxA, X_ObjectPhalanx * cap.p_PhalanxB};
+}
+
+// The grasp tick reuses the closest points the contact search found for its signed distances and
+// contacts; they equal the exact answers asked afresh of the mesh. measure() against another mesh
+// under the same id reuses nothing.
+TEST(HandControllerTest, GraspMetricsAndContactsEqualFreshExactQueries) {
+  auto sphere = make_object_model("sphere", testing::uv_sphere_mesh(0.03, 90, 180), 1.0, "test");
+  const ObjectView view{ObjectId(3), Eigen::Isometry3d(Eigen::Translation3d(0.09, 0.004, -0.045)), sphere.get()};
+  HandController hand(finger_rig(), {});
+  bool grasped = false;
+  for (int t = 0; t < 120 && !grasped; ++t) grasped = hand.tick(at_identity(1.0), kDt, {&view, 1}).grasped;
+  ASSERT_TRUE(grasped);
+  const auto& ids = hand.rig().capsule_phalanges();
+  const MeshDistance& mesh = sphere->distance;
+  const Eigen::Isometry3d X_ObjectPalm = view.X_WorldObject.inverse() * hand.state().X_WorldPalm;
+  const GraspMetrics& m = *hand.grasp_metrics();
+  ASSERT_EQ(m.capsules.size(), ids.size());
+  int blocked = 0;
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    const auto [a, b] = capsule_in(hand, ids[i], X_ObjectPalm);
+    const double r = hand.rig().phalanges()[ids[i].value].capsule->radius;
+    EXPECT_NEAR(m.capsules[i].signed_distance, mesh.capsule_signed_distance(a, b, r), 1e-12) << i;
+    blocked += m.capsules[i].blocked;
+  }
+  EXPECT_GT(blocked, 0);
+  // Contacts: the exact closest point of each blocked capsule, in the object frame.
+  const std::vector<Contact> contacts = hand.contacts();
+  ASSERT_EQ(static_cast<int>(contacts.size()), blocked);
+  for (const Contact& c : contacts) {
+    const auto [a, b] = capsule_in(hand, c.phalanx, hand.state().X_PalmObject.inverse());
+    const SegmentQuery q = mesh.closest_to_segment(a, b);
+    EXPECT_NEAR((c.p_ObjectContact - q.point_on_mesh).norm(), 0.0, 1e-12);
+    EXPECT_NEAR((c.n_Object - q.normal).norm(), 0.0, 1e-12);
+  }
+  // The same capsules against a box under the sphere's id.
+  BoxScene box({0.03, 0.03, 0.03}, {0.0, 0.0, 0.0});
+  const ObjectView other{view.id, view.X_WorldObject, box.model.get()};
+  const GraspMetrics mb = hand.measure(other);
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    const auto [a, b] = capsule_in(hand, ids[i], X_ObjectPalm);
+    const double r = hand.rig().phalanges()[ids[i].value].capsule->radius;
+    EXPECT_NEAR(mb.capsules[i].signed_distance, box.model->distance.capsule_signed_distance(a, b, r), 1e-12) << i;
+    EXPECT_NE(mb.capsules[i].signed_distance, m.capsules[i].signed_distance) << i;
+  }
+}
+
 }  // namespace
 }  // namespace telegrasp::sim

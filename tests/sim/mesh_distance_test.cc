@@ -137,6 +137,37 @@ TriangleMesh make_cylinder(double r, double h, int n) {
   return m;
 }
 
+/// Box [-h, h] with every face split into n x n squares of two triangles: wide flat patches of
+/// small triangles, all equally far from a segment running parallel to them.
+TriangleMesh make_subdivided_box(const Vector3d& h, int n) {
+  TriangleMesh m;
+  for (int axis = 0; axis < 3; ++axis) {
+    const int u = (axis + 1) % 3;
+    const int v = (axis + 2) % 3;
+    for (const double side : {-1.0, 1.0}) {
+      const auto first = static_cast<std::uint32_t>(m.vertices.size());
+      for (int i = 0; i <= n; ++i) {
+        for (int j = 0; j <= n; ++j) {
+          Vector3d p;
+          p[axis] = side * h[axis];
+          p[u] = -h[u] + 2 * h[u] * i / n;  // the same expression on every face: shared edges weld
+          p[v] = -h[v] + 2 * h[v] * j / n;
+          m.vertices.push_back(p);
+        }
+      }
+      const auto at = [&](int i, int j) { return first + static_cast<std::uint32_t>(i * (n + 1) + j); };
+      for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < n; ++j) {
+          m.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+          m.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+        }
+      }
+    }
+  }
+  orient_outward(m, Vector3d::Zero());
+  return m;
+}
+
 // ---------------------------------------------------------------- independent reference
 
 double ref_point_segment_sq(const Vector3d& p, const Vector3d& a, const Vector3d& b) {
@@ -501,6 +532,69 @@ TEST(MeshDistance, MaxDistancePrunesToNotFound) {
   EXPECT_FALSE(md.closest_point(p, -1.0).found);
 }
 
+// The searches prune a node or triangle by the plane through the segment's point closest to its
+// centre: a segment lying along a flat patch of many small triangles, each as far as the next,
+// is where that bound must neither lose the answer nor let a bounded search miss it.
+TEST(MeshDistance, SegmentsAlongFinelyTriangulatedFacesFindTheExactGap) {
+  const TriangleMesh mesh = make_subdivided_box(kBoxHalf, 24);  // 6912 triangles of ~2 mm
+  const MeshDistance md(mesh);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int i = 0; i < 300; ++i) {
+    const double height = 0.0005 + 0.015 * u(rng);  // like a finger capsule's radius above the top face
+    const double angle = 2 * kPi * u(rng);
+    const Vector3d dir(std::cos(angle), std::sin(angle), 0.0);
+    const double length = 0.03 * u(rng);
+    // Start over the face; the far end may overhang an edge, the closest distance stays `height`.
+    const Vector3d a(kBoxHalf.x() * (2 * u(rng) - 1), kBoxHalf.y() * (2 * u(rng) - 1), kBoxHalf.z() + height);
+    const Vector3d b = a + length * dir;
+    const SegmentQuery q = md.closest_to_segment(a, b);
+    ASSERT_TRUE(q.found);
+    EXPECT_NEAR(q.distance, height, kExact) << i;
+    EXPECT_NEAR(q.point_on_mesh.z(), kBoxHalf.z(), kExact) << i;
+    EXPECT_NEAR((q.point_on_segment - q.point_on_mesh).norm(), height, kExact) << i;
+    EXPECT_GT(q.normal.z(), 0.0) << i;
+    // A search bounded just above the gap finds the same distance, one just below finds nothing.
+    const SegmentQuery above = md.closest_to_segment(a, b, height * (1 + 1e-9), q.triangle);
+    ASSERT_TRUE(above.found) << i;
+    EXPECT_EQ(above.distance, q.distance) << i;
+    EXPECT_FALSE(md.closest_to_segment(a, b, height * (1 - 1e-9)).found) << i;
+    EXPECT_TRUE(md.capsule_overlaps(a, b, height * (1 + 1e-9))) << i;
+    EXPECT_FALSE(md.capsule_overlaps(a, b, height * (1 - 1e-9))) << i;
+    EXPECT_NEAR(md.capsule_signed_distance(a, b, 0.008), height - 0.008, kExact) << i;
+  }
+}
+
+TEST(MeshDistance, SegmentTiltedTowardsAFinelyTriangulatedFaceTouchesWithItsLowEnd) {
+  const MeshDistance md(make_subdivided_box(kBoxHalf, 24));
+  // The low end is 3 mm over (0.011, -0.007) on the top face, the segment rises away from it.
+  const Vector3d low(0.011, -0.007, kBoxHalf.z() + 0.003);
+  const Vector3d high = low + Vector3d(-0.02, 0.01, 0.006);
+  const SegmentQuery q = md.closest_to_segment(high, low);
+  ASSERT_TRUE(q.found);
+  EXPECT_NEAR(q.distance, 0.003, kExact);
+  EXPECT_NEAR(q.segment_t, 1.0, kExact);
+  expect_vec_near(q.point_on_mesh, Vector3d(0.011, -0.007, kBoxHalf.z()), kExact);
+  expect_vec_near(q.normal, Vector3d::UnitZ(), kExact);
+}
+
+TEST(MeshDistance, SegmentsNearAFinelyTriangulatedBoxMatchBruteForce) {
+  const TriangleMesh mesh = make_subdivided_box(kBoxHalf, 12);
+  const MeshDistance md(mesh);
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int i = 0; i < 300; ++i) {
+    // Around the box, out to 15 mm beyond it (edges and corners included), any direction.
+    const Vector3d corner = kBoxHalf + Vector3d::Constant(0.015);
+    const Vector3d a = corner.cwiseProduct(Vector3d(2 * u(rng) - 1, 2 * u(rng) - 1, 2 * u(rng) - 1));
+    const Vector3d b = a + 0.03 * u(rng) * random_unit(rng);
+    const SegmentQuery q = md.closest_to_segment(a, b);
+    ASSERT_TRUE(q.found);
+    EXPECT_NEAR(q.distance, brute_segment_distance(mesh, a, b), kExact) << i;
+    EXPECT_NEAR((q.point_on_segment - q.point_on_mesh).norm(), q.distance, kExact) << i;
+  }
+}
+
 // ---------------------------------------------------------------- capsules
 
 TEST(MeshDistance, CapsuleOverlapsJustInsideAndBeyondRadius) {
@@ -759,6 +853,44 @@ TEST_F(IcosphereBruteForce, PointCapsulesAndHintsGiveTheSameAnswers) {
     EXPECT_EQ(md_.closest_to_segment(p, b, std::numeric_limits<double>::infinity(), hint).distance, md_.closest_to_segment(p, b).distance) << i;
     EXPECT_EQ(md_.capsule_overlaps(p, b, r, hint), md_.capsule_overlaps(p, b, r)) << i;
     EXPECT_EQ(md_.capsule_signed_distance(p, b, r, hint), md_.capsule_signed_distance(p, b, r)) << i;
+  }
+}
+
+// Finger-like segments lying along a finer sphere, 0-15 mm above it: many small triangles are
+// nearly as close as the closest, the case the searches' plane bound prunes hardest.
+TEST(MeshDistance, SegmentsAlongAFineIcosphereMatchBruteForceAndTheSphere) {
+  constexpr double kR = 0.03;
+  const TriangleMesh mesh = make_icosphere(kR, 4);  // 5120 triangles
+  const MeshDistance md(mesh);
+  const double tessellation = tessellation_error(mesh, kR);
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::uniform_int_distribution<std::uint32_t> tri(0, static_cast<std::uint32_t>(mesh.triangles.size() - 1));
+  for (int i = 0; i < 300; ++i) {
+    const Vector3d n = random_unit(rng);
+    Vector3d t = random_unit(rng);
+    t = (t - t.dot(n) * n).normalized();
+    const Vector3d dir = (t + 0.3 * (2 * u(rng) - 1) * n).normalized();  // tangent, tilted up to ~17 deg
+    const double length = 0.005 + 0.025 * u(rng);
+    const Vector3d a = (kR + 0.015 * u(rng)) * n - 0.5 * length * dir;
+    const Vector3d b = a + length * dir;
+    // Analytic, for a segment outside the sphere: the tessellated surface lies in the shell
+    // [R - tessellation, R].
+    const double to_sphere = (a + std::clamp(-a.dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0) * (b - a)).norm() - kR;
+    const SegmentQuery q = md.closest_to_segment(a, b);
+    ASSERT_TRUE(q.found);
+    if (to_sphere >= 0) {
+      EXPECT_GE(q.distance, to_sphere - 1e-12) << i;
+      EXPECT_LE(q.distance, to_sphere + tessellation + 1e-12) << i;
+    }
+    EXPECT_NEAR(q.distance, brute_segment_distance(mesh, a, b), kExact) << i;
+    EXPECT_EQ(md.closest_to_segment(a, b, std::numeric_limits<double>::infinity(), tri(rng)).distance, q.distance) << i;
+    EXPECT_EQ(md.closest_to_segment(a, b, q.distance * (1 + 1e-9)).distance, q.distance) << i;
+    if (q.distance > 0) {
+      EXPECT_FALSE(md.closest_to_segment(a, b, q.distance * (1 - 1e-9)).found) << i;
+      EXPECT_TRUE(md.capsule_overlaps(a, b, q.distance * (1 + 1e-9))) << i;
+      EXPECT_FALSE(md.capsule_overlaps(a, b, q.distance * (1 - 1e-9))) << i;
+    }
   }
 }
 

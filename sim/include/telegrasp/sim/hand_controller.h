@@ -145,6 +145,11 @@ class HandController {
   void select_object(std::span<const ObjectView> objects);
   void step_finger(int finger, double u, double dt, const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm);
   void refresh_contacts() const;
+  // Exact closest pair between capsule `id`'s segment [a, b] (object frame) and the object's mesh:
+  // the cached one while the capsule has not moved since, else searched within `reach` first (a
+  // touching capsule's is near), then everywhere.
+  SegmentQuery closest_pair(PhalanxId id, ObjectId object, const MeshDistance& mesh, const Eigen::Vector3d& a,
+                            const Eigen::Vector3d& b, double reach) const;
   // The hand's shape as the contact and metric caches see it: joint angles, blocks, palm, grasp.
   std::vector<double> shape_key() const;
   // Precise mode: extends a finger the hand pushed into the object until it rests on the surface;
@@ -172,12 +177,30 @@ class HandController {
     bool matches(ObjectId o, const Capsule& c, bool touch) const;
   };
   std::vector<TouchCache> touch_cache_;
+  // Per phalanx, the last exact closest pair found for its capsule and where the capsule was: the
+  // contact search, the grasp tick's signed distances and the contacts all ask about the same
+  // resting capsules, and a bit-identical pose has the identical answer (the one a new search
+  // would give: the contact search makes the pair's triangle the capsule's hint).
+  struct ClosestCache {
+    ObjectId object;
+    const MeshDistance* mesh = nullptr;
+    Eigen::Vector3d a{0, 0, 0}, b{0, 0, 0};
+    SegmentQuery pair;  // found
+    bool matches(ObjectId o, const MeshDistance& m, const Eigen::Vector3d& pa, const Eigen::Vector3d& pb) const;
+  };
+  mutable std::vector<ClosestCache> closest_;
   // Per phalanx, the triangle last found nearest to its capsule: a search hint (speed only).
   std::vector<std::uint32_t> hint_;
   // Per phalanx, a lower bound on its capsule's gap to bound_object_ (-inf: unknown), kept
   // across ticks and shrunk by every motion, so far-away capsules need no query.
   std::vector<double> gap_bound_;
   std::vector<double> palm_reach_;  // bound on |p| over the capsule's segment, palm frame
+  // step_finger's work space, kept between ticks so that a tick allocates nothing.
+  struct StepWork {
+    std::vector<double> q0, delta, rate;  // per position along the finger
+    std::vector<std::size_t> affected;
+  };
+  StepWork work_;
   ObjectId bound_object_;
   Eigen::Isometry3d bound_X_ObjectPalm_ = Eigen::Isometry3d::Identity();
 };
