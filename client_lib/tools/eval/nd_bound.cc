@@ -3,12 +3,12 @@
 // hand at each with precise closing, and keeps the clean grasp with the lowest mean |ND|.
 #include "cli.h"
 #include "commands.h"
+#include "eval_inputs.h"
 #include "grasp_report.h"
 #include "grasp_svg.h"
 #include "telegrasp/sim/hand_rig.h"
 #include "telegrasp/sim/object_model.h"
 #include "telegrasp/sim/scripted_operator.h"
-#include "telegrasp/sim/standin_objects.h"
 #include "telegrasp/sim/world.h"
 
 #include <nlohmann/json.hpp>
@@ -16,7 +16,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <mutex>
@@ -101,36 +100,22 @@ constexpr double kDt = 1.0 / 90.0;
 }  // namespace
 
 int telegrasp::eval::run_nd_bound(int argc, char** argv) {
+  using namespace telegrasp::eval;
   const Options opt = parse(argc, argv);
   std::shared_ptr<const HandRig> rig;
   std::vector<ObjectModelPtr> models;
   try {
-    rig = std::make_shared<const HandRig>(HandRig::load(opt.rig_path.empty() ? HandRig::builtin_path("human_right") : opt.rig_path));
-    if (opt.objects_dir.empty()) {
-      for (const auto& o : protocol_objects()) models.push_back(make_standin_model(o));
-    } else {
-      std::cerr << "loading meshes from " << opt.objects_dir << " ...\n";
-      models = load_object_dir(opt.objects_dir);
-    }
+    EvalInputs in = load_eval_inputs(opt.rig_path, opt.objects_dir);
+    rig = std::move(in.rig);
+    models = std::move(in.models);
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-eval nd-bound: " << e.what() << "\n";
     return 1;
   }
   std::ofstream json_out;
-  if (!opt.json_path.empty()) {
-    json_out.open(opt.json_path);
-    if (!json_out) {
-      std::cerr << "telegrasp-eval nd-bound: cannot write --json file " << opt.json_path << "\n";
-      return 1;
-    }
-  }
-  if (!opt.svg_dir.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(opt.svg_dir, ec);
-    if (!std::filesystem::is_directory(opt.svg_dir)) {
-      std::cerr << "telegrasp-eval nd-bound: cannot create --svg folder " << opt.svg_dir << "\n";
-      return 1;
-    }
+  if (const std::string error = prepare_outputs(opt.json_path, json_out, opt.svg_dir); !error.empty()) {
+    std::cerr << "telegrasp-eval nd-bound: " << error << "\n";
+    return 1;
   }
 
   NdSearchSettings search;

@@ -1,0 +1,36 @@
+#include "eval_inputs.h"
+
+#include "telegrasp/sim/standin_objects.h"
+
+#include <filesystem>
+#include <iostream>
+
+namespace telegrasp::eval {
+
+EvalInputs load_eval_inputs(const std::string& rig_path, const std::string& objects_dir) {
+  EvalInputs in;
+  in.rig = std::make_shared<const sim::HandRig>(
+      sim::HandRig::load(rig_path.empty() ? sim::HandRig::builtin_path("human_right") : rig_path));
+  if (objects_dir.empty()) {
+    for (const auto& o : sim::protocol_objects()) in.models.push_back(sim::make_standin_model(o));
+  } else {
+    std::cerr << "loading meshes from " << objects_dir << " ...\n";
+    in.models = sim::load_object_dir(objects_dir);
+  }
+  return in;
+}
+
+std::string prepare_outputs(const std::string& json_path, std::ofstream& json_out, const std::string& svg_dir) {
+  if (!svg_dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(svg_dir, ec);
+    if (!std::filesystem::is_directory(svg_dir)) return "cannot create --svg folder " + svg_dir;
+  }
+  if (!json_path.empty()) {
+    json_out.open(json_path);
+    if (!json_out) return "cannot write --json file " + json_path;
+  }
+  return "";
+}
+
+}  // namespace telegrasp::eval
