@@ -101,14 +101,8 @@ struct Options {
 
 Options parse(int argc, char** argv) {
   Options o;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) usage_error(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "-h" || a == "--help") { std::cout << kUsage; std::exit(0); }
-    else if (a == "--client-id") {
+  telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
+    if (a == "--client-id") {
       o.client_id = value();
       if (o.client_id.empty() || o.client_id.size() > 64) usage_error("--client-id expects 1 to 64 characters, got '" + o.client_id + "'");
     } else if (a == "--hands") {
@@ -138,8 +132,11 @@ Options parse(int argc, char** argv) {
       o.timeout_s = std::strtod(v.c_str(), &end);
       if (v.empty() || *end != '\0' || !(o.timeout_s > 0) || o.timeout_s > 86400)
         usage_error("--timeout expects seconds in (0, 86400], got '" + v + "'");
-    } else usage_error("unknown option '" + a + "'");
-  }
+    } else {
+      return false;
+    }
+    return true;
+  });
   return o;
 }
 

@@ -84,14 +84,8 @@ struct Options {
 
 Options parse(int argc, char** argv) {
   Options o;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) usage_error(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "-h" || a == "--help") { std::cout << kUsage; std::exit(0); }
-    else if (a == "--objects") o.objects_dir = value();
+  telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
+    if (a == "--objects") o.objects_dir = value();
     else if (a == "--rig") o.rig_path = value();
     else if (a == "--json") o.json_path = value();
     else if (a == "--svg") o.svg_dir = value();
@@ -120,8 +114,11 @@ Options parse(int argc, char** argv) {
         if (item.empty() || *end != '\0' || !(s > 0) || !std::isfinite(s)) usage_error("--speed-scale expects positive numbers, got '" + item + "'");
         o.speeds.push_back(s);
       }
-    } else usage_error("unknown option '" + a + "'");
-  }
+    } else {
+      return false;
+    }
+    return true;
+  });
   return o;
 }
 

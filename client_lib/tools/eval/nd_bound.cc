@@ -74,14 +74,8 @@ struct Options {
 Options parse(int argc, char** argv) {
   using telegrasp::cli::parse_whole;
   Options o;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) usage_error(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "-h" || a == "--help") { std::cout << kUsage; std::exit(0); }
-    else if (a == "--objects") o.objects_dir = value();
+  telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
+    if (a == "--objects") o.objects_dir = value();
     else if (a == "--rig") o.rig_path = value();
     else if (a == "--json") o.json_path = value();
     else if (a == "--svg") o.svg_dir = value();
@@ -90,8 +84,9 @@ Options parse(int argc, char** argv) {
     else if (a == "--min-hits") o.min_hits = static_cast<int>(parse_whole(a, value(), 1, 1000, usage_error));
     else if (a == "--threads") o.threads = static_cast<int>(parse_whole(a, value(), 1, 64, usage_error));
     else if (a == "--seed") o.seed = static_cast<std::uint64_t>(parse_whole(a, value(), 0, 1L << 62, usage_error));
-    else usage_error("unknown option '" + a + "'");
-  }
+    else return false;
+    return true;
+  });
   return o;
 }
 

@@ -4,6 +4,7 @@
 // it, removes it, and records each grasp from the server's GraspEvent. Every decision is a
 // function of the SceneState sequence alone, so with a lockstep server a run is deterministic.
 // Progress: one line per grasp on stdout ("grasp I/N OBJECT held|not-held"), read by the runner.
+#include "cli.h"
 #include "commands.h"
 #include "grasp_report.h"
 #include "protocol_common.h"
@@ -70,12 +71,7 @@ struct Options {
 
 Options parse(int argc, char** argv) {
   Options o;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) usage_error(a + " needs a value");
-      return argv[++i];
-    };
+  telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
     auto number = [&](double lo, double hi) {
       const std::string v = value();
       char* end = nullptr;
@@ -83,8 +79,7 @@ Options parse(int argc, char** argv) {
       if (v.empty() || *end != '\0' || !(x >= lo && x <= hi)) usage_error(a + " expects a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
       return x;
     };
-    if (a == "-h" || a == "--help") { std::cout << kUsage; std::exit(0); }
-    else if (a == "--domain") o.domain = static_cast<int>(number(0, 232));
+    if (a == "--domain") o.domain = static_cast<int>(number(0, 232));
     else if (a == "--profile") o.profile = value();
     else if (a == "--profiles") o.profiles_file = value();
     else if (a == "--group") o.group = value();
@@ -95,8 +90,9 @@ Options parse(int argc, char** argv) {
     else if (a == "--count") o.count = static_cast<int>(number(1, 30));
     else if (a == "--json") o.json_path = value();
     else if (a == "--timeout") o.timeout_s = number(0.1, 86400);
-    else usage_error("unknown option '" + a + "'");
-  }
+    else return false;
+    return true;
+  });
   return o;
 }
 

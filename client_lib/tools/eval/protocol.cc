@@ -106,14 +106,8 @@ struct Options {
 Options parse(int argc, char** argv) {
   Options o;
   o.jobs = std::max(1u, std::thread::hardware_concurrency());
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) usage_error(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "-h" || a == "--help") { std::cout << kUsage; std::exit(0); }
-    else if (a == "--protocol") {
+  telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
+    if (a == "--protocol") {
       if (const std::string p = value(); p != "paper") usage_error("--protocol expects paper, got '" + p + "'");
     } else if (a == "--participants") {
       const std::string v = value();
@@ -144,8 +138,9 @@ Options parse(int argc, char** argv) {
     else if (a == "--profiles") o.profiles_file = value();
     else if (a == "--keep-logs") o.logs_dir = value();
     else if (a == "--record") o.record_dir = value();
-    else usage_error("unknown option '" + a + "'");
-  }
+    else return false;
+    return true;
+  });
   if (o.domain < 0) o.domain = 100 + static_cast<int>(getpid() % 101);
   if (o.domain + o.jobs - 1 > 232) usage_error("--domain " + std::to_string(o.domain) + " + --jobs " + std::to_string(o.jobs) + " exceeds domain 232");
   return o;
