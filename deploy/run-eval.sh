@@ -6,4 +6,4 @@ cd "$(dirname "$0")/.."
 deploy/install-deps.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 cmake --build build -j"$(nproc)" --target telegrasp-eval
-exec build/bin/telegrasp-eval "$@"
+exec build/bin/telegrasp-eval run "$@"

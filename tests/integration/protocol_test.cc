@@ -1,4 +1,4 @@
-// The paper's protocol over loopback: telegrasp-eval --protocol paper starts lockstep servers and
+// The paper's protocol over loopback: telegrasp-eval protocol starts lockstep servers and
 // participant processes; every (mode, participant, object) gives exactly one record, in the
 // protocol's order, and the lockstep run repeats exactly.
 #include "process.h"
@@ -30,7 +30,7 @@ std::string temp_path(const std::string& name) {
 // on domains `domain`, `domain` + 1; returns the exit code.
 int run_protocol(int domain, const std::string& name) {
   Process eval(bin("telegrasp-eval"),
-               {"--protocol", "paper", "--participants", "1,1", "--count", "3", "--mode", "both", "--jobs", "2", "--seed", "5",
+               {"protocol", "--participants", "1,1", "--count", "3", "--mode", "both", "--jobs", "2", "--seed", "5",
                 "--domain", std::to_string(domain), "--json", temp_path(name + ".json"), "--csv", temp_path(name + ".csv"),
                 "--report", temp_path(name + ".html")},
                temp_path(name + ".log"));

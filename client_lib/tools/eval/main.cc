@@ -1,15 +1,65 @@
-// telegrasp-eval: grasp evaluation. In-process runs, the paper's protocol over DDS, and the
-// questionnaire's scoring; see commands.h.
+// telegrasp-eval <subcommand>: grasp evaluation. In-process runs, the oracle ND bound and the
+// questionnaire's scoring (sim/tools/eval), the paper's protocol over DDS and its participant
+// processes (here); see commands.h.
 #include "commands.h"
 
+#include <cstring>
+#include <iostream>
 #include <string>
 
+namespace {
+
+constexpr const char* kUsage = R"(Usage: telegrasp-eval <subcommand> [options]
+
+Grasp evaluation: scripted operators grasp objects with the telegrasp hand, and reports tell
+how fast, how often and how exactly.
+
+Subcommands (each has its own --help):
+  run             scripted grasps in-process, no network: per-object success, time to grasp
+                  and the paper's ND error metric
+  protocol        the paper's 30-object experiment through telegrasp-server over DDS, with
+                  CSV, JSON and HTML reports
+  nd-bound        the lowest ND an oracle pose search finds for the rig on each object
+  questionnaire   scores the paper's questionnaire from a CSV of answers
+  participant     one participant process of a protocol run (started by `protocol`)
+
+Exit status: 0 success, 1 runtime failure, 2 usage error.
+)";
+
+using Command = int (*)(int, char**);
+
+struct Subcommand {
+  const char* name;
+  Command run;
+};
+
+constexpr Subcommand kSubcommands[] = {
+    {"run", telegrasp::eval::run_in_process},     {"protocol", telegrasp::eval::run_protocol},
+    {"nd-bound", telegrasp::eval::run_nd_bound},  {"questionnaire", telegrasp::eval::run_questionnaire},
+    {"participant", telegrasp::eval::run_participant},
+};
+
+}  // namespace
+
 int main(int argc, char** argv) {
-  using namespace telegrasp::eval;
-  if (argc > 1 && std::string(argv[1]) == "questionnaire") return run_questionnaire(argc - 1, argv + 1);
-  if (argc > 1 && std::string(argv[1]) == "nd-bound") return run_nd_bound(argc - 1, argv + 1);
-  if (argc > 1 && std::string(argv[1]) == "participant") return run_participant(argc - 1, argv + 1);
+  if (argc > 1 && (std::strcmp(argv[1], "-h") == 0 || std::strcmp(argv[1], "--help") == 0)) {
+    std::cout << kUsage;
+    return 0;
+  }
+  if (argc > 1)
+    for (const Subcommand& s : kSubcommands)
+      if (std::strcmp(argv[1], s.name) == 0) return s.run(argc - 1, argv + 1);
+  // The spellings of the previous release: no subcommand runs in-process, and --protocol
+  // anywhere runs the protocol. Kept for one release.
   for (int i = 1; i < argc; ++i)
-    if (std::string(argv[i]) == "--protocol") return run_protocol(argc, argv);
-  return run_in_process(argc, argv);
+    if (std::strcmp(argv[i], "--protocol") == 0) {
+      std::cerr << "telegrasp-eval: deprecated: use `telegrasp-eval protocol [options]`\n";
+      return telegrasp::eval::run_protocol(argc, argv);
+    }
+  if (argc > 1 && argv[1][0] != '-') {
+    std::cerr << "telegrasp-eval: unknown subcommand '" << argv[1] << "'\n(see telegrasp-eval --help)\n";
+    return 2;
+  }
+  std::cerr << "telegrasp-eval: deprecated: use `telegrasp-eval run [options]`\n";
+  return telegrasp::eval::run_in_process(argc, argv);
 }

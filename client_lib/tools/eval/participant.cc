@@ -35,7 +35,7 @@ using Clock = std::chrono::steady_clock;
 
 constexpr const char* kUsage = R"(Usage: telegrasp-eval participant [options]
 
-One bot participant of `telegrasp-eval --protocol paper`, which starts it (with a server in
+One bot participant of `telegrasp-eval protocol`, which starts it (with a server in
 lockstep) in its own process; run by hand only to debug a protocol run.
 
 Options:

@@ -1,4 +1,4 @@
-// telegrasp-eval --protocol paper: the paper's experiment through the server over DDS. Every
+// telegrasp-eval protocol: the paper's experiment through the server over DDS. Every
 // (mode, participant) pair is a job: a telegrasp-server in lockstep on its own DDS domain and a
 // participant process (participant.cc) driving it. Jobs run in parallel, as many as --jobs.
 // Records come from the GraspEvent topic, via the participants.
@@ -40,7 +40,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
-constexpr const char* kUsage = R"(Usage: telegrasp-eval --protocol paper [options]
+constexpr const char* kUsage = R"(Usage: telegrasp-eval protocol [options]
 
 Runs the paper's experiment (GRASPING.md section 6) through telegrasp servers over DDS: the 30
 protocol objects are spawned one at a time with SceneCommand, in the paper's order, resting at a
@@ -61,7 +61,7 @@ metrics are the same however many run in parallel and however loaded the machine
 seed gives the same records.
 
 Options:
-  --protocol paper       the protocol (only "paper")
+  --protocol paper       the protocol (only "paper", the default)
   --participants N|E,I   participants per group, or experienced,inexperienced (default 4,6 as
                          in the paper)
   --objects DIR          meshes of the protocol objects (file stem = YCB name, e.g.
@@ -99,7 +99,7 @@ struct Options {
 };
 
 [[noreturn]] void usage_error(const std::string& what) {
-  std::cerr << "telegrasp-eval: " << what << "\n(see telegrasp-eval --protocol paper --help)\n";
+  std::cerr << "telegrasp-eval: " << what << "\n(see telegrasp-eval protocol --help)\n";
   std::exit(2);
 }
 

@@ -1,6 +1,6 @@
 // telegrasp-eval questionnaire FILE.csv: scores the paper's questionnaire (GRASPING.md section 6)
 // per participant and per group, beside the paper's Table 2.
-#include "commands.h"
+#include "offline_commands.h"
 
 #include "experiment_report.h"
 #include "questionnaire.h"

@@ -2,7 +2,7 @@
 // An oracle searches palm poses around each object (random, then refined locally), closes the
 // hand at each with precise closing, and keeps the clean grasp with the lowest mean |ND|.
 #include "cli.h"
-#include "commands.h"
+#include "offline_commands.h"
 #include "eval_inputs.h"
 #include "grasp_report.h"
 #include "grasp_svg.h"

@@ -1,7 +1,7 @@
 // telegrasp-eval's in-process run: scripted grasps on objects with no network; reports success,
 // time and ND.
 #include "cli.h"
-#include "commands.h"
+#include "offline_commands.h"
 #include "eval_inputs.h"
 #include "grasp_report.h"
 #include "grasp_svg.h"
@@ -38,7 +38,7 @@ using telegrasp::report::fmt;
 using telegrasp::report::Record;
 using telegrasp::report::summarize;
 
-constexpr const char* kUsage = R"(Usage: telegrasp-eval [options]
+constexpr const char* kUsage = R"(Usage: telegrasp-eval run [options]
 
 Grasps every object with a scripted operator, in-process (no network), and reports
 per-object success, time to grasp and the paper's ND error metric.
@@ -59,13 +59,7 @@ Options:
   --threads N         worker threads (default 2)
   -h, --help          this text
 
-Other commands:
-  telegrasp-eval --protocol paper [options]        the paper's experiment through the server
-                                                   over DDS, with reports (--protocol paper --help)
-  telegrasp-eval questionnaire FILE.csv [options]  scores the paper's questionnaire
-                                                   (questionnaire --help)
-  telegrasp-eval nd-bound [options]                the lowest ND an oracle pose search finds
-                                                   for the rig on each object (nd-bound --help)
+Other subcommands: telegrasp-eval --help.
 )";
 
 struct Options {
@@ -78,7 +72,7 @@ struct Options {
 };
 
 [[noreturn]] void usage_error(const std::string& what) {
-  std::cerr << "telegrasp-eval: " << what << "\n(see telegrasp-eval --help)\n";
+  std::cerr << "telegrasp-eval run: " << what << "\n(see telegrasp-eval run --help)\n";
   std::exit(2);
 }
 

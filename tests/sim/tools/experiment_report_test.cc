@@ -58,7 +58,7 @@ Record miss(const std::string& mode, const std::string& group, int participant, 
 ExperimentRun handmade_run() {
   ExperimentRun run;
   run.protocol = "paper";
-  run.command_line = "telegrasp-eval --protocol paper --mode both";
+  run.command_line = "telegrasp-eval protocol --mode both";
   run.seed = 7;
   run.wall_seconds = 12.5;
   run.created = "2024-05-01T10:00:00Z";

@@ -1,0 +1,162 @@
+// The bot of telegrasp-bot: the scripted operator of sim/ driving one or two hands of a telegrasp
+// server over DDS through telegrasp::client. main.cc parses the options and runs the 90 Hz loop;
+// Bot picks objects, runs each hand's trials and records every grasp from the server's GraspEvent.
+#pragma once
+
+#include "grasp_report.h"
+#include "telegrasp/client/client.h"
+#include "telegrasp/sim/hand_rig.h"
+#include "telegrasp/sim/object_model.h"
+#include "telegrasp/sim/scripted_operator.h"
+
+#include <Eigen/Geometry>
+
+#include <chrono>
+#include <cstdint>
+#include <future>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace telegrasp::bot {
+
+namespace client = telegrasp::client;
+namespace sim = telegrasp::sim;
+namespace report = telegrasp::report;
+using Clock = std::chrono::steady_clock;
+
+constexpr double kRate = 90.0;                 // controller samples per second per hand
+constexpr double kStaleScene = 0.25;           // s without a new SceneState: the server is stalled, wait
+
+// The bot's settings (telegrasp-bot --help).
+struct Options {
+  std::string client_id;  // default bot-<pid>
+  std::vector<client::HandSide> hands{client::HandSide::kRight};
+  std::string skill = "experienced", objects_dir, json_path, profile = "loopback", profiles_file;
+  int trials = 1, domain = 0;
+  std::uint64_t seed = 1;
+  double timeout_s = 20;
+};
+
+// One object of the scene and this bot's trials on it.
+struct Target {
+  int id = -1;
+  std::string name, label;     // label: the table's row name (name, or name#id for duplicates)
+  std::size_t scene_index = 0; // position in the first SceneState: seeds the operator
+  sim::ObjectModelPtr model;   // null: this bot has no model of that name
+  int started = 0, finished = 0;
+  bool given_up = false;
+  std::optional<Clock::time_point> unavailable_since;
+  // Stillness: the last pose seen and since when (server time) it has not changed.
+  std::optional<Eigen::Isometry3d> X_WorldObject_last;
+  double still_since = 0;
+};
+
+// A finished trial: the shared record and who did it.
+struct BotRecord {
+  report::Record record;
+  int object_id = -1;
+  client::HandSide hand = client::HandSide::kRight;
+  std::string reason;  // why it was not held after lift, when known
+};
+
+enum class Stage { kIdle, kSettle, kRun, kFinish };
+
+struct Hand {
+  client::HandKey key;
+  std::shared_ptr<const sim::HandRig> rig;
+  Stage stage = Stage::kIdle;
+  sim::ControllerInput input;  // what this hand publishes this tick
+  // The current trial.
+  Target* target = nullptr;
+  int trial = 0;
+  Eigen::Isometry3d X_WorldStart = Eigen::Isometry3d::Identity();  // where it began, and returns to
+  std::unique_ptr<sim::ScriptedOperator> op;
+  std::future<void> planning;  // op->begin() runs here so the loop keeps publishing
+  std::int64_t stage_tick = 0, op_tick = 0;
+  double server_t0 = 0, z0 = 0, z_max = -1e9;
+  bool seen_grasped = false, got_grasp_event = false;
+  report::Record rec;
+  std::string note;
+  // When this hand, and each other client's hand, was first near the target (server time of the
+  // skeleton), before our squeeze: every bot sees the same skeletons, so they agree who came first.
+  std::optional<double> near_time;
+  std::map<client::HandKey, double> others_near_time;
+};
+
+// The bot's hands, its work list (every object of the first SceneState, --trials times) and its
+// records. One thread calls everything.
+class Bot {
+ public:
+  Bot(Options opt, client::Client& c, std::map<std::string, sim::ObjectModelPtr> models);
+
+  // Takes the scene's objects as the work list; false if the scene is empty.
+  bool set_scene(const client::SceneState& scene);
+
+  // One tick of every hand: reads the newest server outputs, steps each hand, publishes.
+  void tick(std::int64_t tick, const client::SceneState& scene);
+
+  // While the server is silent: every hand keeps its last input, the operators and the clocks of
+  // unavailable objects wait.
+  void hold();
+
+  void publish();
+
+  bool all_done() const;
+
+  // The trials in progress (not counted when stopped early).
+  int in_progress() const;
+
+  // Prints the table and the summary line; writes --json. False if the file cannot be written.
+  bool report_results() const;
+
+ private:
+  Hand* hand_of(const client::HandKey& key);
+
+  bool targeted(const Target& t) const;
+
+  void on_event(const client::GraspEvent& e);
+
+  // Starts or stops each untargeted object's unavailability clock; gives up after kGiveUpAfter.
+  void update_availability(const std::map<int, const client::ObjectState*>& objects);
+
+  // Records every remaining trial of `t` as not grasped.
+  void give_up(Target& t, const std::string& why);
+
+  void add_record(BotRecord r);
+
+  // The next object for `h`: fewest trials started first, then the seeded order.
+  Target* pick(const std::map<int, const client::ObjectState*>& objects);
+
+  bool holds_target(const Hand& h, const client::ObjectState* o) const;
+
+  void step(Hand& h, std::int64_t tick, const client::SceneState& scene, const std::map<int, const client::ObjectState*>& objects);
+
+  // Before its squeeze a hand gives the object up, as a person would, to a hand that holds it, or
+  // came near it first, or came at the same time with a greater key (so exactly one of two goes on).
+  // Returns the hand it gives way to, if any.
+  std::optional<client::HandKey> yields_to(Hand& h, const client::ObjectState* o);
+
+  void start_trial(Hand& h, Target& t, std::int64_t tick, const client::ObjectState& o);
+
+  // Drops the current trial without counting it: `other` has the object, or came for it first.
+  void abandon(Hand& h, const client::HandKey& other);
+
+  void finish_trial(Hand& h);
+
+  Options opt_;
+  client::Client& client_;
+  std::map<std::string, sim::ObjectModelPtr> models_;
+  sim::OperatorSkill skill_;
+  std::vector<Hand> hands_;
+  std::vector<Target> targets_;
+  std::vector<std::size_t> order_;
+  std::vector<client::HandSkeleton> others_, own_;  // other clients' hands and ours, this tick
+  double server_time_ = 0;                          // of the newest scene state
+  std::vector<BotRecord> records_;
+  int total_ = 0, done_ = 0;
+};
+
+}  // namespace telegrasp::bot

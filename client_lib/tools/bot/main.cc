@@ -1,0 +1,226 @@
+// telegrasp-bot: the scripted operator of sim/ driving one or two hands of a telegrasp server
+// over DDS. It grasps every object of the server's scene --trials times, records each grasp
+// from the server's GraspEvent, and prints the same table and JSON records as telegrasp-eval.
+#include "bot.h"
+#include "cli.h"
+#include "telegrasp/sim/standin_objects.h"
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdint>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include <unistd.h>
+
+namespace {
+
+namespace client = telegrasp::client;
+namespace sim = telegrasp::sim;
+using telegrasp::bot::Bot;
+using telegrasp::bot::Clock;
+using telegrasp::bot::kRate;
+using telegrasp::bot::kStaleScene;
+using Options = telegrasp::bot::Options;
+
+constexpr const char* kUsage = R"(Usage: telegrasp-bot [options]
+
+The scripted operator of telegrasp-eval driving one or two hands of a telegrasp server over DDS.
+Each hand picks a free object from the server's SceneState (resting on the table, held by
+nobody, no other client's hand at it), appears 30 cm from it, reaches, grasps, lifts 10 cm,
+holds 1 s and releases, publishing its controller at 90 Hz. Every object in the scene (as the
+bot first sees it) is grasped --trials times; each grasp is recorded from the server's
+GraspEvent. A hand leaves an object to another client's hand that got there first; an object
+unavailable for 10 s is given up (recorded as not grasped, with the reason). Progress goes to
+stderr (one line per trial), then the per-object table of telegrasp-eval goes to stdout.
+
+Options:
+  --client-id ID      names this bot's hands on the server (default bot-<pid>)
+  --hands H           right | left | both (default right)
+  --skill NAME        perfect | experienced | inexperienced (default experienced)
+  --trials N          grasps per object in the scene (default 1)
+  --seed S            random seed: object order and operator noise (default 1)
+  --objects DIR       the server's mesh folder, to know each object's geometry (default: the
+                      30 built-in stand-ins)
+  --json FILE         write every grasp record as telegrasp-eval does, plus "client_id",
+                      "hand", "object_id" and "reason" ("mode" and "speed_scale" are null: they
+                      are the server's settings)
+  --domain N          DDS domain, 0..232 (default 0)
+  --profile NAME      Fast DDS participant profile: loopback (default), lan, wan
+  --profiles FILE     Fast DDS XML profiles (default: $TELEGRASP_PROFILES, else the shipped file)
+  --timeout S         give up when no server is found (or it goes silent) for S seconds
+                      (default 20)
+  -h, --help          this text
+
+Exit status: 0 when every trial is done, 1 if no server was found or it went silent,
+2 for a bad option, 130 when stopped by SIGINT or SIGTERM (the table shows the trials done).
+)";
+
+[[noreturn]] void usage_error(const std::string& what) {
+  std::cerr << "telegrasp-bot: " << what << "\n(see telegrasp-bot --help)\n";
+  std::exit(2);
+}
+
+Options parse(int argc, char** argv) {
+  Options o;
+  o.client_id = "bot-" + std::to_string(getpid());
+  telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
+    if (a == "--client-id") {
+      o.client_id = value();
+      if (o.client_id.empty() || o.client_id.size() > 64) usage_error("--client-id expects 1 to 64 characters, got '" + o.client_id + "'");
+    } else if (a == "--hands") {
+      const std::string h = value();
+      if (h == "right") o.hands = {client::HandSide::kRight};
+      else if (h == "left") o.hands = {client::HandSide::kLeft};
+      else if (h == "both") o.hands = {client::HandSide::kRight, client::HandSide::kLeft};
+      else usage_error("--hands expects right, left or both, got '" + h + "'");
+    } else if (a == "--skill") {
+      o.skill = value();
+      try {
+        sim::skill_profile(o.skill);
+      } catch (const std::exception&) {
+        usage_error("--skill expects perfect, experienced or inexperienced, got '" + o.skill + "'");
+      }
+    }
+    else if (a == "--trials") o.trials = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 10000, usage_error));
+    else if (a == "--seed") o.seed = static_cast<std::uint64_t>(telegrasp::cli::parse_whole(a, value(), 0, 1L << 62, usage_error));
+    else if (a == "--objects") o.objects_dir = value();
+    else if (a == "--json") o.json_path = value();
+    else if (a == "--domain") o.domain = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 0, 232, usage_error));
+    else if (a == "--profile") o.profile = value();
+    else if (a == "--profiles") o.profiles_file = value();
+    else if (a == "--timeout") {
+      const std::string v = value();
+      char* end = nullptr;
+      o.timeout_s = std::strtod(v.c_str(), &end);
+      if (v.empty() || *end != '\0' || !(o.timeout_s > 0) || o.timeout_s > 86400)
+        usage_error("--timeout expects seconds in (0, 86400], got '" + v + "'");
+    } else {
+      return false;
+    }
+    return true;
+  });
+  return o;
+}
+
+std::atomic<bool> g_stop{false};
+extern "C" void on_signal(int) { g_stop = true; }
+
+// Waits up to `timeout` for `ready`, in short steps so that a signal stops the wait.
+template <class F>
+bool wait_until(F ready, double timeout_s) {
+  const auto deadline = Clock::now() + std::chrono::duration<double>(timeout_s);
+  while (!g_stop) {
+    if (ready()) return true;
+    if (Clock::now() >= deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return false;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options opt = parse(argc, argv);
+  std::map<std::string, sim::ObjectModelPtr> models;
+  try {
+    if (opt.objects_dir.empty()) {
+      for (const auto& o : sim::protocol_objects()) models.emplace(o.name, sim::make_standin_model(o));
+    } else {
+      for (auto& m : sim::load_object_dir(opt.objects_dir)) models.emplace(m->name, std::move(m));
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "telegrasp-bot: --objects " << opt.objects_dir << ": " << e.what() << "\n";
+    return 2;
+  }
+  if (!opt.json_path.empty() && !std::ofstream(opt.json_path, std::ios::app)) {
+    std::cerr << "telegrasp-bot: cannot write --json file " << opt.json_path << "\n";
+    return 2;
+  }
+
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+
+  client::ClientOptions copt;
+  copt.client_id = opt.client_id;
+  copt.domain = opt.domain;
+  copt.profile = opt.profile;
+  copt.profiles_file = opt.profiles_file;
+  copt.topics = client::kHandSkeletons | client::kGraspStates | client::kGraspEvents | client::kSceneStates | client::kServerStatuses;
+  std::unique_ptr<client::Client> c;
+  try {
+    c = std::make_unique<client::Client>(copt);
+  } catch (const std::exception& e) {
+    std::cerr << "telegrasp-bot: " << e.what() << "\n";
+    return 2;
+  }
+
+  std::cerr << "telegrasp-bot " << opt.client_id << ": waiting for a server on domain " << opt.domain << " (profile "
+            << opt.profile << ") ...\n";
+  std::optional<client::SceneState> scene;
+  const bool found = wait_until([&] { return c->wait_for_server(std::chrono::milliseconds(0)); }, opt.timeout_s) &&
+                     wait_until([&] { return (scene = c->latest_scene_state()).has_value(); }, opt.timeout_s);
+  if (g_stop) return 130;
+  if (!found) {
+    std::cerr << "telegrasp-bot: no telegrasp server found on domain " << opt.domain << " with profile " << opt.profile
+              << " within " << opt.timeout_s << " s (--timeout)\n";
+    return 1;
+  }
+
+  Bot bot(opt, *c, std::move(models));
+  if (!bot.set_scene(*scene)) {
+    std::cerr << "telegrasp-bot: the server's scene has no objects\n";
+    bot.report_results();
+    return 0;
+  }
+  std::cerr << "telegrasp-bot " << opt.client_id << ": " << scene->objects.size() << " objects x " << opt.trials
+            << " trial(s), " << opt.hands.size() << " hand(s), skill " << opt.skill << "\n";
+
+  // One loop at 90 Hz steps every hand and publishes its controller. The operators' clock (`tick`)
+  // runs only while the server's scene state is fresh, so a stalled server does not fail trials.
+  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / kRate));
+  const auto stale_after = std::chrono::duration<double>(kStaleScene);
+  auto next = Clock::now();
+  std::uint64_t last_scene_tick = scene->tick;
+  auto last_scene_change = Clock::now();
+  bool paused = false;
+  int status = 0;
+  for (std::int64_t tick = 0; !bot.all_done();) {
+    if (g_stop) { status = 130; break; }
+    if (auto s = c->latest_scene_state(); s && s->tick != last_scene_tick) {
+      scene = std::move(s);
+      last_scene_tick = scene->tick;
+      last_scene_change = Clock::now();
+    }
+    const auto silent = Clock::now() - last_scene_change;
+    if (silent > std::chrono::duration<double>(opt.timeout_s)) {
+      std::cerr << "telegrasp-bot: the server sent no scene state for " << opt.timeout_s << " s (--timeout); stopping\n";
+      status = 1;
+      break;
+    }
+    if (silent > stale_after) {
+      if (!paused) std::cerr << "telegrasp-bot: no scene state from the server for " << kStaleScene << " s; waiting\n";
+      paused = true;
+      bot.hold();
+    } else {
+      if (paused) std::cerr << "telegrasp-bot: the server is back\n";
+      paused = false;
+      bot.tick(tick++, *scene);
+    }
+    next += period;
+    const auto now = Clock::now();
+    if (now > next + 5 * period) next = now;  // fell behind (a stall): do not burst to catch up
+    std::this_thread::sleep_until(next);
+  }
+  if (status != 0 && bot.in_progress() > 0)
+    std::cerr << "telegrasp-bot: " << bot.in_progress() << " trial(s) in progress not counted\n";
+  if (!bot.report_results() && status == 0) status = 1;
+  return status;
+}
