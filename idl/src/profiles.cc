@@ -1,5 +1,7 @@
 #include "telegrasp/idl/profiles.h"
 
+#include "telegrasp/sim/data_paths.h"
+
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 #include <fastrtps/xmlparser/XMLProfileManager.h>
@@ -14,8 +16,7 @@ namespace telegrasp::idl {
 
 std::string default_profiles_file() {
   if (const char* env = std::getenv("TELEGRASP_PROFILES"); env != nullptr && *env != '\0') return env;
-  if (std::filesystem::exists(TELEGRASP_SOURCE_PROFILES)) return TELEGRASP_SOURCE_PROFILES;
-  return TELEGRASP_INSTALLED_PROFILES;
+  return (sim::data_dir() / "telegrasp_profiles.xml").string();
 }
 
 void load_profiles(const std::string& path_in, const std::string& participant_profile) {

@@ -1,6 +1,8 @@
 // Loading, validating and mirroring hand rigs.
 #include "telegrasp/sim/hand_rig.h"
 
+#include "telegrasp/sim/data_paths.h"
+
 #include "hand_rig.pb.h"  // generated from sim/proto/hand_rig.proto
 
 #include <google/protobuf/io/tokenizer.h>
@@ -58,7 +60,7 @@ PalmSphere to_sphere(const proto::Sphere& s, const std::string& source, const st
 }  // namespace
 
 std::string HandRig::builtin_path(const std::string& name) {
-  return std::string(TELEGRASP_RIG_DIR) + "/" + name + ".textproto";
+  return (data_dir() / "rigs" / (name + ".textproto")).string();
 }
 
 HandRig HandRig::load(const std::string& path) {

@@ -22,8 +22,9 @@ namespace {
 constexpr double kDt = 1.0 / 90.0;
 
 std::string objects_dir() {
+  // The YCB meshes beside the repository when run from its root, as the README does.
   const char* env = std::getenv("TELEGRASP_OBJECTS_DIR");
-  return env ? env : TELEGRASP_YCB_DIR;
+  return env ? env : "../shared/data/ycb";
 }
 
 struct Fixture {

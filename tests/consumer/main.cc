@@ -1,5 +1,6 @@
 // A minimal program built against the installed telegrasp package: a bad option is rejected,
-// then a client on a private domain publishes one sample.
+// then a client on a private domain publishes one sample. The library finds its Fast DDS
+// profiles in the installed prefix by itself.
 #include <telegrasp/client/client.h>
 
 #include <iostream>
@@ -21,7 +22,6 @@ int main() {
   ClientOptions options;
   options.client_id = "consumer";
   options.domain = 209;  // private: nobody else is here
-  options.profiles_file = TELEGRASP_PROFILES_FILE;
   options.topics = kServerStatuses;
   Client client(options);
   ControllerSample sample;

@@ -1,6 +1,7 @@
 #include "process.h"
 
 #include <csignal>
+#include <filesystem>
 #include <cstdio>
 #include <stdexcept>
 #include <thread>
@@ -66,6 +67,9 @@ int Process::wait(std::chrono::milliseconds timeout) {
   return status_;
 }
 
-std::string bin(const std::string& name) { return std::string(TELEGRASP_BIN_DIR) + "/" + name; }
+// The tools are built next to the test program (build/bin).
+std::string bin(const std::string& name) {
+  return (std::filesystem::read_symlink("/proc/self/exe").parent_path() / name).string();
+}
 
 }  // namespace telegrasp::testing

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
@@ -62,7 +63,9 @@ TEST(ServerConfigTest, ErrorsNameTheFileAndField) {
 // The example shipped for deployments loads as it is.
 TEST(ServerConfigTest, ShippedExampleLoads) {
   ServerSettings s;
-  load_server_config(std::string(TELEGRASP_SOURCE_DIR) + "/deploy/server.example.textproto", s);
+  const char* source_dir = std::getenv("TELEGRASP_SOURCE_DIR");
+  ASSERT_NE(source_dir, nullptr) << "TELEGRASP_SOURCE_DIR is not set (ctest sets it)";
+  load_server_config(std::string(source_dir) + "/deploy/server.example.textproto", s);
   EXPECT_EQ(s.objects.size(), 3u);
   EXPECT_TRUE(s.late_latch);
 }

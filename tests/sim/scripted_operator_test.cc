@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <fstream>
 
 namespace telegrasp::sim {
@@ -80,8 +81,10 @@ void fast_close_on(const ObjectModelPtr& knife);
 // The built-in knife, and the YCB scan when ../shared/data/ycb is present.
 std::vector<ObjectModelPtr> knives() {
   std::vector<ObjectModelPtr> out{standin("032_knife")};
-  const std::string scan = std::string(TELEGRASP_YCB_DIR) + "/032_knife.ply";
-  if (std::ifstream(scan).good()) out.push_back(load_object_model(scan));
+  if (const char* ycb = std::getenv("TELEGRASP_YCB_DIR")) {
+    const std::string scan = std::string(ycb) + "/032_knife.ply";
+    if (std::ifstream(scan).good()) out.push_back(load_object_model(scan));
+  }
   return out;
 }
 

@@ -1,5 +1,7 @@
 #include "experiment_report.h"
 
+#include "telegrasp/sim/data_paths.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -10,9 +12,6 @@
 #include <sstream>
 #include <stdexcept>
 
-#ifndef TELEGRASP_PAPER_RESULTS
-#define TELEGRASP_PAPER_RESULTS "paper_results_per_object.csv"
-#endif
 
 namespace telegrasp::report {
 namespace {
@@ -420,7 +419,7 @@ std::string questionnaire_section(const QuestionnaireSummary& q) {
 
 // ---------------------------------------------------------------------------------------------
 
-std::string default_paper_results_path() { return TELEGRASP_PAPER_RESULTS; }
+std::string default_paper_results_path() { return (sim::data_dir() / "paper_results_per_object.csv").string(); }
 
 std::vector<PaperRow> load_paper_results(const std::string& path) {
   std::ifstream in(path);

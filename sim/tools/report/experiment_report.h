@@ -45,7 +45,7 @@ struct PaperRow {
   double time_experienced = 0, time_inexperienced = 0, err_experienced = 0, err_inexperienced = 0;
 };
 
-/// The shipped paper_results_per_object.csv (the TELEGRASP_PAPER_RESULTS compile definition).
+/// The shipped paper_results_per_object.csv, in the data folder (sim::data_dir()).
 std::string default_paper_results_path();
 
 /// Reads label,object,time_s_experienced,time_s_inexperienced,err_experienced,err_inexperienced

@@ -5,9 +5,9 @@
 
 namespace telegrasp::idl {
 
-/// The profiles file to use when none is given: $TELEGRASP_PROFILES if set, else the source
-/// tree's deploy/fastdds/telegrasp_profiles.xml if it exists, else the installed copy
-/// (<prefix>/share/telegrasp/telegrasp_profiles.xml).
+/// The profiles file to use when none is given: $TELEGRASP_PROFILES if set, else the shipped copy
+/// of deploy/fastdds/telegrasp_profiles.xml in the data folder (sim::data_dir():
+/// <prefix>/share/telegrasp once installed, build/share/telegrasp in a build tree).
 std::string default_profiles_file();
 
 /// Loads `path` (or default_profiles_file() if empty) into Fast DDS once per process and checks
