@@ -77,13 +77,6 @@ std::atomic<bool> g_stop{false};
 extern "C" void on_stop_signal(int) { g_stop = true; }
 
 // Running children, for the watchdog.
-std::mutex g_children_mutex;
-std::set<pid_t> g_children;
-void register_child(pid_t pid, bool running) {
-  std::lock_guard lock(g_children_mutex);
-  if (running) g_children.insert(pid);
-  else g_children.erase(pid);
-}
 }  // namespace
 
 void install_signal_handlers() {
@@ -115,14 +108,10 @@ Watchdog::Watchdog(double seconds) {
       if (!overdue && !stuck) continue;
       std::fprintf(stderr, "telegrasp-bench: watchdog: %s; killing the children and exiting\n",
                    overdue ? "the run exceeded its time limit (a hang, e.g. inside Fast DDS)" : "no clean stop 15 s after the signal");
-      std::set<pid_t> children;
-      {
-        std::lock_guard lock(g_children_mutex);
-        children = g_children;
-      }
-      for (pid_t pid : children) ::kill(pid, SIGTERM);
+      const std::vector<int> children = ChildProcess::live_pids();
+      for (int pid : children) ::kill(pid, SIGTERM);
       std::this_thread::sleep_for(std::chrono::seconds(3));
-      for (pid_t pid : children) ::kill(pid, SIGKILL);
+      for (int pid : children) ::kill(pid, SIGKILL);
       ::_exit(1);
     }
   });
@@ -137,86 +126,6 @@ std::string self_exe() { return std::filesystem::read_symlink("/proc/self/exe").
 
 std::string default_server_path() {
   return (std::filesystem::path(self_exe()).parent_path() / "telegrasp-server").string();
-}
-
-void ChildProcess::start(const std::vector<std::string>& argv, const std::string& log_path) {
-  if (pid_ > 0) throw std::logic_error("ChildProcess::start: already running");
-  if (argv.empty()) throw std::logic_error("ChildProcess::start: empty argv");
-  log_ = log_path;
-  exit_.clear();
-  const int fd = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw std::runtime_error("cannot write the log file " + log_path + ": " + std::strerror(errno));
-  std::vector<char*> args;
-  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-  args.push_back(nullptr);
-  const pid_t parent = ::getpid();
-  const pid_t pid = ::fork();
-  if (pid < 0) {
-    ::close(fd);
-    throw std::runtime_error(std::string("fork failed: ") + std::strerror(errno));
-  }
-  if (pid == 0) {
-    // Child: only async-signal-safe calls until exec.
-    ::prctl(PR_SET_PDEATHSIG, SIGTERM);
-    if (::getppid() != parent) ::_exit(126);  // the parent died before prctl
-    ::dup2(fd, STDOUT_FILENO);
-    ::dup2(fd, STDERR_FILENO);
-    ::execv(args[0], args.data());
-    const char msg[] = "telegrasp-bench: exec failed\n";
-    (void)!::write(STDERR_FILENO, msg, sizeof msg - 1);
-    ::_exit(127);
-  }
-  ::close(fd);
-  pid_ = pid;
-  register_child(pid, true);
-}
-
-void ChildProcess::reaped(int status) {
-  register_child(pid_, false);
-  if (WIFEXITED(status)) exit_ = "exit status " + std::to_string(WEXITSTATUS(status));
-  else if (WIFSIGNALED(status)) exit_ = std::string("killed by signal ") + strsignal(WTERMSIG(status));
-  else exit_ = "status " + std::to_string(status);
-  pid_ = -1;
-}
-
-bool ChildProcess::running() {
-  if (pid_ <= 0) return false;
-  int status = 0;
-  const pid_t r = ::waitpid(pid_, &status, WNOHANG);
-  if (r == pid_) {
-    reaped(status);
-    return false;
-  }
-  return true;
-}
-
-std::string ChildProcess::stop(double grace_s) {
-  if (!running()) return exit_;
-  ::kill(pid_, SIGTERM);
-  const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(grace_s));
-  while (Clock::now() < end) {
-    if (!running()) return exit_;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  ::kill(pid_, SIGKILL);
-  int status = 0;
-  while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
-  }
-  reaped(status);
-  exit_ += " (did not stop within " + std::to_string(grace_s) + " s of SIGTERM: SIGKILLed)";
-  return exit_;
-}
-
-std::string ChildProcess::log_tail(int lines) const {
-  std::ifstream in(log_);
-  std::deque<std::string> tail;
-  for (std::string line; std::getline(in, line);) {
-    tail.push_back(line);
-    if (static_cast<int>(tail.size()) > lines) tail.pop_front();
-  }
-  std::string out;
-  for (const auto& l : tail) out += "    " + l + "\n";
-  return out;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -3,6 +3,8 @@
 // idl::DdsParticipant's), ServerStatus collection, CPU time from /proc, and latency summaries.
 #pragma once
 
+#include "child_process.h"
+
 #include "telegrasp/idl/dds_participant.h"
 #include "telegrasp/idl/telegrasp.h"
 
@@ -66,7 +68,7 @@ bool stop_requested();
 bool sleep_unless_stopped(double seconds);
 
 /// Ends the process if it is still running `seconds` after construction, or 15 s after a stop was
-/// requested: it SIGTERMs (then SIGKILLs) every running ChildProcess and calls _exit(1). A hang
+/// requested: it SIGTERMs (then SIGKILLs) every live ChildProcess and calls _exit(1). A hang
 /// inside Fast DDS must not leave a server behind.
 class Watchdog {
  public:
@@ -84,34 +86,8 @@ class Watchdog {
 std::string self_exe();
 std::string default_server_path();
 
-/// A child process (fork + exec) whose stdout and stderr go to a log file. It receives SIGTERM if
-/// this process dies (PR_SET_PDEATHSIG), and stop() (also run by the destructor) sends SIGTERM,
-/// waits, then SIGKILL: no child outlives the benchmark.
-class ChildProcess {
- public:
-  ChildProcess() = default;
-  ChildProcess(const ChildProcess&) = delete;
-  ChildProcess& operator=(const ChildProcess&) = delete;
-  ~ChildProcess() { stop(); }
-
-  /// Starts argv[0] with `argv`; throws std::runtime_error if the log cannot be opened or fork fails.
-  void start(const std::vector<std::string>& argv, const std::string& log_path);
-  pid_t pid() const { return pid_; }
-  /// True while it runs; once it has exited, exit_description() says how.
-  bool running();
-  std::string exit_description() const { return exit_; }
-  /// SIGTERM, up to `grace_s` to exit, then SIGKILL; reaps it. Returns its exit description.
-  std::string stop(double grace_s = 5.0);
-  const std::string& log_path() const { return log_; }
-  /// The last `lines` lines of the log, for error messages.
-  std::string log_tail(int lines = 15) const;
-
- private:
-  void reaped(int status);
-  pid_t pid_ = -1;
-  std::string log_;
-  std::string exit_;
-};
+/// Child processes: the shared ChildProcess (sim/tools/common); the watchdog stops every live one.
+using tools::ChildProcess;
 
 // ---------------------------------------------------------------------------------------------
 // CPU time from /proc.

@@ -473,7 +473,8 @@ int run(const Options& o) {
                       {"echo_process_cpu_pct", pct(echo_us)},
                       {"bench_process_cpu_pct", pct(self_us)},
                       {"other_processes_cpu_pct", pct(busy_us - self_us - server_us - echo_us)}};
-    std::cerr << "telegrasp-bench-latency: echo stopped: " << echo.stop() << "\n";
+    echo.stop();
+    std::cerr << "telegrasp-bench-latency: echo stopped: " << echo.exit_description() << "\n";
   }
   if (stop_requested()) throw std::runtime_error("interrupted");
 
@@ -521,7 +522,8 @@ int run(const Options& o) {
     server_json["skeletons_tick"] = skeleton_listener.tick_skeletons.load();
   }
   if (stop_requested()) throw std::runtime_error("interrupted");
-  const std::string server_exit = server.stop();
+  server.stop();
+  const std::string server_exit = server.exit_description();
 
   std::cout << "telegrasp-bench-latency: " << o.clients << " clients x 2 hands at " << o.hz << " Hz, " << o.seconds << " s (+" << o.warmup
             << " s warm-up), profile " << o.profile << ", late latching " << (o.late_latch ? "on" : "off") << ", "

@@ -426,7 +426,8 @@ int run(const Options& o) {
     pubs.stop();
   }
   if (stop_requested()) throw std::runtime_error("interrupted");
-  const std::string server_exit = server.stop();
+  server.stop();
+  const std::string server_exit = server.exit_description();
 
   // The last sustained level before the stop whose inputs all (>= 99%) reached the server, and
   // the last one the machine ran unsaturated: there the per-hand cost is the server's own.
