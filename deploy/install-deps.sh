@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# Installs every Debian package telegrasp needs to build, test and run. Idempotent and quiet
-# when everything is present. Run as root (or with sudo available) on Debian 12.
+# Installs every Debian package telegrasp needs to build, test and run, then the npm packages of
+# tests/js (the reference MCAP reader the tests check telegrasp's recordings with). Idempotent and
+# quiet when everything is present. Run as root (or with sudo available) on Debian 12.
 set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
 packages=(
   build-essential cmake pkg-config
@@ -9,20 +11,31 @@ packages=(
   libprotobuf-dev protobuf-compiler nlohmann-json3-dev
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
   libgtest-dev libgmock-dev libbenchmark-dev
+  libzstd-dev
 )
+# Node.js runs tests/js; a machine with its own node on PATH keeps it.
+command -v node >/dev/null || packages+=(nodejs npm)
 
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
-[ ${#missing[@]} -eq 0 ] && exit 0
 
-sudo=""
-if [ "$(id -u)" -ne 0 ]; then
-  command -v sudo >/dev/null || { echo "install-deps: need root (or sudo) to install: ${missing[*]}" >&2; exit 1; }
-  sudo="sudo"
+if [ ${#missing[@]} -gt 0 ]; then
+  sudo=""
+  if [ "$(id -u)" -ne 0 ]; then
+    command -v sudo >/dev/null || { echo "install-deps: need root (or sudo) to install: ${missing[*]}" >&2; exit 1; }
+    sudo="sudo"
+  fi
+  echo "install-deps: installing ${missing[*]}" >&2
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get update -qq
+  $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
-echo "install-deps: installing ${missing[*]}" >&2
-export DEBIAN_FRONTEND=noninteractive
-$sudo apt-get update -qq
-$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+
+# tests/js: exactly the versions in package-lock.json, reinstalled when the lock is newer.
+js="$root/tests/js"
+if [ ! -d "$js/node_modules" ] || [ "$js/node_modules" -ot "$js/package-lock.json" ]; then
+  echo "install-deps: npm ci in tests/js" >&2
+  (cd "$js" && npm ci --no-audit --no-fund --loglevel=error >/dev/null)
+fi
