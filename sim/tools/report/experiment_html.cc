@@ -265,50 +265,61 @@ std::string questionnaire_section(const QuestionnaireSummary& q) {
   return o.str();
 }
 
-}  // namespace
+// ---------------------------------------------------------------------------------------------
+// The experiment page, section by section
 
-std::string html_report(const ExperimentRun& run, const std::vector<PaperRow>& paper,
-                        const QuestionnaireSummary* questionnaire) {
-  const std::vector<std::string> modes = modes_of(run), groups = groups_of(run), objects = objects_of(run);
-  std::vector<std::string> labels;
-  for (std::size_t i = 0; i < objects.size(); ++i) labels.push_back(label_of(paper, objects, i));
-
-  // Aggregates per mode, group ("all" = both) and object, computed once.
+// What the sections draw from: the run's modes, groups and objects in a stable order, each
+// object's x-axis label, and the aggregate per mode, group ("all" = both) and object, computed once.
+struct PageData {
+  std::vector<std::string> modes, groups, objects, labels;
   std::map<std::string, std::map<std::string, std::vector<Aggregate>>> agg;
-  std::map<std::string, std::map<std::string, std::vector<bool>>> has;
-  for (const std::string& mode : modes) {
-    std::vector<std::string> with_all = groups;
+  std::map<std::string, std::map<std::string, std::vector<bool>>> has;  // per object: has records
+};
+
+PageData page_data(const ExperimentRun& run, const std::vector<PaperRow>& paper) {
+  PageData d{modes_of(run), groups_of(run), objects_of(run), {}, {}, {}};
+  for (std::size_t i = 0; i < d.objects.size(); ++i) d.labels.push_back(label_of(paper, d.objects, i));
+  for (const std::string& mode : d.modes) {
+    std::vector<std::string> with_all = d.groups;
     with_all.push_back("all");
-    for (const std::string& group : with_all)
-      for (const std::string& object : objects) {
+    for (const std::string& group : with_all) {
+      std::vector<Aggregate>& aggs = d.agg[mode][group];  // present even with no objects
+      std::vector<bool>& has = d.has[mode][group];
+      for (const std::string& object : d.objects) {
         const auto records = select(run, mode, group == "all" ? "" : group, object);
-        agg[mode][group].push_back(aggregate(records));
-        has[mode][group].push_back(!records.empty());
+        aggs.push_back(aggregate(records));
+        has.push_back(!records.empty());
       }
-  }
-  auto time_cell = [](const Aggregate& a) {
-    return mean_sd(a.time) + " (" + std::to_string(a.grasped) + "/" + std::to_string(a.n) + ")";
-  };
-  auto nd_cell = [](const Aggregate& a) { return mean_sd(a.nd, 3) + " (" + std::to_string(a.nd.n) + ")"; };
-  auto series_of = [&](const std::string& mode, const std::string& group, const std::string& legend,
-                       const std::string& colour, bool time) {
-    Series s{mode, group, legend, colour, has[mode][group], {}, {}};
-    for (const Aggregate& a : agg[mode][group]) {
-      s.values.push_back(time ? a.time.mean : a.nd.mean);
-      s.cells.push_back(time ? time_cell(a) : nd_cell(a));
     }
-    return s;
-  };
+  }
+  return d;
+}
 
+std::string time_cell(const Aggregate& a) {
+  return mean_sd(a.time) + " (" + std::to_string(a.grasped) + "/" + std::to_string(a.n) + ")";
+}
+
+std::string nd_cell(const Aggregate& a) { return mean_sd(a.nd, 3) + " (" + std::to_string(a.nd.n) + ")"; }
+
+// The bars of one mode and group: mean time to grasp (or mean |ND|) per object, and table cells.
+Series series_of(const PageData& d, const std::string& mode, const std::string& group, const std::string& legend,
+                 const std::string& colour, bool time) {
+  Series s{mode, group, legend, colour, d.has.at(mode).at(group), {}, {}};
+  for (const Aggregate& a : d.agg.at(mode).at(group)) {
+    s.values.push_back(time ? a.time.mean : a.nd.mean);
+    s.cells.push_back(time ? time_cell(a) : nd_cell(a));
+  }
+  return s;
+}
+
+// Run summary: command, time, seed, modes, participants, objects and stand-in fallbacks.
+std::string run_section(const ExperimentRun& run, const PageData& d) {
   std::ostringstream body;
-  body << "<h1>telegrasp: the paper's grasping experiment (" << esc(run.protocol) << ")</h1>\n";
-
-  // Run summary.
   body << "<h2>Run</h2>\n<table class=\"numbers\">\n<tr><th>command</th><td><code>" << esc(run.command_line)
        << "</code></td></tr>\n<tr><th>created</th><td>" << esc(run.created) << "</td></tr>\n<tr><th>seed</th><td>"
        << run.seed << "</td></tr>\n<tr><th>wall time</th><td>" << fmt(run.wall_seconds, 1)
        << " s</td></tr>\n<tr><th>modes</th><td>";
-  for (std::size_t i = 0; i < modes.size(); ++i) body << (i ? ", " : "") << esc(mode_name(modes[i]));
+  for (std::size_t i = 0; i < d.modes.size(); ++i) body << (i ? ", " : "") << esc(mode_name(d.modes[i]));
   body << "</td></tr>\n<tr><th>participants</th><td>";
   {
     bool first = true;
@@ -317,26 +328,17 @@ std::string html_report(const ExperimentRun& run, const std::vector<PaperRow>& p
       first = false;
     }
   }
-  body << "</td></tr>\n<tr><th>objects</th><td>" << objects.size() << " with records of " << run.objects.size()
+  body << "</td></tr>\n<tr><th>objects</th><td>" << d.objects.size() << " with records of " << run.objects.size()
        << " in the protocol; " << run.records.size() << " grasp trials</td></tr>\n<tr><th>stand-in fallbacks</th><td>";
   if (run.standin_objects.empty()) body << "none";
   for (std::size_t i = 0; i < run.standin_objects.size(); ++i) body << (i ? ", " : "") << esc(run.standin_objects[i]);
   body << "</td></tr>\n</table>\n";
+  return body.str();
+}
 
-  // Overall per mode and group: the discrete-vs-precise comparison at a glance.
-  body << "<h2>Overall per mode and group</h2>\n<table class=\"numbers\"><tr><th>mode</th><th>group</th><th>trials</th>"
-          "<th>grasped</th><th>held after lift</th><th>time to grasp (s)</th><th>mean |ND| (mm)</th>"
-          "<th>HandError (mm)</th></tr>\n";
-  for (const std::string& mode : modes)
-    for (const std::string& group : groups) {
-      const auto records = select(run, mode, group, "");
-      if (records.empty()) continue;
-      const Aggregate a = aggregate(records);
-      body << "<tr><td>" << esc(mode_name(mode)) << "</td><td>" << esc(group) << "</td><td>" << a.n << "</td><td>"
-           << a.grasped << "</td><td>" << a.held << "</td><td>" << mean_sd(a.time) << "</td><td>" << mean_sd(a.nd, 3)
-           << "</td><td>" << mean_sd(a.hand_error) << "</td></tr>\n";
-    }
-  body << "</table>\n";
+// The slowest and least exact objects of each mode, both groups together (from aggregate_json).
+std::string worst_objects_paragraph(const ExperimentRun& run) {
+  std::ostringstream body;
   const json aggregates = aggregate_json(run);
   body << "<p>Worst objects (both groups): ";
   for (const json& w : aggregates["worst_objects"]) {
@@ -347,9 +349,32 @@ std::string html_report(const ExperimentRun& run, const std::vector<PaperRow>& p
     for (const json& o : w["by_nd"])
       body << esc(o["object"].get<std::string>()) << " (" << fmt(o["nd_abs_mean_mm"].get<double>(), 3) << " mm) ";
   }
-  body << "</p>\n" << unit_caveat(run);
+  body << "</p>\n";
+  return body.str();
+}
 
-  // Charts (1) to (3): one column per mode, so discrete and precise sit side by side.
+// Overall per mode and group: the discrete-vs-precise comparison at a glance, then the worst
+// objects and how our numbers compare with the paper's.
+std::string overall_section(const ExperimentRun& run, const PageData& d) {
+  std::ostringstream body;
+  body << "<h2>Overall per mode and group</h2>\n<table class=\"numbers\"><tr><th>mode</th><th>group</th><th>trials</th>"
+          "<th>grasped</th><th>held after lift</th><th>time to grasp (s)</th><th>mean |ND| (mm)</th>"
+          "<th>HandError (mm)</th></tr>\n";
+  for (const std::string& mode : d.modes)
+    for (const std::string& group : d.groups) {
+      const auto records = select(run, mode, group, "");
+      if (records.empty()) continue;
+      const Aggregate a = aggregate(records);
+      body << "<tr><td>" << esc(mode_name(mode)) << "</td><td>" << esc(group) << "</td><td>" << a.n << "</td><td>"
+           << a.grasped << "</td><td>" << a.held << "</td><td>" << mean_sd(a.time) << "</td><td>" << mean_sd(a.nd, 3)
+           << "</td><td>" << mean_sd(a.hand_error) << "</td></tr>\n";
+    }
+  body << "</table>\n";
+  return body.str() + worst_objects_paragraph(run) + unit_caveat(run);
+}
+
+// Charts (1) to (3): one column per mode, so discrete and precise sit side by side.
+std::string mode_charts_section(const PageData& d) {
   struct Kind {
     const char* id;
     const char* title;
@@ -362,63 +387,84 @@ std::string html_report(const ExperimentRun& run, const std::vector<PaperRow>& p
       {"time_overall", "Mean time to grasp per object, all participants", "Time [s]", true, true},
       {"nd_overall", "Mean |ND| per object, all participants", "|ND| [mm]", false, true},
   };
+  std::ostringstream body;
   for (const Kind& kind : kinds) {
     body << "<h2>" << kind.title << "</h2>\n<div class=\"row\">\n";
-    for (const std::string& mode : modes) {
+    for (const std::string& mode : d.modes) {
       Chart c{std::string(kind.id) + "." + mode, kind.title + std::string(", ") + mode_name(mode), kind.y_label,
-              objects, labels, {}, {}};
+              d.objects, d.labels, {}, {}};
       if (kind.overall) {
-        c.series.push_back(series_of(mode, "all", "All participants", group_colour("all", 0), kind.time));
+        c.series.push_back(series_of(d, mode, "all", "All participants", group_colour("all", 0), kind.time));
       } else {
-        for (std::size_t g = 0; g < groups.size(); ++g)
-          c.series.push_back(series_of(mode, groups[g], groups[g], group_colour(groups[g], g), kind.time));
+        for (std::size_t g = 0; g < d.groups.size(); ++g)
+          c.series.push_back(series_of(d, mode, d.groups[g], d.groups[g], group_colour(d.groups[g], g), kind.time));
       }
       body << "<div class=\"col\"><h3>" << esc(mode_name(mode)) << "</h3>\n" << figure(c) << "</div>\n";
     }
     body << "</div>\n";
   }
+  return body.str();
+}
 
-  // Chart (4): the paper's published numbers beside ours, per group, every mode in one chart.
+// Chart (4) for one of the paper's groups: the paper's time (or error) per object beside ours in
+// every mode; the error chart's table adds our HandError.
+Chart paper_chart(const std::vector<PaperRow>& paper, const PageData& d, const std::string& group, bool time) {
+  const bool experienced = group == "experienced";
+  Chart c{std::string(time ? "paper_time." : "paper_error.") + group,
+          (time ? "Time to grasp, paper vs ours, " : "Error, paper's HandError vs our mean |ND|, ") + group,
+          time ? "Time [s]" : "Error [mm]", d.objects, d.labels, {}, {}};
+  Series p{"paper", group, "paper", mode_colour("paper"), {}, {}, {}};
+  for (const std::string& object : d.objects) {
+    const PaperRow* row = find_paper(paper, object);
+    const double v = !row ? NAN
+                     : time ? (experienced ? row->time_experienced : row->time_inexperienced)
+                            : (experienced ? row->err_experienced : row->err_inexperienced);
+    p.present.push_back(row != nullptr);
+    p.values.push_back(v);
+    p.cells.push_back(number(v, 3));
+  }
+  c.series.push_back(std::move(p));
+  for (const std::string& mode : d.modes) {
+    c.series.push_back(series_of(d, mode, group, "ours, " + mode_name(mode), mode_colour(mode), time));
+    if (!time) {
+      std::vector<std::string> cells;
+      for (const Aggregate& a : d.agg.at(mode).at(group)) cells.push_back(mean_sd(a.hand_error));
+      c.table_only.emplace_back("our HandError, " + mode_name(mode), std::move(cells));
+    }
+  }
+  return c;
+}
+
+// Chart (4): the paper's published numbers beside ours, per group, every mode in one chart.
+std::string paper_section(const std::vector<PaperRow>& paper, const PageData& d) {
+  std::ostringstream body;
   body << "<h2>The paper's per-object results beside ours</h2>\n";
   if (paper.empty()) body << "<p>No paper results given.</p>\n";
-  for (const std::string& group : groups) {
-    const bool experienced = group == "experienced";
-    if (paper.empty() || (!experienced && group != "inexperienced")) continue;
+  for (const std::string& group : d.groups) {
+    if (paper.empty() || (group != "experienced" && group != "inexperienced")) continue;
     body << "<div class=\"row\">\n";
-    for (const bool time : {true, false}) {
-      Chart c{std::string(time ? "paper_time." : "paper_error.") + group,
-              (time ? "Time to grasp, paper vs ours, " : "Error, paper's HandError vs our mean |ND|, ") + group,
-              time ? "Time [s]" : "Error [mm]", objects, labels, {}, {}};
-      Series p{"paper", group, "paper", mode_colour("paper"), {}, {}, {}};
-      std::vector<std::string> hand_error_cells(objects.size());
-      for (const std::string& object : objects) {
-        const PaperRow* row = find_paper(paper, object);
-        const double v = !row ? NAN
-                         : time ? (experienced ? row->time_experienced : row->time_inexperienced)
-                                : (experienced ? row->err_experienced : row->err_inexperienced);
-        p.present.push_back(row != nullptr);
-        p.values.push_back(v);
-        p.cells.push_back(number(v, 3));
-      }
-      c.series.push_back(std::move(p));
-      for (const std::string& mode : modes) {
-        c.series.push_back(series_of(mode, group, "ours, " + mode_name(mode), mode_colour(mode), time));
-        if (!time) {
-          std::vector<std::string> cells;
-          for (const Aggregate& a : agg[mode][group]) cells.push_back(mean_sd(a.hand_error));
-          c.table_only.emplace_back("our HandError, " + mode_name(mode), std::move(cells));
-        }
-      }
-      body << "<div class=\"col\">\n" << figure(c) << "</div>\n";
-    }
+    for (const bool time : {true, false})
+      body << "<div class=\"col\">\n" << figure(paper_chart(paper, d, group, time)) << "</div>\n";
     body << "</div>\n";
   }
   body << "<p>Paper: Oprea et al. 2019, figures \"average elapsed time\" and \"average error (mm)\" per object "
           "(<code>paper_results_per_object.csv</code>). Table cells of ours: mean &plusmn; sample sd (grasped/trials "
           "for time; grasps with a hit capsule for |ND|).</p>\n";
+  return body.str();
+}
 
-  if (questionnaire) body << questionnaire_section(*questionnaire);
-  return page("telegrasp experiment report", body.str());
+}  // namespace
+
+std::string html_report(const ExperimentRun& run, const std::vector<PaperRow>& paper,
+                        const QuestionnaireSummary* questionnaire) {
+  const PageData d = page_data(run, paper);
+  std::string body = "<h1>telegrasp: the paper's grasping experiment (" + esc(run.protocol) + ")</h1>\n";
+  body += run_section(run, d);
+  body += overall_section(run, d);
+  body += mode_charts_section(d);
+  body += paper_section(paper, d);
+  if (questionnaire) body += questionnaire_section(*questionnaire);
+  return page("telegrasp experiment report", body);
 }
 
 std::string questionnaire_html_report(const QuestionnaireSummary& questionnaire) {
