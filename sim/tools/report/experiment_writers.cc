@@ -1,5 +1,6 @@
 // The experiment report's files: the per-grasp and per-object CSV tables, and writing any
 // report text to disk.
+#include "csv.h"
 #include "experiment_aggregate.h"
 
 #include <filesystem>
@@ -11,13 +12,6 @@ namespace telegrasp::report {
 namespace {
 
 using nlohmann::json;
-
-std::string csv_field(const std::string& s) {
-  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
-  std::string out = "\"";
-  for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return out + "\"";
-}
 
 }  // namespace
 
@@ -37,7 +31,7 @@ std::string write_csv(const ExperimentRun& run, const std::string& path) {
     int hits = 0;
     const double nd = grasp_nd_abs_mean(r, &hits);
     // Metrics exist only for a grasp; an empty cell is "no value", never zero.
-    grasps << csv_field(r.mode) << ',' << csv_field(r.group) << ',' << r.participant << ',' << csv_field(r.object)
+    grasps << csv::field(r.mode) << ',' << csv::field(r.group) << ',' << r.participant << ',' << csv::field(r.object)
            << ',' << r.trial << ',' << (r.grasped ? 1 : 0) << ',' << (r.held_after_lift ? 1 : 0) << ',' << r.attempts
            << ',' << (r.grasped ? number(r.time_to_grasp_s, 4) : "") << ','
            << (r.grasped ? number(r.grasp_tick_hand_error_mm, 4) : "") << ',' << (r.grasped ? number(nd, 4) : "")
@@ -53,8 +47,8 @@ std::string write_csv(const ExperimentRun& run, const std::string& path) {
   auto cell = [](const json& v) { return v.is_null() ? std::string() : number(v.get<double>(), 4); };
   auto write_rows = [&](const json& rows) {
     for (const json& r : rows)
-      by_object << csv_field(r["mode"].get<std::string>()) << ',' << csv_field(r["group"].get<std::string>()) << ','
-                << csv_field(r["object"].get<std::string>()) << ',' << r["n"] << ',' << r["grasped"] << ','
+      by_object << csv::field(r["mode"].get<std::string>()) << ',' << csv::field(r["group"].get<std::string>()) << ','
+                << csv::field(r["object"].get<std::string>()) << ',' << r["n"] << ',' << r["grasped"] << ','
                 << r["held_after_lift"] << ',' << cell(r["time_to_grasp_mean_s"]) << ','
                 << cell(r["time_to_grasp_sd_s"]) << ',' << cell(r["nd_abs_mean_mm"]) << ',' << cell(r["nd_abs_sd_mm"])
                 << ',' << r["nd_abs_grasps"] << ',' << cell(r["nd_abs_pooled_mean_mm"]) << ',' << r["capsules_hit"]
