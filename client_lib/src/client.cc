@@ -1,20 +1,12 @@
 #include "telegrasp/client/client.h"
 
 #include "conversions.h"
-#include "telegrasp/idl/profiles.h"
+#include "telegrasp/idl/dds_participant.h"
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
 
 #include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
-#include <fastdds/dds/domain/DomainParticipant.hpp>
-#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
-#include <fastdds/dds/publisher/DataWriter.hpp>
-#include <fastdds/dds/publisher/Publisher.hpp>
-#include <fastdds/dds/subscriber/DataReader.hpp>
-#include <fastdds/dds/subscriber/DataReaderListener.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
-#include <fastdds/dds/subscriber/Subscriber.hpp>
-#include <fastdds/dds/topic/TypeSupport.hpp>
 
 #include <algorithm>
 #include <atomic>
@@ -94,10 +86,8 @@ struct Client::Impl {
   Impl(const Impl&) = delete;
   Impl& operator=(const Impl&) = delete;
 
-  dds::Topic* topic(const char* name, dds::TopicDataType* type);
-  dds::DataWriter* writer(const char* name, dds::TopicDataType* type);
-  template <class Msg>
-  void reader(const char* name, dds::TopicDataType* type);
+  template <class PubSubType>
+  void reader(const char* name);
   void close();
   bool server_ready() const;
 
@@ -125,13 +115,10 @@ struct Client::Impl {
   void set_callback(Channel<T>& channel, std::function<void(const T&)> callback, const Snapshot& snapshot, const char* what);
 
   const ClientOptions options;
-  dds::DomainParticipant* participant = nullptr;
-  dds::Publisher* publisher = nullptr;
-  dds::Subscriber* subscriber = nullptr;
+  std::vector<std::unique_ptr<dds::DataReaderListener>> listeners;  // outlive their readers
+  std::optional<idl::DdsParticipant> participant;  // after the listeners: destroyed before them
   dds::DataWriter* controller_writer = nullptr;
   dds::DataWriter* command_writer = nullptr;
-  std::vector<dds::DataReader*> readers;
-  std::vector<std::unique_ptr<dds::DataReaderListener>> listeners;  // outlive their readers
 
   // Outgoing numbering; held across the write so numbers go out in order.
   std::mutex publish_mutex;
@@ -195,59 +182,27 @@ class Client::Impl::Listener final : public dds::DataReaderListener {
 
 Client::Impl::Impl(ClientOptions options_in) : options(std::move(options_in)) {
   validate(options);
-  idl::load_profiles(options.profiles_file, options.profile);
-  participant = dds::DomainParticipantFactory::get_instance()->create_participant_with_profile(
-      static_cast<dds::DomainId_t>(options.domain), options.profile);
-  if (participant == nullptr)
-    throw std::runtime_error("cannot join DDS domain " + std::to_string(options.domain) + " with participant profile '" +
-                             options.profile + "'");
   try {
-    publisher = participant->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
-    subscriber = participant->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
-    if (publisher == nullptr || subscriber == nullptr) throw std::runtime_error("cannot create a DDS publisher or subscriber");
-    controller_writer = writer(idl::kControllerStateTopic, new msg::ControllerStatePubSubType());
-    command_writer = writer(idl::kSceneCommandTopic, new msg::SceneCommandPubSubType());
+    participant.emplace(options.domain, options.profile, options.profiles_file);
+    controller_writer = participant->writer<msg::ControllerStatePubSubType>(idl::kControllerStateTopic);
+    command_writer = participant->writer<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic);
     // Readers last: their listeners may run as soon as they exist.
-    if (options.topics & kHandSkeletons) reader<msg::HandSkeleton>(idl::kHandSkeletonTopic, new msg::HandSkeletonPubSubType());
-    if (options.topics & kGraspStates) reader<msg::GraspState>(idl::kGraspStateTopic, new msg::GraspStatePubSubType());
-    if (options.topics & kContactSets) reader<msg::ContactSet>(idl::kContactSetTopic, new msg::ContactSetPubSubType());
-    if (options.topics & kGraspEvents) reader<msg::GraspEvent>(idl::kGraspEventTopic, new msg::GraspEventPubSubType());
-    if (options.topics & kSceneStates) reader<msg::SceneState>(idl::kSceneStateTopic, new msg::SceneStatePubSubType());
-    if (options.topics & kServerStatuses) reader<msg::ServerStatus>(idl::kServerStatusTopic, new msg::ServerStatusPubSubType());
+    if (options.topics & kHandSkeletons) reader<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic);
+    if (options.topics & kGraspStates) reader<msg::GraspStatePubSubType>(idl::kGraspStateTopic);
+    if (options.topics & kContactSets) reader<msg::ContactSetPubSubType>(idl::kContactSetTopic);
+    if (options.topics & kGraspEvents) reader<msg::GraspEventPubSubType>(idl::kGraspEventTopic);
+    if (options.topics & kSceneStates) reader<msg::SceneStatePubSubType>(idl::kSceneStateTopic);
+    if (options.topics & kServerStatuses) reader<msg::ServerStatusPubSubType>(idl::kServerStatusTopic);
   } catch (...) {
     close();
     throw;
   }
 }
 
-dds::Topic* Client::Impl::topic(const char* name, dds::TopicDataType* type) {
-  dds::TypeSupport support(type);  // owns `type` from here on
-  if (support.register_type(participant) != ReturnCode_t::RETCODE_OK)
-    throw std::runtime_error(std::string("cannot register the DDS type of topic ") + name);
-  dds::Topic* t = participant->create_topic(name, support.get_type_name(), dds::TOPIC_QOS_DEFAULT);
-  if (t == nullptr) throw std::runtime_error(std::string("cannot create DDS topic ") + name);
-  return t;
-}
-
-dds::DataWriter* Client::Impl::writer(const char* name, dds::TopicDataType* type) {
-  const std::string profile = std::string(name) + idl::kWriterSuffix;
-  dds::DataWriter* w = publisher->create_datawriter_with_profile(topic(name, type), profile);
-  if (w == nullptr)
-    throw std::runtime_error("cannot create the DDS writer of " + std::string(name) + ": is profile '" + profile +
-                             "' in the profiles file?");
-  return w;
-}
-
-template <class Msg>
-void Client::Impl::reader(const char* name, dds::TopicDataType* type) {
-  const std::string profile = std::string(name) + idl::kReaderSuffix;
-  dds::Topic* t = topic(name, type);
-  listeners.push_back(std::make_unique<Listener<Msg>>(*this));
-  dds::DataReader* r = subscriber->create_datareader_with_profile(t, profile, listeners.back().get());
-  if (r == nullptr)
-    throw std::runtime_error("cannot create the DDS reader of " + std::string(name) + ": is profile '" + profile +
-                             "' in the profiles file?");
-  readers.push_back(r);
+template <class PubSubType>
+void Client::Impl::reader(const char* name) {
+  listeners.push_back(std::make_unique<Listener<typename PubSubType::type>>(*this));
+  participant->reader<PubSubType>(name, listeners.back().get());
 }
 
 void Client::Impl::close() {
@@ -256,12 +211,7 @@ void Client::Impl::close() {
     closing = true;
     dispatch_idle.wait(lock, [&] { return dispatching == 0; });
   }
-  if (participant == nullptr) return;
-  for (dds::DataReader* r : readers) r->set_listener(nullptr);
-  participant->delete_contained_entities();
-  dds::DomainParticipantFactory::get_instance()->delete_participant(participant);
-  participant = nullptr;
-  readers.clear();
+  participant.reset();  // detaches the listeners, then deletes every entity
 }
 
 bool Client::Impl::server_ready() const {

@@ -1,24 +1,16 @@
 #include "dds_node.h"
 
-#include "telegrasp/idl/profiles.h"
+#include "telegrasp/idl/dds_participant.h"
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
 
-#include <fastdds/dds/domain/DomainParticipant.hpp>
-#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
-#include <fastdds/dds/publisher/DataWriter.hpp>
-#include <fastdds/dds/publisher/Publisher.hpp>
-#include <fastdds/dds/subscriber/DataReader.hpp>
-#include <fastdds/dds/subscriber/DataReaderListener.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
-#include <fastdds/dds/subscriber/Subscriber.hpp>
-#include <fastdds/dds/topic/TypeSupport.hpp>
 
 #include <chrono>
 #include <cstring>
 #include <iostream>
 #include <mutex>
-#include <stdexcept>
+#include <utility>
 
 namespace telegrasp::server {
 
@@ -73,75 +65,37 @@ class SceneCommandListener : public dds::DataReaderListener {
 
 }  // namespace
 
+// Members in destruction order: the participant (and its readers) goes before the listeners.
 struct DdsNode::Impl {
-  dds::DomainParticipant* participant = nullptr;
-  dds::Publisher* publisher = nullptr;
-  dds::Subscriber* subscriber = nullptr;
+  Impl(int domain, const std::string& profile, const std::string& profiles_file, InputMailbox& mailbox)
+      : input_listener(mailbox), command_listener(mailbox), participant(domain, profile, profiles_file) {}
+
+  ControllerStateListener input_listener;
+  SceneCommandListener command_listener;
+  idl::DdsParticipant participant;
   dds::DataWriter *skeleton = nullptr, *grasp_state = nullptr, *contacts = nullptr, *events = nullptr,
                   *scene = nullptr, *status = nullptr;
-  std::unique_ptr<ControllerStateListener> input_listener;
-  std::unique_ptr<SceneCommandListener> command_listener;
-  std::string profiles;
-
-  dds::Topic* topic(const char* name, dds::TopicDataType* type) {
-    dds::TypeSupport ts(type);
-    if (ts.register_type(participant) != ReturnCode_t::RETCODE_OK) throw std::runtime_error(std::string("cannot register the type of ") + name);
-    dds::Topic* t = participant->create_topic(name, ts.get_type_name(), dds::TOPIC_QOS_DEFAULT);
-    if (!t) throw std::runtime_error(std::string("cannot create topic ") + name);
-    return t;
-  }
-  dds::DataWriter* writer(const char* name, dds::TopicDataType* type) {
-    const std::string profile = std::string(name) + idl::kWriterSuffix;
-    dds::DataWriter* w = publisher->create_datawriter_with_profile(topic(name, type), profile);
-    if (!w) throw std::runtime_error("cannot create the writer of " + std::string(name) + ": is profile '" + profile + "' in " + profiles + "?");
-    return w;
-  }
-  dds::DataReader* reader(const char* name, dds::TopicDataType* type, dds::DataReaderListener* listener) {
-    const std::string profile = std::string(name) + idl::kReaderSuffix;
-    dds::DataReader* r = subscriber->create_datareader_with_profile(topic(name, type), profile, listener);
-    if (!r) throw std::runtime_error("cannot create the reader of " + std::string(name) + ": is profile '" + profile + "' in " + profiles + "?");
-    return r;
-  }
-  void close() {
-    if (!participant) return;
-    participant->delete_contained_entities();
-    dds::DomainParticipantFactory::get_instance()->delete_participant(participant);
-    participant = nullptr;
-  }
 };
 
 DdsNode::DdsNode(int domain, const std::string& profile, const std::string& profiles_file, InputMailbox& mailbox)
-    : impl_(std::make_unique<Impl>()) {
+    : impl_(std::make_unique<Impl>(domain, profile, profiles_file, mailbox)) {
   Impl& d = *impl_;
-  d.profiles = profiles_file.empty() ? idl::default_profiles_file() : profiles_file;
-  idl::load_profiles(d.profiles, profile);
-  d.participant = dds::DomainParticipantFactory::get_instance()->create_participant_with_profile(domain, profile);
-  if (!d.participant) throw std::runtime_error("cannot join DDS domain " + std::to_string(domain) + " with profile '" + profile + "'");
-  try {
-    d.publisher = d.participant->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
-    d.subscriber = d.participant->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
-    if (!d.publisher || !d.subscriber) throw std::runtime_error("cannot create the publisher or subscriber");
-    d.skeleton = d.writer(idl::kHandSkeletonTopic, new msg::HandSkeletonPubSubType());
-    d.grasp_state = d.writer(idl::kGraspStateTopic, new msg::GraspStatePubSubType());
-    d.contacts = d.writer(idl::kContactSetTopic, new msg::ContactSetPubSubType());
-    d.events = d.writer(idl::kGraspEventTopic, new msg::GraspEventPubSubType());
-    d.scene = d.writer(idl::kSceneStateTopic, new msg::SceneStatePubSubType());
-    d.status = d.writer(idl::kServerStatusTopic, new msg::ServerStatusPubSubType());
-    d.input_listener = std::make_unique<ControllerStateListener>(mailbox);
-    d.command_listener = std::make_unique<SceneCommandListener>(mailbox);
-    d.reader(idl::kControllerStateTopic, new msg::ControllerStatePubSubType(), d.input_listener.get());
-    d.reader(idl::kSceneCommandTopic, new msg::SceneCommandPubSubType(), d.command_listener.get());
-  } catch (...) {
-    d.close();
-    throw;
-  }
+  idl::DdsParticipant& p = d.participant;
+  d.skeleton = p.writer<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic);
+  d.grasp_state = p.writer<msg::GraspStatePubSubType>(idl::kGraspStateTopic);
+  d.contacts = p.writer<msg::ContactSetPubSubType>(idl::kContactSetTopic);
+  d.events = p.writer<msg::GraspEventPubSubType>(idl::kGraspEventTopic);
+  d.scene = p.writer<msg::SceneStatePubSubType>(idl::kSceneStateTopic);
+  d.status = p.writer<msg::ServerStatusPubSubType>(idl::kServerStatusTopic);
+  p.reader<msg::ControllerStatePubSubType>(idl::kControllerStateTopic, &d.input_listener);
+  p.reader<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic, &d.command_listener);
 }
 
-DdsNode::~DdsNode() { impl_->close(); }
+DdsNode::~DdsNode() = default;
 
 std::vector<msg::SceneCommand> DdsNode::take_commands() {
-  std::lock_guard lock(impl_->command_listener->mutex);
-  return std::exchange(impl_->command_listener->queue, {});
+  std::lock_guard lock(impl_->command_listener.mutex);
+  return std::exchange(impl_->command_listener.queue, {});
 }
 
 // A failed write is not fatal (e.g. a reliable reader is slow): the next tick publishes again.

@@ -2,20 +2,13 @@
 // domain (loopback profile): what it publishes arrives with the right key, fields and sequence
 // numbers; what a server would publish reaches its callbacks and polling functions.
 #include "telegrasp/client/client.h"
-#include "telegrasp/idl/profiles.h"
+#include "telegrasp/idl/dds_participant.h"
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
 
 #include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
 #include <fastdds/dds/core/status/SubscriptionMatchedStatus.hpp>
-#include <fastdds/dds/domain/DomainParticipant.hpp>
-#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
-#include <fastdds/dds/publisher/DataWriter.hpp>
-#include <fastdds/dds/publisher/Publisher.hpp>
-#include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
-#include <fastdds/dds/subscriber/Subscriber.hpp>
-#include <fastdds/dds/topic/TypeSupport.hpp>
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -50,47 +43,6 @@ bool eventually(const std::function<bool()>& condition, std::chrono::millisecond
 std::int64_t steady_now_ns() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
-
-// A bare Fast DDS participant standing in for a server, with readers and writers made from the
-// shipped profiles.
-class RawNode {
- public:
-  explicit RawNode(int domain) {
-    idl::load_profiles("", "loopback");
-    participant_ = dds::DomainParticipantFactory::get_instance()->create_participant_with_profile(domain, "loopback");
-    if (participant_ == nullptr) throw std::runtime_error("cannot create the raw participant");
-    publisher_ = participant_->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
-    subscriber_ = participant_->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
-  }
-  ~RawNode() {
-    participant_->delete_contained_entities();
-    dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
-  }
-  RawNode(const RawNode&) = delete;
-  RawNode& operator=(const RawNode&) = delete;
-
-  dds::DataWriter* writer(const char* name, dds::TopicDataType* type) {
-    dds::DataWriter* w = publisher_->create_datawriter_with_profile(topic(name, type), std::string(name) + idl::kWriterSuffix);
-    if (w == nullptr) throw std::runtime_error(std::string("cannot create a raw writer of ") + name);
-    return w;
-  }
-  dds::DataReader* reader(const char* name, dds::TopicDataType* type) {
-    dds::DataReader* r = subscriber_->create_datareader_with_profile(topic(name, type), std::string(name) + idl::kReaderSuffix);
-    if (r == nullptr) throw std::runtime_error(std::string("cannot create a raw reader of ") + name);
-    return r;
-  }
-
- private:
-  dds::Topic* topic(const char* name, dds::TopicDataType* type) {
-    dds::TypeSupport support(type);
-    support.register_type(participant_);
-    return participant_->create_topic(name, support.get_type_name(), dds::TOPIC_QOS_DEFAULT);
-  }
-
-  dds::DomainParticipant* participant_ = nullptr;
-  dds::Publisher* publisher_ = nullptr;
-  dds::Subscriber* subscriber_ = nullptr;
-};
 
 bool matched(dds::DataWriter* writer) {
   dds::PublicationMatchedStatus status;
@@ -130,9 +82,9 @@ ClientOptions options(const std::string& id, int domain, unsigned topics) {
 
 TEST(ClientLoopbackTest, PublishedControllerStatesArriveNumberedWithTheirFields) {
   const int domain = 201;
-  RawNode server(domain);
-  dds::DataReader* reader = server.reader(idl::kControllerStateTopic, new msg::ControllerStatePubSubType());
-  server.reader(idl::kSceneCommandTopic, new msg::SceneCommandPubSubType());
+  idl::DdsParticipant server(domain, "loopback");
+  dds::DataReader* reader = server.reader<msg::ControllerStatePubSubType>(idl::kControllerStateTopic);
+  server.reader<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic);
   Client client(options("alice", domain, 0));
   // With no status topic subscribed, matched ControllerState and SceneCommand readers are a server.
   ASSERT_TRUE(client.wait_for_server(kTimeout));
@@ -234,9 +186,9 @@ TEST(ClientLoopbackTest, PublishedControllerStatesArriveNumberedWithTheirFields)
 
 TEST(ClientLoopbackTest, SceneCommandsArriveNumbered) {
   const int domain = 202;
-  RawNode server(domain);
-  dds::DataReader* reader = server.reader(idl::kSceneCommandTopic, new msg::SceneCommandPubSubType());
-  server.reader(idl::kControllerStateTopic, new msg::ControllerStatePubSubType());
+  idl::DdsParticipant server(domain, "loopback");
+  dds::DataReader* reader = server.reader<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic);
+  server.reader<msg::ControllerStatePubSubType>(idl::kControllerStateTopic);
   Client client(options("operator", domain, 0));
   // Reliable, but only to readers matched when written: wait_for_server waits for that match.
   ASSERT_TRUE(client.wait_for_server(kTimeout));
@@ -295,10 +247,10 @@ msg::HandSkeleton make_skeleton(const std::string& id, std::uint8_t side, std::u
 
 TEST(ClientLoopbackTest, ServerOutputsReachCallbacksAndPolling) {
   const int domain = 203;
-  RawNode server(domain);
-  dds::DataWriter* skeleton_writer = server.writer(idl::kHandSkeletonTopic, new msg::HandSkeletonPubSubType());
-  dds::DataWriter* event_writer = server.writer(idl::kGraspEventTopic, new msg::GraspEventPubSubType());
-  dds::DataWriter* grasp_state_writer = server.writer(idl::kGraspStateTopic, new msg::GraspStatePubSubType());
+  idl::DdsParticipant server(domain, "loopback");
+  dds::DataWriter* skeleton_writer = server.writer<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic);
+  dds::DataWriter* event_writer = server.writer<msg::GraspEventPubSubType>(idl::kGraspEventTopic);
+  dds::DataWriter* grasp_state_writer = server.writer<msg::GraspStatePubSubType>(idl::kGraspStateTopic);
 
   Client client(options("viewer", domain, kAllTopics));
   Received received;
@@ -396,9 +348,9 @@ TEST(ClientLoopbackTest, WaitForServerNeedsAMatchedReaderAndAStatus) {
   const int domain = 204;
   Client client(options("waiter", domain, kAllTopics));
   EXPECT_FALSE(client.wait_for_server(100ms));  // nobody there
-  RawNode server(domain);
-  dds::DataReader* reader = server.reader(idl::kControllerStateTopic, new msg::ControllerStatePubSubType());
-  server.reader(idl::kSceneCommandTopic, new msg::SceneCommandPubSubType());
+  idl::DdsParticipant server(domain, "loopback");
+  dds::DataReader* reader = server.reader<msg::ControllerStatePubSubType>(idl::kControllerStateTopic);
+  server.reader<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic);
   // A client without the status topic calls the matched readers a server; ours needs a status too.
   Client no_status(options("no-status", domain, 0));
   ASSERT_TRUE(no_status.wait_for_server(kTimeout));
@@ -407,7 +359,7 @@ TEST(ClientLoopbackTest, WaitForServerNeedsAMatchedReaderAndAStatus) {
   EXPECT_FALSE(client.latest_server_status().has_value());
 
   // The status is transient local: written now, it reaches the client whenever it matches.
-  dds::DataWriter* status_writer = server.writer(idl::kServerStatusTopic, new msg::ServerStatusPubSubType());
+  dds::DataWriter* status_writer = server.writer<msg::ServerStatusPubSubType>(idl::kServerStatusTopic);
   msg::ServerStatus status;
   status.tick(900);
   status.clients(2);
@@ -429,9 +381,9 @@ TEST(ClientLoopbackTest, WaitForServerNeedsAMatchedReaderAndAStatus) {
 // Samples that arrive before a callback is set are not lost to it: setting it catches it up.
 TEST(ClientLoopbackTest, ANewCallbackIsCaughtUpWithWhatArrivedBefore) {
   const int domain = 209;
-  RawNode server(domain);
-  dds::DataWriter* status_writer = server.writer(idl::kServerStatusTopic, new msg::ServerStatusPubSubType());
-  dds::DataWriter* event_writer = server.writer(idl::kGraspEventTopic, new msg::GraspEventPubSubType());
+  idl::DdsParticipant server(domain, "loopback");
+  dds::DataWriter* status_writer = server.writer<msg::ServerStatusPubSubType>(idl::kServerStatusTopic);
+  dds::DataWriter* event_writer = server.writer<msg::GraspEventPubSubType>(idl::kGraspEventTopic);
   Client client(options("late", domain, kServerStatuses | kGraspEvents));
 
   // A status and two events arrive while no callback is set (seen by polling).
@@ -472,8 +424,8 @@ TEST(ClientLoopbackTest, ANewCallbackIsCaughtUpWithWhatArrivedBefore) {
 
 TEST(ClientLoopbackTest, NoCallbackRunsAfterTheDestructorReturns) {
   const int domain = 206;
-  RawNode server(domain);
-  dds::DataWriter* skeleton_writer = server.writer(idl::kHandSkeletonTopic, new msg::HandSkeletonPubSubType());
+  idl::DdsParticipant server(domain, "loopback");
+  dds::DataWriter* skeleton_writer = server.writer<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic);
   std::atomic<bool> destroyed{false}, called_after_destroy{false};
   std::atomic<int> calls{0};
   auto client = std::make_unique<Client>(options("short-lived", domain, kHandSkeletons));
@@ -506,8 +458,8 @@ TEST(ClientLoopbackTest, NoCallbackRunsAfterTheDestructorReturns) {
 
 TEST(ClientLoopbackTest, AThrowingCallbackDoesNotStopDelivery) {
   const int domain = 207;
-  RawNode server(domain);
-  dds::DataWriter* skeleton_writer = server.writer(idl::kHandSkeletonTopic, new msg::HandSkeletonPubSubType());
+  idl::DdsParticipant server(domain, "loopback");
+  dds::DataWriter* skeleton_writer = server.writer<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic);
   Client client(options("thrower", domain, kHandSkeletons));
   std::atomic<int> calls{0};
   client.on_hand_skeleton([&](const HandSkeleton&) {

@@ -1,15 +1,10 @@
 // Tests client_lib/tools/echo_main.cc: telegrasp-echo, run as a process, prints what raw Fast DDS
 // writers publish as one JSON object per line, and exits after --count lines.
-#include "telegrasp/idl/profiles.h"
+#include "telegrasp/idl/dds_participant.h"
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
 
 #include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
-#include <fastdds/dds/domain/DomainParticipant.hpp>
-#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
-#include <fastdds/dds/publisher/DataWriter.hpp>
-#include <fastdds/dds/publisher/Publisher.hpp>
-#include <fastdds/dds/topic/TypeSupport.hpp>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -27,14 +22,6 @@ namespace {
 namespace dds = eprosima::fastdds::dds;
 using namespace std::chrono_literals;
 
-dds::DataWriter* make_writer(dds::DomainParticipant* participant, const char* name, dds::TopicDataType* type) {
-  dds::TypeSupport support(type);
-  support.register_type(participant);
-  dds::Topic* topic = participant->create_topic(name, support.get_type_name(), dds::TOPIC_QOS_DEFAULT);
-  dds::Publisher* publisher = participant->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
-  return publisher->create_datawriter_with_profile(topic, std::string(name) + idl::kWriterSuffix);
-}
-
 bool matched(dds::DataWriter* writer) {
   dds::PublicationMatchedStatus status;
   return writer->get_publication_matched_status(status) == ReturnCode_t::RETCODE_OK && status.current_count > 0;
@@ -42,14 +29,10 @@ bool matched(dds::DataWriter* writer) {
 
 TEST(EchoToolTest, PrintsOneJsonObjectPerSampleAndStopsAtTheCount) {
   const int domain = 208;
-  idl::load_profiles("", "loopback");
-  auto* factory = dds::DomainParticipantFactory::get_instance();
-  dds::DomainParticipant* participant = factory->create_participant_with_profile(domain, "loopback");
-  ASSERT_NE(participant, nullptr);
-  dds::DataWriter* status_writer = make_writer(participant, idl::kServerStatusTopic, new msg::ServerStatusPubSubType());
-  dds::DataWriter* event_writer = make_writer(participant, idl::kGraspEventTopic, new msg::GraspEventPubSubType());
-  ASSERT_NE(status_writer, nullptr);
-  ASSERT_NE(event_writer, nullptr);
+  // Owns every DDS entity of the test, so a failed assertion below frees them too.
+  idl::DdsParticipant participant(domain, "loopback");
+  dds::DataWriter* status_writer = participant.writer<msg::ServerStatusPubSubType>(idl::kServerStatusTopic);
+  dds::DataWriter* event_writer = participant.writer<msg::GraspEventPubSubType>(idl::kGraspEventTopic);
 
   // Transient local: the status reaches the echo whenever it joins.
   msg::ServerStatus status;
@@ -80,8 +63,6 @@ TEST(EchoToolTest, PrintsOneJsonObjectPerSampleAndStopsAtTheCount) {
   char buffer[1 << 16];
   while (std::fgets(buffer, sizeof buffer, pipe) != nullptr) lines.push_back(nlohmann::json::parse(buffer));
   const int status_code = pclose(pipe);
-  participant->delete_contained_entities();
-  factory->delete_participant(participant);
 
   EXPECT_TRUE(WIFEXITED(status_code) && WEXITSTATUS(status_code) == 0) << "exit status " << status_code;
   ASSERT_EQ(lines.size(), 2u) << (lines.empty() ? std::string("no line") : lines.front().dump());

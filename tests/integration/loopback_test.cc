@@ -59,18 +59,19 @@ std::unique_ptr<Client> observe(int domain, Observed& seen, const std::string& i
   return c;
 }
 
-std::unique_ptr<Process> start_server(int domain, const std::string& config, const std::string& name) {
-  std::vector<std::string> args{"--domain", std::to_string(domain), "--profile", "loopback"};
+std::unique_ptr<ChildProcess> start_server(int domain, const std::string& config, const std::string& name) {
+  std::vector<std::string> args{bin("telegrasp-server"), "--domain", std::to_string(domain), "--profile", "loopback"};
   if (!config.empty()) args.insert(args.end(), {"--config", config});
-  return std::make_unique<Process>(bin("telegrasp-server"), args, temp_path(name + "_server.log"));
+  return std::make_unique<ChildProcess>(args, temp_path(name + "_server.log"));
 }
 
-std::unique_ptr<Process> start_bot(int domain, const std::string& id, const std::string& hands, int trials, const std::string& json) {
-  return std::make_unique<Process>(bin("telegrasp-bot"),
-                                   std::vector<std::string>{"--client-id", id, "--hands", hands, "--trials", std::to_string(trials),
-                                                            "--seed", "3", "--domain", std::to_string(domain), "--profile",
-                                                            "loopback", "--json", json, "--timeout", "30"},
-                                   temp_path(id + ".log"));
+std::unique_ptr<ChildProcess> start_bot(int domain, const std::string& id, const std::string& hands, int trials,
+                                        const std::string& json) {
+  return std::make_unique<ChildProcess>(
+      std::vector<std::string>{bin("telegrasp-bot"), "--client-id", id, "--hands", hands, "--trials", std::to_string(trials),
+                               "--seed", "3", "--domain", std::to_string(domain), "--profile", "loopback", "--json", json,
+                               "--timeout", "30"},
+      temp_path(id + ".log"));
 }
 
 // Polls `done` every 10 ms until it holds or `timeout` passes.

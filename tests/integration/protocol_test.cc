@@ -29,11 +29,10 @@ std::string temp_path(const std::string& name) {
 // Runs a short protocol (3 objects, 1 experienced + 1 inexperienced participant, both modes)
 // on domains `domain`, `domain` + 1; returns the exit code.
 int run_protocol(int domain, const std::string& name) {
-  Process eval(bin("telegrasp-eval"),
-               {"protocol", "--participants", "1,1", "--count", "3", "--mode", "both", "--jobs", "2", "--seed", "5",
-                "--domain", std::to_string(domain), "--json", temp_path(name + ".json"), "--csv", temp_path(name + ".csv"),
-                "--report", temp_path(name + ".html")},
-               temp_path(name + ".log"));
+  ChildProcess eval({bin("telegrasp-eval"), "protocol", "--participants", "1,1", "--count", "3", "--mode", "both", "--jobs",
+                     "2", "--seed", "5", "--domain", std::to_string(domain), "--json", temp_path(name + ".json"), "--csv",
+                     temp_path(name + ".csv"), "--report", temp_path(name + ".html")},
+                    temp_path(name + ".log"));
   return eval.wait(240s);
 }
 

@@ -1,6 +1,8 @@
 // The bot's object choice, trials and records (bot.h).
 #include "bot.h"
 
+#include "grasp_event_record.h"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -219,14 +221,7 @@ void Bot::on_event(const client::GraspEvent& e) {
   }
   if (h->got_grasp_event) return;  // a later attempt's grasp: the first one is the trial's
   h->got_grasp_event = true;
-  report::Record& r = h->rec;
-  r.grasped = true;
-  r.time_to_grasp_s = e.time - h->server_t0;
-  r.hand_error_mm = r.grasp_tick_hand_error_mm = e.hand_error_mm;
-  r.capsules.clear();
-  for (const client::CapsuleReport& c : e.capsules)
-    r.capsules.push_back({c.phalanx_name, c.hit, c.blocked, 1000 * c.nd, 1000 * c.signed_distance});
-  r.grasp_tick_capsules = r.capsules;
+  tools::record_grasp_event(e, h->server_t0, *h->rig, h->rec);
 }
 
 // Starts or stops each untargeted object's unavailability clock; gives up after kGiveUpAfter.

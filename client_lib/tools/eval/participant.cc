@@ -6,6 +6,7 @@
 // Progress: one line per grasp on stdout ("grasp I/N OBJECT held|not-held"), read by the runner.
 #include "cli.h"
 #include "commands.h"
+#include "grasp_event_record.h"
 #include "grasp_report.h"
 #include "protocol_common.h"
 #include "telegrasp/client/client.h"
@@ -221,19 +222,8 @@ class Participant {
     }
   }
 
-  void take_grasp_event(const client::GraspEvent& e) {
-    rec_.grasped = true;
-    rec_.time_to_grasp_s = e.time - e.object_spawn_time;
-    rec_.hand_error_mm = rec_.grasp_tick_hand_error_mm = e.hand_error_mm;
-    for (const client::CapsuleReport& c : e.capsules)
-      rec_.capsules.push_back({c.phalanx_name, c.hit, c.blocked, 1000 * c.nd, 1000 * c.signed_distance});
-    rec_.grasp_tick_capsules = rec_.capsules;
-    for (const client::ContactPoint& c : e.contacts) {
-      const bool palm = c.phalanx < 0 || c.phalanx >= static_cast<int>(rig_->phalanges().size());
-      rec_.contacts.push_back({palm ? std::string("palm") : rig_->phalanges()[c.phalanx].name, c.p_WorldContact, c.n_World,
-                               c.p_ObjectContact, c.n_Object});
-    }
-  }
+  // The trial starts when the object appears: the hand waits at home, free to reach.
+  void take_grasp_event(const client::GraspEvent& e) { tools::record_grasp_event(e, e.object_spawn_time, *rig_, rec_); }
 
   void finish(std::uint64_t tick) {
     rec_.mode = opt_.mode;

@@ -2,9 +2,11 @@
 // per participant and per group, beside the paper's Table 2.
 #include "offline_commands.h"
 
+#include "cli.h"
 #include "experiment_report.h"
 #include "questionnaire.h"
 
+#include <cstdlib>
 #include <exception>
 #include <iostream>
 #include <string>
@@ -28,33 +30,18 @@ const char* kUsage =
 int telegrasp::eval::run_questionnaire(int argc, char** argv) {
   namespace report = telegrasp::report;
   std::string input, json_path, report_path;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&](std::string& out) {
-      if (i + 1 >= argc) {
-        std::cerr << "telegrasp-eval questionnaire: " << arg << " needs a value\n" << kUsage;
-        return false;
-      }
-      out = argv[++i];
-      return true;
-    };
-    if (arg == "-h" || arg == "--help") {
-      std::cout << kUsage;
-      return 0;
-    } else if (arg == "--json") {
-      if (!value(json_path)) return 2;
-    } else if (arg == "--report") {
-      if (!value(report_path)) return 2;
-    } else if (!arg.empty() && arg[0] == '-') {
-      std::cerr << "telegrasp-eval questionnaire: unknown option " << arg << "\n" << kUsage;
-      return 2;
-    } else if (input.empty()) {
-      input = arg;
-    } else {
-      std::cerr << "telegrasp-eval questionnaire: one answers file only (got " << input << " and " << arg << ")\n";
-      return 2;
-    }
-  }
+  auto usage_error = [](const std::string& what) {
+    std::cerr << "telegrasp-eval questionnaire: " << what << "\n(see telegrasp-eval questionnaire --help)\n";
+    std::exit(2);
+  };
+  telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
+    if (a == "--json") json_path = value();
+    else if (a == "--report") report_path = value();
+    else if (a.empty() || a[0] == '-') return false;
+    else if (input.empty()) input = a;
+    else usage_error("one answers file only (got " + input + " and " + a + ")");
+    return true;
+  });
   if (input.empty()) {
     std::cerr << "telegrasp-eval questionnaire: no answers file given\n" << kUsage;
     return 2;

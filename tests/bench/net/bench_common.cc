@@ -4,14 +4,9 @@
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
 
-#include <fastdds/dds/domain/DomainParticipant.hpp>
-#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
-#include <fastdds/dds/publisher/DataWriter.hpp>
-#include <fastdds/dds/publisher/Publisher.hpp>
-#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
+#include <fastdds/dds/core/status/SubscriptionMatchedStatus.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
-#include <fastdds/dds/subscriber/Subscriber.hpp>
-#include <fastdds/dds/topic/TypeSupport.hpp>
 #include <fastrtps/attributes/LibrarySettingsAttributes.h>
 #include <fastrtps/xmlparser/XMLProfileManager.h>
 
@@ -284,51 +279,6 @@ void load_profiles(const std::string& file, const std::string& participant_profi
   eprosima::fastrtps::LibrarySettingsAttributes settings;
   settings.intraprocess_delivery = eprosima::fastrtps::INTRAPROCESS_OFF;
   eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(settings);
-}
-
-Participant::Participant(int domain, const std::string& profile) {
-  auto* factory = dds::DomainParticipantFactory::get_instance();
-  participant_ = factory->create_participant_with_profile(domain, profile);
-  if (!participant_)
-    throw std::runtime_error("cannot create a DDS participant on domain " + std::to_string(domain) + " with profile '" + profile + "'");
-  publisher_ = participant_->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
-  subscriber_ = participant_->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
-  if (!publisher_ || !subscriber_) {
-    participant_->delete_contained_entities();
-    factory->delete_participant(participant_);
-    throw std::runtime_error("cannot create a DDS publisher/subscriber");
-  }
-}
-
-Participant::~Participant() {
-  participant_->delete_contained_entities();
-  dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
-}
-
-dds::Topic* Participant::topic(const std::string& name, const TypeFactory& type) {
-  if (auto it = topics_.find(name); it != topics_.end()) return it->second;
-  dds::TypeSupport ts(type());
-  if (participant_->find_type(ts.get_type_name()).empty() && ts.register_type(participant_) != ReturnCode_t::RETCODE_OK)
-    throw std::runtime_error("cannot register type " + ts.get_type_name());
-  dds::Topic* t = participant_->create_topic(name, ts.get_type_name(), dds::TOPIC_QOS_DEFAULT);
-  if (!t) throw std::runtime_error("cannot create topic " + name);
-  topics_[name] = t;
-  return t;
-}
-
-dds::DataWriter* Participant::make_writer(const std::string& name, const TypeFactory& type, const std::string& profile_topic) {
-  const std::string profile = profile_topic + idl::kWriterSuffix;
-  dds::DataWriter* w = publisher_->create_datawriter_with_profile(topic(name, type), profile);
-  if (!w) throw std::runtime_error("cannot create a writer of " + name + " with profile '" + profile + "'");
-  return w;
-}
-
-dds::DataReader* Participant::make_reader(const std::string& name, const TypeFactory& type, const std::string& profile_topic,
-                                          dds::DataReaderListener* listener) {
-  const std::string profile = profile_topic + idl::kReaderSuffix;
-  dds::DataReader* r = subscriber_->create_datareader_with_profile(topic(name, type), profile, listener);
-  if (!r) throw std::runtime_error("cannot create a reader of " + name + " with profile '" + profile + "'");
-  return r;
 }
 
 int matched_readers(dds::DataWriter* writer) {

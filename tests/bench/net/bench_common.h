@@ -1,8 +1,9 @@
 // Shared pieces of the network benchmarks (telegrasp-bench-latency, telegrasp-bench-scale):
-// flag parsing, the server child process, raw Fast DDS entities, ServerStatus collection, CPU
-// time from /proc, and latency summaries.
+// flag parsing, the server child process, profile loading (the entities are
+// idl::DdsParticipant's), ServerStatus collection, CPU time from /proc, and latency summaries.
 #pragma once
 
+#include "telegrasp/idl/dds_participant.h"
 #include "telegrasp/idl/telegrasp.h"
 
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
@@ -21,15 +22,6 @@
 #include <sys/types.h>
 #include <thread>
 #include <vector>
-
-namespace eprosima::fastdds::dds {
-class DomainParticipant;
-class Publisher;
-class Subscriber;
-class DataWriter;
-class DataReader;
-class Topic;
-}  // namespace eprosima::fastdds::dds
 
 namespace telegrasp::bench {
 
@@ -145,38 +137,6 @@ std::int64_t machine_busy_us();
 /// 17 participants and AUTOMATIC liveliness). Samples between them then go through shared memory,
 /// as between processes.
 void load_profiles(const std::string& file, const std::string& participant_profile);
-
-/// One RAII owner of a DomainParticipant and everything it contains. Topics are created on demand
-/// per (name, type); writers and readers use the XML profiles "<profile_topic>.writer/.reader",
-/// which lets a benchmark topic borrow the QoS of a telegrasp topic.
-class Participant {
- public:
-  Participant(int domain, const std::string& profile);
-  ~Participant();
-  Participant(const Participant&) = delete;
-  Participant& operator=(const Participant&) = delete;
-
-  template <class PubSubType>
-  dds::DataWriter* writer(const std::string& topic, const std::string& profile_topic) {
-    return make_writer(topic, [] { return new PubSubType(); }, profile_topic);
-  }
-  template <class PubSubType>
-  dds::DataReader* reader(const std::string& topic, const std::string& profile_topic, dds::DataReaderListener* listener) {
-    return make_reader(topic, [] { return new PubSubType(); }, profile_topic, listener);
-  }
-  dds::DomainParticipant* get() const { return participant_; }
-
- private:
-  using TypeFactory = std::function<dds::TopicDataType*()>;
-  dds::Topic* topic(const std::string& name, const TypeFactory& type);
-  dds::DataWriter* make_writer(const std::string& topic, const TypeFactory& type, const std::string& profile_topic);
-  dds::DataReader* make_reader(const std::string& topic, const TypeFactory& type, const std::string& profile_topic,
-                               dds::DataReaderListener* listener);
-  dds::DomainParticipant* participant_ = nullptr;
-  dds::Publisher* publisher_ = nullptr;
-  dds::Subscriber* subscriber_ = nullptr;
-  std::map<std::string, dds::Topic*> topics_;
-};
 
 /// Matched remote endpoints of a writer / reader.
 int matched_readers(dds::DataWriter* writer);

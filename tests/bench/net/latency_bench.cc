@@ -141,9 +141,9 @@ int echo_main(int argc, char** argv) {
   install_signal_handlers();
   load_profiles(profiles_file, profile);
   EchoListener listener;
-  Participant p(domain, profile);
+  idl::DdsParticipant p(domain, profile, profiles_file);
   listener.pong = p.writer<msg::ControllerStatePubSubType>("bench/Pong", idl::kHandSkeletonTopic);
-  p.reader<msg::ControllerStatePubSubType>("bench/Ping", idl::kControllerStateTopic, &listener);
+  p.reader<msg::ControllerStatePubSubType>("bench/Ping", &listener, idl::kControllerStateTopic);
   std::cerr << "telegrasp-bench-latency echo: domain " << domain << ", profile " << profile << "\n";
   while (sleep_unless_stopped(0.2)) {
   }
@@ -420,8 +420,8 @@ int run(const Options& o) {
   SkeletonListener skeleton_listener(e2e_any, e2e_tick, o.clients);
   ChildProcess server, echo;
 
-  Participant main_participant(o.domain, o.profile);
-  main_participant.reader<msg::ServerStatusPubSubType>(idl::kServerStatusTopic, idl::kServerStatusTopic, &status);
+  idl::DdsParticipant main_participant(o.domain, o.profile, o.profiles_file);
+  main_participant.reader<msg::ServerStatusPubSubType>(idl::kServerStatusTopic, &status);
   std::cerr << "telegrasp-bench-latency: starting " << join_command(server_argv(so)) << " (log " << so.log_path << ")\n";
   start_server(server, so, status, 20);
   std::cerr << "telegrasp-bench-latency: server pid " << server.pid() << " answered\n";
@@ -449,7 +449,7 @@ int run(const Options& o) {
                                              "--profiles", o.profiles_file};
     echo.start(echo_argv, echo_log);
     dds::DataWriter* ping = main_participant.writer<msg::ControllerStatePubSubType>("bench/Ping", idl::kControllerStateTopic);
-    dds::DataReader* pong = main_participant.reader<msg::ControllerStatePubSubType>("bench/Pong", idl::kHandSkeletonTopic, &pong_listener);
+    dds::DataReader* pong = main_participant.reader<msg::ControllerStatePubSubType>("bench/Pong", &pong_listener, idl::kHandSkeletonTopic);
     if (!wait_until([&] { return (matched_readers(ping) > 0 && matched_writers(pong) > 0) || !echo.running(); }, 15) || !echo.running())
       throw std::runtime_error("the echo process (" + join_command(echo_argv) + ") did not match bench/Ping and bench/Pong within 15 s" +
                                (echo.running() ? std::string() : " (it exited: " + echo.exit_description() + ")") + "\n  log " +
@@ -482,12 +482,12 @@ int run(const Options& o) {
   nlohmann::ordered_json server_json;
   {
     dds::DataReader* skeletons =
-        main_participant.reader<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic, idl::kHandSkeletonTopic, &skeleton_listener);
-    std::vector<std::unique_ptr<Participant>> clients;
+        main_participant.reader<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic, &skeleton_listener);
+    std::vector<std::unique_ptr<idl::DdsParticipant>> clients;
     std::vector<dds::DataWriter*> writers;
     for (int c = 0; c < o.clients; ++c) {
-      clients.push_back(std::make_unique<Participant>(o.domain, o.profile));
-      writers.push_back(clients.back()->writer<msg::ControllerStatePubSubType>(idl::kControllerStateTopic, idl::kControllerStateTopic));
+      clients.push_back(std::make_unique<idl::DdsParticipant>(o.domain, o.profile, o.profiles_file));
+      writers.push_back(clients.back()->writer<msg::ControllerStatePubSubType>(idl::kControllerStateTopic));
     }
     const bool matched = wait_until(
         [&] {

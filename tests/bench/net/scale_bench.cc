@@ -119,10 +119,11 @@ Options parse(int argc, char** argv) {
 /// the server sees a steady stream rather than one burst per period.
 class Publishers {
  public:
-  Publishers(int count, int domain, const std::string& profile, double hz, int max_hands) : hz_(hz) {
+  Publishers(int count, int domain, const std::string& profile, const std::string& profiles_file, double hz, int max_hands)
+      : hz_(hz) {
     for (int p = 0; p < count; ++p) {
-      participants_.push_back(std::make_unique<Participant>(domain, profile));
-      writers_.push_back(participants_.back()->writer<msg::ControllerStatePubSubType>(idl::kControllerStateTopic, idl::kControllerStateTopic));
+      participants_.push_back(std::make_unique<idl::DdsParticipant>(domain, profile, profiles_file));
+      writers_.push_back(participants_.back()->writer<msg::ControllerStatePubSubType>(idl::kControllerStateTopic));
     }
     for (int c = 0; c < max_hands / 2; ++c) ids_.push_back("scale-" + std::to_string(c));
   }
@@ -182,7 +183,7 @@ class Publishers {
   }
 
   double hz_;
-  std::vector<std::unique_ptr<Participant>> participants_;
+  std::vector<std::unique_ptr<idl::DdsParticipant>> participants_;
   std::vector<dds::DataWriter*> writers_;
   std::vector<std::string> ids_;
   std::vector<std::thread> threads_;
@@ -376,8 +377,8 @@ int run(const Options& o) {
 
   StatusCollector status;
   ChildProcess server;
-  Participant main_participant(o.domain, o.profile);
-  main_participant.reader<msg::ServerStatusPubSubType>(idl::kServerStatusTopic, idl::kServerStatusTopic, &status);
+  idl::DdsParticipant main_participant(o.domain, o.profile, o.profiles_file);
+  main_participant.reader<msg::ServerStatusPubSubType>(idl::kServerStatusTopic, &status);
   std::cerr << "telegrasp-bench-scale: starting " << join_command(server_argv(so)) << " (log " << so.log_path << ")\n";
   start_server(server, so, status, 20);
   const pid_t server_pid = server.pid();
@@ -388,7 +389,7 @@ int run(const Options& o) {
   std::optional<std::size_t> at_sustained;  // index into steps
   std::string stop_reason;
   {
-    Publishers pubs(o.publishers, o.domain, o.profile, o.hz, o.max);
+    Publishers pubs(o.publishers, o.domain, o.profile, o.profiles_file, o.hz, o.max);
     if (!pubs.matched(15)) throw std::runtime_error("the publisher participants did not match the server's ControllerState reader within 15 s");
     pubs.start();
     std::cout << "telegrasp-bench-scale: " << o.publishers << " publisher threads at " << o.hz << " Hz, +" << o.step << " hands per "

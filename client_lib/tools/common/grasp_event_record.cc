@@ -1,0 +1,23 @@
+#include "grasp_event_record.h"
+
+#include <algorithm>
+
+namespace telegrasp::tools {
+
+void record_grasp_event(const client::GraspEvent& e, double trial_start_time, const sim::HandRig& rig, report::Record& rec) {
+  rec.grasped = true;
+  rec.time_to_grasp_s = e.time - std::max(e.object_spawn_time, trial_start_time);
+  rec.hand_error_mm = rec.grasp_tick_hand_error_mm = e.hand_error_mm;
+  rec.capsules.clear();
+  for (const client::CapsuleReport& c : e.capsules)
+    rec.capsules.push_back({c.phalanx_name, c.hit, c.blocked, 1000 * c.nd, 1000 * c.signed_distance});
+  rec.grasp_tick_capsules = rec.capsules;
+  rec.contacts.clear();
+  for (const client::ContactPoint& c : e.contacts) {
+    const bool palm = c.phalanx < 0 || c.phalanx >= static_cast<int>(rig.phalanges().size());
+    rec.contacts.push_back({palm ? std::string("palm") : rig.phalanges()[c.phalanx].name, c.p_WorldContact, c.n_World,
+                            c.p_ObjectContact, c.n_Object});
+  }
+}
+
+}  // namespace telegrasp::tools

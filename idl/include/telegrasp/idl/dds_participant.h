@@ -1,0 +1,85 @@
+// DdsParticipant: the one RAII owner of a process's Fast DDS entities (participant, publisher,
+// subscriber, topics, writers, readers), all made from the XML profiles by name.
+#pragma once
+
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/topic/TopicDataType.hpp>
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace eprosima::fastdds::dds {
+class DomainParticipant;
+class Publisher;
+class Subscriber;
+class Topic;
+}  // namespace eprosima::fastdds::dds
+
+namespace telegrasp::idl {
+
+/// A DomainParticipant joined by participant profile, with one publisher and one subscriber, the
+/// topics (one per name, its type registered once) and the writers and readers made with the
+/// profiles "<topic>.writer" and "<topic>.reader" (topics.h). Everything it creates it deletes.
+/// Several participants in one process can deadlock Fast DDS 2.9: make one per process (the
+/// network benchmarks make several, with intraprocess delivery off).
+class DdsParticipant {
+ public:
+  /// Loads `profiles_file` ("" = default_profiles_file()) and joins `domain` with the participant
+  /// profile `profile`. Throws std::runtime_error naming the file or profile that failed.
+  DdsParticipant(int domain, const std::string& profile, const std::string& profiles_file = "");
+  /// Detaches the readers' listeners, deletes every contained entity, then the participant.
+  /// Listeners given to reader() must outlive this object.
+  ~DdsParticipant();
+  DdsParticipant(const DdsParticipant&) = delete;
+  DdsParticipant& operator=(const DdsParticipant&) = delete;
+
+  /// A new writer on `topic` (type PubSubType, e.g. msg::HandSkeletonPubSubType) with the QoS
+  /// profile "<qos_of>.writer" ("" = `topic`'s own). Owned by this participant. Throws
+  /// std::runtime_error naming the topic or profile that failed.
+  template <class PubSubType>
+  eprosima::fastdds::dds::DataWriter* writer(const std::string& topic, const std::string& qos_of = "") {
+    return make_writer(topic, &new_type<PubSubType>, qos_of);
+  }
+
+  /// A new reader on `topic` with the QoS profile "<qos_of>.reader" ("" = `topic`'s own); its
+  /// listener (may be null) runs as soon as it returns. Owned by this participant. Throws
+  /// std::runtime_error naming the topic or profile that failed.
+  template <class PubSubType>
+  eprosima::fastdds::dds::DataReader* reader(const std::string& topic,
+                                             eprosima::fastdds::dds::DataReaderListener* listener = nullptr,
+                                             const std::string& qos_of = "") {
+    return make_reader(topic, &new_type<PubSubType>, listener, qos_of);
+  }
+
+  /// The participant itself (for status queries; entities made on it directly are deleted too).
+  eprosima::fastdds::dds::DomainParticipant* get() const { return participant_; }
+  /// The profiles file in use (resolved: never empty).
+  const std::string& profiles_file() const { return profiles_file_; }
+
+ private:
+  using TypeFactory = eprosima::fastdds::dds::TopicDataType* (*)();
+  template <class PubSubType>
+  static eprosima::fastdds::dds::TopicDataType* new_type() {
+    return new PubSubType();
+  }
+
+  eprosima::fastdds::dds::Topic* topic(const std::string& name, TypeFactory type);
+  eprosima::fastdds::dds::DataWriter* make_writer(const std::string& topic, TypeFactory type, const std::string& qos_of);
+  eprosima::fastdds::dds::DataReader* make_reader(const std::string& topic, TypeFactory type,
+                                                  eprosima::fastdds::dds::DataReaderListener* listener,
+                                                  const std::string& qos_of);
+  void close();
+
+  std::string profiles_file_;
+  std::string profile_;
+  eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
+  eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
+  eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
+  std::map<std::string, eprosima::fastdds::dds::Topic*> topics_;
+  std::vector<eprosima::fastdds::dds::DataReader*> readers_;
+};
+
+}  // namespace telegrasp::idl

@@ -1,0 +1,84 @@
+#include "telegrasp/idl/dds_participant.h"
+
+#include "telegrasp/idl/profiles.h"
+#include "telegrasp/idl/topics.h"
+
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+#include <fastdds/dds/topic/TypeSupport.hpp>
+
+#include <stdexcept>
+
+namespace telegrasp::idl {
+
+namespace dds = eprosima::fastdds::dds;
+
+DdsParticipant::DdsParticipant(int domain, const std::string& profile, const std::string& profiles_file)
+    : profiles_file_(profiles_file.empty() ? default_profiles_file() : profiles_file), profile_(profile) {
+  load_profiles(profiles_file_, profile_);
+  participant_ = dds::DomainParticipantFactory::get_instance()->create_participant_with_profile(domain, profile_);
+  if (participant_ == nullptr)
+    throw std::runtime_error("cannot join DDS domain " + std::to_string(domain) + " with participant profile '" + profile_ +
+                             "' of " + profiles_file_);
+  publisher_ = participant_->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
+  subscriber_ = participant_->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
+  if (publisher_ == nullptr || subscriber_ == nullptr) {
+    close();
+    throw std::runtime_error("cannot create the DDS publisher or subscriber of participant profile '" + profile + "'");
+  }
+}
+
+DdsParticipant::~DdsParticipant() { close(); }
+
+void DdsParticipant::close() {
+  if (participant_ == nullptr) return;
+  for (dds::DataReader* r : readers_) r->set_listener(nullptr);
+  participant_->delete_contained_entities();
+  dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+  participant_ = nullptr;
+  publisher_ = nullptr;
+  subscriber_ = nullptr;
+  topics_.clear();
+  readers_.clear();
+}
+
+dds::Topic* DdsParticipant::topic(const std::string& name, TypeFactory type) {
+  dds::TypeSupport support(type());  // owns the new type object from here on
+  const std::string type_name = support.get_type_name();
+  if (const auto it = topics_.find(name); it != topics_.end()) {
+    if (it->second->get_type_name() != type_name)
+      throw std::runtime_error("DDS topic " + name + " has type " + it->second->get_type_name() + ", not " + type_name);
+    return it->second;
+  }
+  if (participant_->find_type(type_name).empty() && support.register_type(participant_) != ReturnCode_t::RETCODE_OK)
+    throw std::runtime_error("cannot register DDS type " + type_name + " of topic " + name);
+  dds::Topic* t = participant_->create_topic(name, type_name, dds::TOPIC_QOS_DEFAULT);
+  if (t == nullptr) throw std::runtime_error("cannot create DDS topic " + name + " of type " + type_name);
+  topics_[name] = t;
+  return t;
+}
+
+dds::DataWriter* DdsParticipant::make_writer(const std::string& name, TypeFactory type, const std::string& qos_of) {
+  const std::string profile = (qos_of.empty() ? name : qos_of) + kWriterSuffix;
+  dds::DataWriter* w = publisher_->create_datawriter_with_profile(topic(name, type), profile);
+  if (w == nullptr)
+    throw std::runtime_error("cannot create the DDS writer of topic " + name + ": is profile '" + profile + "' in " +
+                             profiles_file_ + "?");
+  return w;
+}
+
+dds::DataReader* DdsParticipant::make_reader(const std::string& name, TypeFactory type, dds::DataReaderListener* listener,
+                                             const std::string& qos_of) {
+  const std::string profile = (qos_of.empty() ? name : qos_of) + kReaderSuffix;
+  dds::DataReader* r = subscriber_->create_datareader_with_profile(topic(name, type), profile, listener);
+  if (r == nullptr)
+    throw std::runtime_error("cannot create the DDS reader of topic " + name + ": is profile '" + profile + "' in " +
+                             profiles_file_ + "?");
+  readers_.push_back(r);
+  return r;
+}
+
+}  // namespace telegrasp::idl
