@@ -23,6 +23,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -253,59 +254,89 @@ void print_worst_objects(const json& aggregates) {
   }
 }
 
-}  // namespace
+// ---------------------------------------------------------------------------------------------
+// Set-up
 
-int run_protocol(int argc, char** argv) {
-  const Options opt = parse(argc, argv);
-  std::vector<std::string> standins;
+// The paper's per-object numbers, named as the protocol names the objects.
+std::vector<report::PaperRow> load_paper_rows() {
+  std::vector<report::PaperRow> paper = report::load_paper_results(report::default_paper_results_path());
+  // The paper's table writes 072_a_toy_airplane; the protocol's name is YCB's 072-a_toy_airplane.
+  for (report::PaperRow& row : paper)
+    for (const sim::ProtocolObject& o : sim::protocol_objects()) {
+      std::string underscored = o.name;
+      std::replace(underscored.begin(), underscored.end(), '-', '_');
+      if (underscored == row.object) row.object = o.name;
+    }
+  return paper;
+}
+
+// What the reports need besides the records.
+struct ReportInputs {
+  std::vector<std::string> standins;  // protocol objects with no mesh in --objects
   std::optional<report::QuestionnaireSummary> questionnaire;
   std::vector<report::PaperRow> paper;
+};
+
+// Loads the objects (to fail early, naming a bad mesh), the questionnaire and the paper's numbers;
+// nothing (said on stderr) when one cannot be used.
+std::optional<ReportInputs> load_report_inputs(const Options& opt) {
+  ReportInputs in;
   try {
-    protocol_models(opt.objects_dir, &standins);  // fails early, naming a bad mesh
+    protocol_models(opt.objects_dir, &in.standins);  // fails early, naming a bad mesh
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-eval: --objects " << opt.objects_dir << ": " << e.what() << "\n";
-    return 2;
+    return std::nullopt;
   }
   try {
     if (!opt.questionnaire_path.empty()) {
-      questionnaire = report::score_questionnaire_csv(opt.questionnaire_path);
-      for (const auto& r : questionnaire->rejected) std::cerr << "telegrasp-eval: questionnaire: " << r.message << "\n";
+      in.questionnaire = report::score_questionnaire_csv(opt.questionnaire_path);
+      for (const auto& r : in.questionnaire->rejected) std::cerr << "telegrasp-eval: questionnaire: " << r.message << "\n";
     }
-    paper = report::load_paper_results(report::default_paper_results_path());
-    // The paper's table writes 072_a_toy_airplane; the protocol's name is YCB's 072-a_toy_airplane.
-    for (report::PaperRow& row : paper)
-      for (const sim::ProtocolObject& o : sim::protocol_objects()) {
-        std::string underscored = o.name;
-        std::replace(underscored.begin(), underscored.end(), '-', '_');
-        if (underscored == row.object) row.object = o.name;
-      }
+    in.paper = load_paper_rows();
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-eval: " << e.what() << "\n";
-    return 2;
+    return std::nullopt;
   }
+  return in;
+}
+
+// The programs every job runs and the folder for their logs and records.
+struct Setup {
+  std::string server_bin, self_bin;  // telegrasp-server and telegrasp-eval, next to this program
+  fs::path work;                     // --keep-logs, or a temporary folder removed at the end
+};
+
+// Checks the server is there and makes the --record folder and the work folder; nothing (said on
+// stderr) without a server. A folder that cannot be made is a usage error.
+std::optional<Setup> prepare_setup(const Options& opt) {
+  Setup s;
   const std::string bin = self_dir();
-  const std::string server_bin = bin + "/telegrasp-server", self_bin = bin + "/telegrasp-eval";
-  if (access(server_bin.c_str(), X_OK) != 0) {
-    std::cerr << "telegrasp-eval: " << server_bin << " not found: the protocol runs the server built next to telegrasp-eval\n";
-    return 2;
+  s.server_bin = bin + "/telegrasp-server";
+  s.self_bin = bin + "/telegrasp-eval";
+  if (access(s.server_bin.c_str(), X_OK) != 0) {
+    std::cerr << "telegrasp-eval: " << s.server_bin << " not found: the protocol runs the server built next to telegrasp-eval\n";
+    return std::nullopt;
   }
   if (!opt.record_dir.empty()) {
     std::error_code ec;
     fs::create_directories(opt.record_dir, ec);
     if (ec) usage_error("--record " + opt.record_dir + ": " + ec.message());
   }
-  fs::path work;
   if (!opt.logs_dir.empty()) {
-    work = opt.logs_dir;
+    s.work = opt.logs_dir;
     std::error_code ec;
-    fs::create_directories(work, ec);
+    fs::create_directories(s.work, ec);
     if (ec) usage_error("--keep-logs " + opt.logs_dir + ": " + ec.message());
   } else {
     char tmpl[] = "/tmp/telegrasp-protocol-XXXXXX";
     if (!mkdtemp(tmpl)) usage_error(std::string("cannot make a temporary folder: ") + std::strerror(errno));
-    work = tmpl;
+    s.work = tmpl;
   }
+  return s;
+}
 
+// One job per mode and participant; participants 1..E are experienced, the rest inexperienced.
+std::vector<Job> make_jobs(const Options& opt) {
   std::vector<Job> jobs;
   for (const std::string& mode : opt.modes)
     for (int p = 1; p <= opt.experienced + opt.inexperienced; ++p) {
@@ -315,91 +346,137 @@ int run_protocol(int argc, char** argv) {
       j.participant = p;
       jobs.push_back(std::move(j));
     }
-  const int total = static_cast<int>(jobs.size()) * opt.count;
+  return jobs;
+}
+
+void print_plan(const Options& opt, int total, std::size_t standins) {
   std::cerr << "telegrasp-eval: protocol paper, " << opt.count << " objects x (" << opt.experienced << " experienced + "
             << opt.inexperienced << " inexperienced) participants x " << opt.modes.size() << " mode(s) = " << total << " grasps, "
             << opt.jobs << " at a time";
-  if (!standins.empty()) std::cerr << "; " << standins.size() << " object(s) as built-in stand-ins";
+  if (standins) std::cerr << "; " << standins << " object(s) as built-in stand-ins";
   std::cerr << "\n";
+}
 
+// ---------------------------------------------------------------------------------------------
+// Running the jobs
+
+// The stem of a job's files in the work folder (and of its recording), e.g. "precise-p3".
+std::string job_name(const Job& j) { return j.mode + "-p" + std::to_string(j.participant); }
+
+// Starts job `j` on DDS domain opt.domain + slot: a lockstep server and the participant driving
+// it, each logging into the work folder.
+void start_job(Job& j, int slot, const Options& opt, const Setup& setup) {
+  j.slot = slot;
+  const std::string name = job_name(j);
+  const std::string domain = std::to_string(opt.domain + slot);
+  std::vector<std::string> server = {setup.server_bin, "--lockstep", "--empty-scene", "--mode", j.mode, "--domain", domain, "--profile", opt.profile};
+  std::vector<std::string> bot = {setup.self_bin, "participant", "--domain", domain, "--profile", opt.profile, "--group", j.group,
+                                  "--participant", std::to_string(j.participant), "--seed", std::to_string(opt.seed), "--mode", j.mode,
+                                  "--count", std::to_string(opt.count), "--json", (setup.work / (name + ".json")).string()};
+  if (!opt.objects_dir.empty()) {
+    for (const char* a : {"--objects", opt.objects_dir.c_str()}) server.push_back(a), bot.push_back(a);
+    server.push_back("--fill-standins");
+  }
+  if (!opt.profiles_file.empty())
+    for (const char* a : {"--profiles", opt.profiles_file.c_str()}) server.push_back(a), bot.push_back(a);
+  if (!opt.record_dir.empty()) server.insert(server.end(), {"--record", (fs::path(opt.record_dir) / (name + ".tgrec")).string()});
+  j.server = spawn(server, (setup.work / (name + ".server.log")).string(), false);
+  j.bot = spawn(bot, (setup.work / (name + ".participant.log")).string(), true);
+}
+
+// Ends a job whose participant exited with `bot_status`: stops its server, then reads the records
+// the participant wrote, or marks the job failed with the end of both logs.
+void finish_job(Job& j, int bot_status, const fs::path& work) {
+  const std::string name = job_name(j);
+  stop(j.server.pid);
+  close(j.bot.out_fd);
+  j.finished = true;
+  if (!WIFEXITED(bot_status) || WEXITSTATUS(bot_status) != 0) {
+    j.failed = true;
+    j.error = "participant " + std::to_string(j.participant) + " (" + j.mode + ") failed; its log:\n" +
+              tail((work / (name + ".participant.log")).string(), 5) + "  server log:\n" + tail((work / (name + ".server.log")).string(), 5);
+    return;
+  }
+  try {
+    std::ifstream in(work / (name + ".json"));
+    for (const json& r : json::parse(in)) j.records.push_back(report::record_from_json(r));
+  } catch (const std::exception& e) {
+    j.failed = true;
+    j.error = "participant " + std::to_string(j.participant) + " (" + j.mode + "): unreadable records: " + e.what();
+  }
+}
+
+// Where the jobs are: which slots (DDS domains) are taken, how many runs are going, how many
+// grasps are done.
+struct Progress {
+  std::vector<bool> slot_busy;
+  int running = 0, done_grasps = 0;
+};
+
+// Reads what a participant printed so far; returns how many more grasps it reported ("grasp ..." lines).
+int read_grasp_lines(Job& j) {
+  int grasps = 0;
+  char buf[4096];
+  for (ssize_t n; (n = read(j.bot.out_fd, buf, sizeof buf)) > 0;) j.buffer.append(buf, static_cast<std::size_t>(n));
+  for (std::size_t nl; (nl = j.buffer.find('\n')) != std::string::npos; j.buffer.erase(0, nl + 1))
+    if (j.buffer.compare(0, 6, "grasp ") == 0) ++grasps;
+  return grasps;
+}
+
+// Waits up to 200 ms for output of the running participants, counts their grasps and finishes
+// the jobs whose participant has exited, freeing their slots.
+void poll_jobs(std::vector<Job>& jobs, Progress& progress, const Options& opt, const Setup& setup) {
+  std::vector<pollfd> fds;
+  std::vector<Job*> polled;
+  for (Job& j : jobs)
+    if (j.slot >= 0 && !j.finished) {
+      fds.push_back({j.bot.out_fd, POLLIN, 0});
+      polled.push_back(&j);
+    }
+  poll(fds.data(), fds.size(), 200);
+  for (std::size_t i = 0; i < fds.size(); ++i) {
+    Job& j = *polled[i];
+    const int grasps = read_grasp_lines(j);
+    j.grasps_done += grasps;
+    progress.done_grasps += grasps;
+    int status = 0;
+    if (waitpid(j.bot.pid, &status, WNOHANG) == j.bot.pid) {
+      finish_job(j, status, setup.work);
+      progress.slot_busy[static_cast<std::size_t>(j.slot)] = false;
+      --progress.running;
+      progress.done_grasps += opt.count - j.grasps_done;  // a failed run's missing grasps count as done for the bar
+    }
+  }
+}
+
+// Runs every job, opt.jobs at a time, drawing a progress bar on stderr; returns the wall time (s).
+double run_jobs(std::vector<Job>& jobs, const Options& opt, const Setup& setup, int total) {
   std::signal(SIGPIPE, SIG_IGN);
   const auto t0 = Clock::now();
-  std::vector<bool> slot_busy(static_cast<std::size_t>(opt.jobs), false);
+  Progress progress{std::vector<bool>(static_cast<std::size_t>(opt.jobs), false)};
   std::size_t next = 0;
-  int running = 0, done_grasps = 0;
-  auto start_job = [&](Job& j, int slot) {
-    j.slot = slot;
-    const std::string name = j.mode + "-p" + std::to_string(j.participant);
-    const std::string domain = std::to_string(opt.domain + slot);
-    std::vector<std::string> server = {server_bin, "--lockstep", "--empty-scene", "--mode", j.mode, "--domain", domain, "--profile", opt.profile};
-    std::vector<std::string> bot = {self_bin, "participant", "--domain", domain, "--profile", opt.profile, "--group", j.group,
-                                    "--participant", std::to_string(j.participant), "--seed", std::to_string(opt.seed), "--mode", j.mode,
-                                    "--count", std::to_string(opt.count), "--json", (work / (name + ".json")).string()};
-    if (!opt.objects_dir.empty()) {
-      for (const char* a : {"--objects", opt.objects_dir.c_str()}) server.push_back(a), bot.push_back(a);
-      server.push_back("--fill-standins");
-    }
-    if (!opt.profiles_file.empty())
-      for (const char* a : {"--profiles", opt.profiles_file.c_str()}) server.push_back(a), bot.push_back(a);
-    if (!opt.record_dir.empty()) server.insert(server.end(), {"--record", (fs::path(opt.record_dir) / (name + ".tgrec")).string()});
-    j.server = spawn(server, (work / (name + ".server.log")).string(), false);
-    j.bot = spawn(bot, (work / (name + ".participant.log")).string(), true);
-    slot_busy[static_cast<std::size_t>(slot)] = true;
-    ++running;
-  };
-  auto finish_job = [&](Job& j, int bot_status) {
-    const std::string name = j.mode + "-p" + std::to_string(j.participant);
-    stop(j.server.pid);
-    close(j.bot.out_fd);
-    slot_busy[static_cast<std::size_t>(j.slot)] = false;
-    --running;
-    j.finished = true;
-    if (!WIFEXITED(bot_status) || WEXITSTATUS(bot_status) != 0) {
-      j.failed = true;
-      j.error = "participant " + std::to_string(j.participant) + " (" + j.mode + ") failed; its log:\n" +
-                tail((work / (name + ".participant.log")).string(), 5) + "  server log:\n" + tail((work / (name + ".server.log")).string(), 5);
-      return;
-    }
-    try {
-      std::ifstream in(work / (name + ".json"));
-      for (const json& r : json::parse(in)) j.records.push_back(report::record_from_json(r));
-    } catch (const std::exception& e) {
-      j.failed = true;
-      j.error = "participant " + std::to_string(j.participant) + " (" + j.mode + "): unreadable records: " + e.what();
-    }
-  };
-
   while (true) {
     for (int s = 0; s < opt.jobs && next < jobs.size(); ++s)
-      if (!slot_busy[static_cast<std::size_t>(s)]) start_job(jobs[next++], s);
-    if (running == 0) break;
-    std::vector<pollfd> fds;
-    std::vector<Job*> polled;
-    for (Job& j : jobs)
-      if (j.slot >= 0 && !j.finished) {
-        fds.push_back({j.bot.out_fd, POLLIN, 0});
-        polled.push_back(&j);
+      if (!progress.slot_busy[static_cast<std::size_t>(s)]) {
+        start_job(jobs[next++], s, opt, setup);
+        progress.slot_busy[static_cast<std::size_t>(s)] = true;
+        ++progress.running;
       }
-    poll(fds.data(), fds.size(), 200);
-    for (std::size_t i = 0; i < fds.size(); ++i) {
-      Job& j = *polled[i];
-      char buf[4096];
-      for (ssize_t n; (n = read(j.bot.out_fd, buf, sizeof buf)) > 0;) j.buffer.append(buf, static_cast<std::size_t>(n));
-      for (std::size_t nl; (nl = j.buffer.find('\n')) != std::string::npos; j.buffer.erase(0, nl + 1))
-        if (j.buffer.compare(0, 6, "grasp ") == 0) ++j.grasps_done, ++done_grasps;
-      int status = 0;
-      if (waitpid(j.bot.pid, &status, WNOHANG) == j.bot.pid) {
-        finish_job(j, status);
-        done_grasps += opt.count - j.grasps_done;  // a failed run's missing grasps count as done for the bar
-      }
-    }
-    draw_progress(done_grasps, total, std::chrono::duration<double>(Clock::now() - t0).count(), running);
+    if (progress.running == 0) break;
+    poll_jobs(jobs, progress, opt, setup);
+    draw_progress(progress.done_grasps, total, std::chrono::duration<double>(Clock::now() - t0).count(), progress.running);
   }
   const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
   std::fprintf(stderr, "\n");
+  return wall;
+}
 
+// ---------------------------------------------------------------------------------------------
+// Collection and reports
+
+// Every job's records, in job order; says on stderr why each failed run failed and counts them.
+std::vector<report::Record> collect_records(const std::vector<Job>& jobs, int& failures) {
   std::vector<report::Record> records;
-  int failures = 0;
   for (const Job& j : jobs) {
     if (j.failed) {
       ++failures;
@@ -407,11 +484,12 @@ int run_protocol(int argc, char** argv) {
     }
     records.insert(records.end(), j.records.begin(), j.records.end());
   }
-  if (opt.logs_dir.empty()) fs::remove_all(work);
-  std::cerr << "telegrasp-eval: " << records.size() << " grasp records in " << report::fmt(wall, 1) << " s"
-            << (failures ? ", " + std::to_string(failures) + " run(s) failed" : "") << "\n";
+  return records;
+}
 
-  // Per mode and group: the same table and summary keys as the in-process run.
+// Per mode and group: the same table and summary keys as the in-process run, on stdout. Returns
+// the summaries.
+json print_summaries(const std::vector<report::Record>& records, const Options& opt) {
   json summaries = json::array();
   for (const std::string& mode : opt.modes)
     for (const char* group : {"experienced", "inexperienced"}) {
@@ -432,7 +510,12 @@ int run_protocol(int argc, char** argv) {
       std::printf("summary: %s\n", s.dump().c_str());
       summaries.push_back(std::move(s));
     }
+  return summaries;
+}
 
+// The run as the reports describe it, created now.
+report::ExperimentRun experiment_run(int argc, char** argv, const Options& opt, double wall,
+                                     const std::vector<std::string>& standins, std::vector<report::Record> records) {
   report::ExperimentRun run;
   run.protocol = "paper";
   for (int i = 0; i < argc; ++i) run.command_line += (i ? " " : "") + std::string(argv[i]);
@@ -448,7 +531,11 @@ int run_protocol(int argc, char** argv) {
     if (std::find(run.objects.begin(), run.objects.end(), s) != run.objects.end()) run.standin_objects.push_back(s);
   run.participants = {{"experienced", opt.experienced}, {"inexperienced", opt.inexperienced}};
   run.records = std::move(records);
-  print_worst_objects(report::aggregate_json(run));
+  return run;
+}
+
+// Writes the --json, --csv and --report files asked for; false (said on stderr) when one cannot be.
+bool write_reports(const report::ExperimentRun& run, const json& summaries, const ReportInputs& in, const Options& opt) {
   try {
     if (!opt.json_path.empty()) {
       json grasps = json::array();
@@ -462,13 +549,39 @@ int run_protocol(int argc, char** argv) {
       std::cerr << "wrote " << opt.csv_path << " and " << by_object << "\n";
     }
     if (!opt.report_path.empty()) {
-      report::write_text_file(opt.report_path, report::html_report(run, paper, questionnaire ? &*questionnaire : nullptr));
+      report::write_text_file(opt.report_path, report::html_report(run, in.paper, in.questionnaire ? &*in.questionnaire : nullptr));
       std::cerr << "wrote " << opt.report_path << "\n";
     }
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-eval: " << e.what() << "\n";
-    return 1;
+    return false;
   }
+  return true;
+}
+
+}  // namespace
+
+int run_protocol(int argc, char** argv) {
+  const Options opt = parse(argc, argv);
+  const std::optional<ReportInputs> inputs = load_report_inputs(opt);
+  if (!inputs) return 2;
+  const std::optional<Setup> setup = prepare_setup(opt);
+  if (!setup) return 2;
+  std::vector<Job> jobs = make_jobs(opt);
+  const int total = static_cast<int>(jobs.size()) * opt.count;
+  print_plan(opt, total, inputs->standins.size());
+
+  const double wall = run_jobs(jobs, opt, *setup, total);
+  int failures = 0;
+  std::vector<report::Record> records = collect_records(jobs, failures);
+  if (opt.logs_dir.empty()) fs::remove_all(setup->work);
+  std::cerr << "telegrasp-eval: " << records.size() << " grasp records in " << report::fmt(wall, 1) << " s"
+            << (failures ? ", " + std::to_string(failures) + " run(s) failed" : "") << "\n";
+
+  const json summaries = print_summaries(records, opt);
+  const report::ExperimentRun run = experiment_run(argc, argv, opt, wall, inputs->standins, std::move(records));
+  print_worst_objects(report::aggregate_json(run));
+  if (!write_reports(run, summaries, *inputs, opt)) return 1;
   return failures ? 1 : 0;
 }
 

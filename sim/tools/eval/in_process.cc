@@ -37,6 +37,7 @@ using telegrasp::report::capsule_records;
 using telegrasp::report::fmt;
 using telegrasp::report::Record;
 using telegrasp::report::summarize;
+using telegrasp::eval::EvalInputs;
 
 constexpr const char* kUsage = R"(Usage: telegrasp-eval run [options]
 
@@ -203,40 +204,73 @@ Trial run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRig
   return out;
 }
 
-}  // namespace
-
-int telegrasp::eval::run_in_process(int argc, char** argv) {
-  const Options opt = parse(argc, argv);
-  std::shared_ptr<const HandRig> rig;
-  std::vector<ObjectModelPtr> models;
+// Loads the rig and the objects and opens the outputs, so a bad file fails before any trial runs;
+// says what was loaded on stderr. On failure says why on stderr and returns nothing.
+std::optional<EvalInputs> load_inputs(const Options& opt, std::ofstream& json_out) {
+  EvalInputs in;
   try {
     skill_profile(opt.skill);
-    telegrasp::eval::EvalInputs in = telegrasp::eval::load_eval_inputs(opt.rig_path, opt.objects_dir);
-    rig = std::move(in.rig);
-    models = std::move(in.models);
+    in = telegrasp::eval::load_eval_inputs(opt.rig_path, opt.objects_dir);
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-eval: " << e.what() << "\n";
-    return 1;
+    return std::nullopt;
   }
-  std::ofstream json_out;
   if (const std::string error = telegrasp::eval::prepare_outputs(opt.json_path, json_out, opt.svg_dir); !error.empty()) {
     std::cerr << "telegrasp-eval: " << error << "\n";
-    return 1;
+    return std::nullopt;
   }
   std::size_t max_bytes = 0;
-  for (const auto& m : models) max_bytes = std::max(max_bytes, m->memory_bytes());
-  std::cerr << models.size() << " objects (" << (opt.objects_dir.empty() ? "built-in stand-ins" : opt.objects_dir)
-            << "), largest model " << fmt(static_cast<double>(max_bytes) / 1e6, 2) << " MB; rig " << rig->name()
+  for (const auto& m : in.models) max_bytes = std::max(max_bytes, m->memory_bytes());
+  std::cerr << in.models.size() << " objects (" << (opt.objects_dir.empty() ? "built-in stand-ins" : opt.objects_dir)
+            << "), largest model " << fmt(static_cast<double>(max_bytes) / 1e6, 2) << " MB; rig " << in.rig->name()
             << "; skill " << opt.skill << "\n";
+  return in;
+}
 
+// One trial to run: a config (mode and speed), an object and the trial's number.
+struct Job { std::size_t config, object; int trial; };
+
+std::vector<Config> make_configs(const Options& opt) {
   std::vector<Config> configs;
   for (ClosingMode m : opt.modes)
     for (double s : opt.speeds) configs.push_back({m, s});
-  struct Job { std::size_t config, object; int trial; };
+  return configs;
+}
+
+// Every config, object and trial, in that nesting: the order of the records everywhere after.
+std::vector<Job> make_jobs(std::size_t configs, std::size_t objects, int trials) {
   std::vector<Job> jobs;
-  for (std::size_t c = 0; c < configs.size(); ++c)
-    for (std::size_t o = 0; o < models.size(); ++o)
-      for (int t = 0; t < opt.trials; ++t) jobs.push_back({c, o, t});
+  for (std::size_t c = 0; c < configs; ++c)
+    for (std::size_t o = 0; o < objects; ++o)
+      for (int t = 0; t < trials; ++t) jobs.push_back({c, o, t});
+  return jobs;
+}
+
+// One job's trial. A trial that throws counts as not grasped, and is said once on stderr.
+Trial run_job(const Job& job, const std::vector<Config>& configs, const EvalInputs& in, const Options& opt,
+              std::mutex& log_mutex) {
+  // The trial's seed depends on the object and trial only, so modes and speeds see the same poses.
+  const std::uint64_t seed = opt.seed * 1000003ULL + job.object * 1009ULL + static_cast<std::uint64_t>(job.trial);
+  const bool draw = !opt.svg_dir.empty() && job.trial == 0;
+  try {
+    return run_trial(in.models[job.object], in.rig, opt, configs[job.config], job.trial, seed, draw);
+  } catch (const std::exception& e) {
+    Trial failed;
+    Record& rec = failed.record;
+    rec.object = in.models[job.object]->name;
+    rec.mode = mode_name(configs[job.config].mode);
+    rec.speed_scale = configs[job.config].speed;
+    rec.trial = job.trial;
+    std::lock_guard lock(log_mutex);
+    std::cerr << "\ntelegrasp-eval: " << rec.object << " trial " << job.trial << " failed: " << e.what() << "\n";
+    return failed;
+  }
+}
+
+// Runs every job on opt.threads threads, with a progress line per finished trial on stderr.
+// Returns the trials in the jobs' order.
+std::vector<Trial> run_jobs(const std::vector<Job>& jobs, const std::vector<Config>& configs, const EvalInputs& in,
+                            const Options& opt) {
   std::vector<Trial> trials(jobs.size());
   std::atomic<std::size_t> next{0}, finished{0};
   std::mutex log_mutex;
@@ -244,20 +278,8 @@ int telegrasp::eval::run_in_process(int argc, char** argv) {
   auto worker = [&] {
     for (std::size_t j = next++; j < jobs.size(); j = next++) {
       const Job& job = jobs[j];
-      // The trial's seed depends on the object and trial only, so modes and speeds see the same poses.
-      const std::uint64_t seed = opt.seed * 1000003ULL + job.object * 1009ULL + static_cast<std::uint64_t>(job.trial);
-      const bool draw = !opt.svg_dir.empty() && job.trial == 0;
-      Record& rec = trials[j].record;
-      try {
-        trials[j] = run_trial(models[job.object], rig, opt, configs[job.config], job.trial, seed, draw);
-      } catch (const std::exception& e) {  // counted as not grasped, said once
-        rec.object = models[job.object]->name;
-        rec.mode = mode_name(configs[job.config].mode);
-        rec.speed_scale = configs[job.config].speed;
-        rec.trial = job.trial;
-        std::lock_guard lock(log_mutex);
-        std::cerr << "\ntelegrasp-eval: " << rec.object << " trial " << job.trial << " failed: " << e.what() << "\n";
-      }
+      trials[j] = run_job(job, configs, in, opt, log_mutex);
+      const Record& rec = trials[j].record;
       const std::size_t done = ++finished;
       std::lock_guard lock(log_mutex);
       // One line rewritten in place on a terminal; a line per trial in a log file.
@@ -270,7 +292,12 @@ int telegrasp::eval::run_in_process(int argc, char** argv) {
   for (int i = 0; i < opt.threads; ++i) pool.emplace_back(worker);
   for (auto& t : pool) t.join();
   if (stderr_is_terminal) std::cerr << "\n";
+  return trials;
+}
 
+// Per config, the per-object table and the summary line on stdout; returns the summaries.
+json print_summaries(const std::vector<Config>& configs, const std::vector<Job>& jobs, const std::vector<Trial>& trials,
+                     const std::vector<ObjectModelPtr>& models, const Options& opt) {
   json summaries = json::array();
   for (std::size_t c = 0; c < configs.size(); ++c) {
     std::cout << "\n== mode " << mode_name(configs[c].mode) << ", closing speed x" << configs[c].speed << ", skill " << opt.skill << " ==\n";
@@ -290,36 +317,60 @@ int telegrasp::eval::run_in_process(int argc, char** argv) {
     std::cout << "summary: " << s.dump() << "\n";
     summaries.push_back(s);
   }
-  if (configs.size() > 1) {
-    std::cout << "\n== side by side ==\n";
-    std::printf("%-9s %6s %7s %10s %10s %12s %10s\n", "mode", "speed", "held%", "|ND|med", "|ND|p95", "minSD_mm", "SD<-0.1");
-    for (const json& s : summaries) {
-      auto get = [&](const char* k) { return s[k].is_null() ? NAN : s[k].get<double>(); };
-      std::printf("%-9s %6s %7s %10s %10s %12s %10d\n", s["mode"].get<std::string>().c_str(), fmt(get("speed_scale"), 1).c_str(),
-                  fmt(100 * get("held_rate"), 1).c_str(), fmt(get("nd_abs_median_mm"), 3).c_str(), fmt(get("nd_abs_p95_mm"), 3).c_str(),
-                  fmt(get("min_blocked_signed_distance_mm"), 3).c_str(), s["blocked_below_minus_0_1mm"].get<int>());
-    }
-  }
+  return summaries;
+}
 
-  if (!opt.svg_dir.empty()) {
-    int written = 0;
-    for (const Trial& t : trials) {
-      if (t.svg.empty()) continue;
-      const Record& r = t.record;
-      char name[256];
-      std::snprintf(name, sizeof name, "%s_%s_x%g.svg", r.object.c_str(), r.mode.c_str(), r.speed_scale);
-      std::ofstream(std::filesystem::path(opt.svg_dir) / name) << t.svg;
-      ++written;
-    }
-    std::cerr << "wrote " << written << " pictures to " << opt.svg_dir << "\n";
+// The configs' summaries side by side, one row each.
+void print_side_by_side(const json& summaries) {
+  std::cout << "\n== side by side ==\n";
+  std::printf("%-9s %6s %7s %10s %10s %12s %10s\n", "mode", "speed", "held%", "|ND|med", "|ND|p95", "minSD_mm", "SD<-0.1");
+  for (const json& s : summaries) {
+    auto get = [&](const char* k) { return s[k].is_null() ? NAN : s[k].get<double>(); };
+    std::printf("%-9s %6s %7s %10s %10s %12s %10d\n", s["mode"].get<std::string>().c_str(), fmt(get("speed_scale"), 1).c_str(),
+                fmt(100 * get("held_rate"), 1).c_str(), fmt(get("nd_abs_median_mm"), 3).c_str(), fmt(get("nd_abs_p95_mm"), 3).c_str(),
+                fmt(get("min_blocked_signed_distance_mm"), 3).c_str(), s["blocked_below_minus_0_1mm"].get<int>());
   }
+}
 
-  if (!opt.json_path.empty()) {
-    json grasps = json::array();
-    for (const Trial& t : trials) grasps.push_back(telegrasp::report::record_json(t.record));
-    json_out << json{{"grasps", grasps}, {"summary", summaries[0]}, {"summaries", summaries}}.dump(1) << "\n";
-    if (!json_out.flush()) { std::cerr << "telegrasp-eval: cannot write " << opt.json_path << "\n"; return 1; }
-    std::cerr << "wrote " << opt.json_path << "\n";
+// Each drawn trial's picture as svg_dir/<object>_<mode>_x<speed>.svg.
+void write_pictures(const std::vector<Trial>& trials, const std::string& svg_dir) {
+  int written = 0;
+  for (const Trial& t : trials) {
+    if (t.svg.empty()) continue;
+    const Record& r = t.record;
+    char name[256];
+    std::snprintf(name, sizeof name, "%s_%s_x%g.svg", r.object.c_str(), r.mode.c_str(), r.speed_scale);
+    std::ofstream(std::filesystem::path(svg_dir) / name) << t.svg;
+    ++written;
   }
+  std::cerr << "wrote " << written << " pictures to " << svg_dir << "\n";
+}
+
+// Every grasp record and the summaries into the opened `json_out`; false (said on stderr) when
+// writing fails. `summaries` by value: [0] adds a null entry when there are none, as always.
+bool write_json(std::ofstream& json_out, const std::string& json_path, const std::vector<Trial>& trials,
+                json summaries) {
+  json grasps = json::array();
+  for (const Trial& t : trials) grasps.push_back(telegrasp::report::record_json(t.record));
+  json_out << json{{"grasps", grasps}, {"summary", summaries[0]}, {"summaries", summaries}}.dump(1) << "\n";
+  if (!json_out.flush()) { std::cerr << "telegrasp-eval: cannot write " << json_path << "\n"; return false; }
+  std::cerr << "wrote " << json_path << "\n";
+  return true;
+}
+
+}  // namespace
+
+int telegrasp::eval::run_in_process(int argc, char** argv) {
+  const Options opt = parse(argc, argv);
+  std::ofstream json_out;
+  const std::optional<EvalInputs> in = load_inputs(opt, json_out);
+  if (!in) return 1;
+  const std::vector<Config> configs = make_configs(opt);
+  const std::vector<Job> jobs = make_jobs(configs.size(), in->models.size(), opt.trials);
+  const std::vector<Trial> trials = run_jobs(jobs, configs, *in, opt);
+  const json summaries = print_summaries(configs, jobs, trials, in->models, opt);
+  if (configs.size() > 1) print_side_by_side(summaries);
+  if (!opt.svg_dir.empty()) write_pictures(trials, opt.svg_dir);
+  if (!opt.json_path.empty() && !write_json(json_out, opt.json_path, trials, summaries)) return 1;
   return 0;
 }

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <ostream>
 #include <stdexcept>
 
@@ -84,6 +85,104 @@ json scores_json(const QuestionnaireScores& s) {
           {"interaction_realism", s.interaction_realism}, {"embodiment", s.embodiment}};
 }
 
+// The next line of `in` that is neither blank nor a comment ('#'), split into cells; counts every
+// line read in `line_no`. Nothing at the end of `in`.
+std::optional<std::vector<std::string>> next_row(std::istream& in, int& line_no) {
+  for (std::string line; std::getline(in, line);) {
+    ++line_no;
+    const std::string t = trim(line);
+    if (t.empty() || t[0] == '#') continue;
+    return split_csv_line(t);
+  }
+  return std::nullopt;
+}
+
+// Column index of each header name (lower case); other columns (notes, dates) are ignored.
+// Throws naming the line when a column appears twice or id, group or one of Q1..Q14 is missing.
+std::map<std::string, std::size_t> header_columns(const std::vector<std::string>& header, const std::string& source,
+                                                  int line_no) {
+  std::vector<std::string> required = {"id", "group"};
+  for (int q = 1; q <= kQuestionCount; ++q) required.push_back("Q" + std::to_string(q));
+  std::map<std::string, std::size_t> column;  // lower-case name -> index
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    const std::string name = lower(header[i]);
+    if (name.empty()) continue;
+    if (column.count(name))
+      throw std::runtime_error(source + " line " + std::to_string(line_no) + ": header column '" + header[i] +
+                               "' appears twice");
+    column[name] = i;
+  }
+  for (const std::string& name : required)
+    if (!column.count(lower(name)))
+      throw std::runtime_error(source + " line " + std::to_string(line_no) + ": header has no column '" + name +
+                               "' (expected id,group,Q1..Q14 in any order)");
+  return column;
+}
+
+// Reads the id, group and answers of one data row into `p`; returns what is wrong with the row
+// (missing cells, answers that are not integers in -3..3), empty when nothing is.
+std::vector<std::string> read_row(const std::vector<std::string>& cells,
+                                  const std::map<std::string, std::size_t>& column, QuestionnaireParticipant& p) {
+  auto cell = [&](const std::string& name) -> std::string {
+    const std::size_t i = column.at(lower(name));
+    return i < cells.size() ? cells[i] : std::string();
+  };
+  p.id = cell("id");
+  p.group = cell("group");
+  std::vector<std::string> problems;
+  if (p.id.empty()) problems.push_back("id is missing");
+  if (p.group.empty()) problems.push_back("group is missing");
+  for (int q = 1; q <= kQuestionCount; ++q) {
+    const std::string name = "Q" + std::to_string(q);
+    const std::string v = cell(name);
+    if (v.empty()) {
+      problems.push_back(name + " is missing");
+      continue;
+    }
+    // Integers only, with an optional sign: "2.5", "2x" or "agree" are not Likert answers.
+    int value = 0;
+    const char* begin = v.data() + (v[0] == '+' ? 1 : 0);
+    const auto [end, ec] = std::from_chars(begin, v.data() + v.size(), value);
+    if (ec != std::errc() || end != v.data() + v.size()) {
+      problems.push_back(name + " = '" + v + "' is not an integer");
+      continue;
+    }
+    if (value < -3 || value > 3) {
+      problems.push_back(name + " = " + v + " is outside -3..3");
+      continue;
+    }
+    p.answers[static_cast<std::size_t>(q - 1)] = value;
+  }
+  return problems;
+}
+
+// A row not scored, its message naming the source, the line, the participant if known and every problem.
+RejectedRow rejected_row(const std::string& source, int line_no, const std::string& id,
+                         const std::vector<std::string>& problems) {
+  std::string message = source + " line " + std::to_string(line_no);
+  if (!id.empty()) message += " (participant " + id + ")";
+  message += ": ";
+  for (std::size_t i = 0; i < problems.size(); ++i) message += (i ? "; " : "") + problems[i];
+  return {line_no, id, message};
+}
+
+// The mean and sample sd of each score over a group's participants.
+QuestionnaireGroup group_stats(const std::string& name, const std::vector<QuestionnaireScores>& scores) {
+  QuestionnaireGroup g;
+  g.group = name;
+  g.n = static_cast<int>(scores.size());
+  auto collect = [&](double QuestionnaireScores::*field) {
+    std::vector<double> v;
+    for (const QuestionnaireScores& s : scores) v.push_back(s.*field);
+    return stat(v);
+  };
+  g.motor_control = collect(&QuestionnaireScores::motor_control);
+  g.finger_movement_realism = collect(&QuestionnaireScores::finger_movement_realism);
+  g.interaction_realism = collect(&QuestionnaireScores::interaction_realism);
+  g.embodiment = collect(&QuestionnaireScores::embodiment);
+  return g;
+}
+
 }  // namespace
 
 QuestionnaireScores score_answers(const std::array<int, kQuestionCount>& a) {
@@ -112,87 +211,23 @@ QuestionnaireSummary score_questionnaire_csv(const std::string& path) {
 QuestionnaireSummary score_questionnaire(std::istream& in, const std::string& source) {
   QuestionnaireSummary out;
   out.source = source;
-
-  // Header: the first line that is neither blank nor a comment.
-  std::string line;
   int line_no = 0;
-  std::vector<std::string> header;
-  while (std::getline(in, line)) {
-    ++line_no;
-    const std::string t = trim(line);
-    if (t.empty() || t[0] == '#') continue;
-    header = split_csv_line(t);
-    break;
-  }
-  if (header.empty()) throw std::runtime_error(source + ": no header row (expected id,group,Q1..Q14)");
+  const std::optional<std::vector<std::string>> header = next_row(in, line_no);
+  if (!header) throw std::runtime_error(source + ": no header row (expected id,group,Q1..Q14)");
+  const std::map<std::string, std::size_t> column = header_columns(*header, source, line_no);
 
-  // Column index of each required name; other columns (notes, dates) are ignored.
-  std::vector<std::string> required = {"id", "group"};
-  for (int q = 1; q <= kQuestionCount; ++q) required.push_back("Q" + std::to_string(q));
-  std::map<std::string, std::size_t> column;  // lower-case name -> index
-  for (std::size_t i = 0; i < header.size(); ++i) {
-    const std::string name = lower(header[i]);
-    if (name.empty()) continue;
-    if (column.count(name))
-      throw std::runtime_error(source + " line " + std::to_string(line_no) + ": header column '" + header[i] +
-                               "' appears twice");
-    column[name] = i;
-  }
-  for (const std::string& name : required)
-    if (!column.count(lower(name)))
-      throw std::runtime_error(source + " line " + std::to_string(line_no) + ": header has no column '" + name +
-                               "' (expected id,group,Q1..Q14 in any order)");
-
+  // Every row scored or rejected, the scores gathered per group in order of first appearance.
   std::map<std::string, int> first_line_of_id;
   std::map<std::string, std::size_t> group_index;
   std::vector<std::vector<QuestionnaireScores>> group_scores;
-  while (std::getline(in, line)) {
-    ++line_no;
-    const std::string t = trim(line);
-    if (t.empty() || t[0] == '#') continue;
-    const std::vector<std::string> cells = split_csv_line(t);
-    auto cell = [&](const std::string& name) -> std::string {
-      const std::size_t i = column.at(lower(name));
-      return i < cells.size() ? cells[i] : std::string();
-    };
-
+  while (const std::optional<std::vector<std::string>> cells = next_row(in, line_no)) {
     QuestionnaireParticipant p;
     p.line = line_no;
-    p.id = cell("id");
-    p.group = cell("group");
-    std::vector<std::string> problems;
-    if (p.id.empty()) problems.push_back("id is missing");
-    if (p.group.empty()) problems.push_back("group is missing");
-    for (int q = 1; q <= kQuestionCount; ++q) {
-      const std::string name = "Q" + std::to_string(q);
-      const std::string v = cell(name);
-      if (v.empty()) {
-        problems.push_back(name + " is missing");
-        continue;
-      }
-      // Integers only, with an optional sign: "2.5", "2x" or "agree" are not Likert answers.
-      int value = 0;
-      const char* begin = v.data() + (v[0] == '+' ? 1 : 0);
-      const auto [end, ec] = std::from_chars(begin, v.data() + v.size(), value);
-      if (ec != std::errc() || end != v.data() + v.size()) {
-        problems.push_back(name + " = '" + v + "' is not an integer");
-        continue;
-      }
-      if (value < -3 || value > 3) {
-        problems.push_back(name + " = " + v + " is outside -3..3");
-        continue;
-      }
-      p.answers[static_cast<std::size_t>(q - 1)] = value;
-    }
+    std::vector<std::string> problems = read_row(*cells, column, p);
     if (!p.id.empty() && first_line_of_id.count(p.id))
       problems.push_back("duplicate id, first on line " + std::to_string(first_line_of_id[p.id]));
-
     if (!problems.empty()) {
-      std::string message = source + " line " + std::to_string(line_no);
-      if (!p.id.empty()) message += " (participant " + p.id + ")";
-      message += ": ";
-      for (std::size_t i = 0; i < problems.size(); ++i) message += (i ? "; " : "") + problems[i];
-      out.rejected.push_back({line_no, p.id, message});
+      out.rejected.push_back(rejected_row(source, line_no, p.id, problems));
       continue;
     }
     first_line_of_id[p.id] = line_no;
@@ -204,21 +239,7 @@ QuestionnaireSummary score_questionnaire(std::istream& in, const std::string& so
   }
 
   out.groups.resize(group_scores.size());
-  for (const auto& [name, index] : group_index) {
-    const auto& scores = group_scores[index];
-    QuestionnaireGroup& g = out.groups[index];
-    g.group = name;
-    g.n = static_cast<int>(scores.size());
-    auto collect = [&](double QuestionnaireScores::*field) {
-      std::vector<double> v;
-      for (const QuestionnaireScores& s : scores) v.push_back(s.*field);
-      return stat(v);
-    };
-    g.motor_control = collect(&QuestionnaireScores::motor_control);
-    g.finger_movement_realism = collect(&QuestionnaireScores::finger_movement_realism);
-    g.interaction_realism = collect(&QuestionnaireScores::interaction_realism);
-    g.embodiment = collect(&QuestionnaireScores::embodiment);
-  }
+  for (const auto& [name, index] : group_index) out.groups[index] = group_stats(name, group_scores[index]);
   return out;
 }
 

@@ -1,0 +1,264 @@
+// The aggregates of a protocol run (per mode, group and object) and the paper's published
+// per-object numbers: the data every report of experiment_report.h is made of.
+#include "experiment_aggregate.h"
+
+#include "telegrasp/sim/data_paths.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+namespace telegrasp::report {
+namespace {
+
+using nlohmann::json;
+
+json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+json aggregate_fields(const Aggregate& a) {
+  return {{"n", a.n},
+          {"grasped", a.grasped},
+          {"held_after_lift", a.held},
+          {"time_to_grasp_mean_s", num(a.time.mean)},
+          {"time_to_grasp_sd_s", num(a.time.sd)},
+          {"nd_abs_mean_mm", num(a.nd.mean)},
+          {"nd_abs_sd_mm", num(a.nd.sd)},
+          {"nd_abs_grasps", a.nd.n},
+          {"nd_abs_pooled_mean_mm", num(a.nd_pooled)},
+          {"capsules_hit", a.capsules_hit},
+          {"hand_error_mean_mm", num(a.hand_error.mean)},
+          {"hand_error_sd_mm", num(a.hand_error.sd)}};
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Statistics
+
+Stat stat(const std::vector<double>& v) {
+  Stat s;
+  s.n = static_cast<int>(v.size());
+  if (v.empty()) return s;
+  double sum = 0;
+  for (double x : v) sum += x;
+  s.mean = sum / static_cast<double>(v.size());
+  if (v.size() < 2) return s;
+  double sq = 0;
+  for (double x : v) sq += (x - s.mean) * (x - s.mean);
+  s.sd = std::sqrt(sq / static_cast<double>(v.size() - 1));
+  return s;
+}
+
+double grasp_nd_abs_mean(const Record& r, int* hits) {
+  double sum = 0;
+  int n = 0;
+  for (const CapsuleRecord& c : r.grasp_tick_capsules)
+    if (c.hit) {
+      sum += std::abs(c.nd_mm);
+      ++n;
+    }
+  if (hits) *hits = n;
+  return n ? sum / n : NAN;
+}
+
+double grasp_min_signed_distance(const Record& r) {
+  double m = INFINITY;
+  for (const CapsuleRecord& c : r.grasp_tick_capsules)
+    if (c.blocked) m = std::min(m, c.signed_distance_mm);
+  return std::isfinite(m) ? m : NAN;
+}
+
+Aggregate aggregate(const std::vector<const Record*>& records) {
+  Aggregate a;
+  std::vector<double> times, nds, hand_errors;
+  double pooled_sum = 0;
+  for (const Record* r : records) {
+    ++a.n;
+    a.held += r->held_after_lift;
+    if (!r->grasped) continue;
+    ++a.grasped;
+    times.push_back(r->time_to_grasp_s);
+    hand_errors.push_back(r->grasp_tick_hand_error_mm);
+    int hits = 0;
+    const double nd = grasp_nd_abs_mean(*r, &hits);
+    if (hits) nds.push_back(nd);
+    a.capsules_hit += hits;
+    pooled_sum += std::isfinite(nd) ? nd * hits : 0;
+  }
+  a.time = stat(times);
+  a.nd = stat(nds);
+  a.hand_error = stat(hand_errors);
+  if (a.capsules_hit) a.nd_pooled = pooled_sum / a.capsules_hit;
+  return a;
+}
+
+// ---------------------------------------------------------------------------------------------
+// What a run contains, in a stable order
+
+std::vector<std::string> modes_of(const ExperimentRun& run) {
+  std::vector<std::string> out = run.modes;
+  for (const Record& r : run.records)
+    if (std::find(out.begin(), out.end(), r.mode) == out.end()) out.push_back(r.mode);
+  return out;
+}
+
+std::vector<std::string> groups_of(const ExperimentRun& run) {
+  std::set<std::string> named;
+  for (const auto& [group, count] : run.participants) named.insert(group);
+  for (const Record& r : run.records) named.insert(r.group);
+  std::vector<std::string> out;
+  for (const char* g : {"experienced", "inexperienced"})
+    if (named.erase(g)) out.push_back(g);
+  out.insert(out.end(), named.begin(), named.end());
+  return out;
+}
+
+std::vector<std::string> objects_of(const ExperimentRun& run) {
+  std::set<std::string> recorded;
+  for (const Record& r : run.records) recorded.insert(r.object);
+  std::vector<std::string> out;
+  for (const std::string& o : run.objects)
+    if (recorded.count(o) && std::find(out.begin(), out.end(), o) == out.end()) out.push_back(o);
+  for (const Record& r : run.records)
+    if (std::find(out.begin(), out.end(), r.object) == out.end()) out.push_back(r.object);
+  return out;
+}
+
+std::vector<const Record*> select(const ExperimentRun& run, const std::string& mode, const std::string& group,
+                                  const std::string& object) {
+  std::vector<const Record*> out;
+  for (const Record& r : run.records)
+    if (r.mode == mode && (group.empty() || r.group == group) && (object.empty() || r.object == object))
+      out.push_back(&r);
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The paper's numbers and the run's aggregates
+
+std::string default_paper_results_path() { return (sim::data_dir() / "paper_results_per_object.csv").string(); }
+
+std::vector<PaperRow> load_paper_results(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open the paper's results file");
+  const std::vector<std::string> columns = {"label", "object", "time_s_experienced", "time_s_inexperienced",
+                                            "err_experienced", "err_inexperienced"};
+  std::vector<std::size_t> index;  // file column of each of `columns`
+  std::vector<PaperRow> out;
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.find_first_not_of(" \t") == std::string::npos || line[line.find_first_not_of(" \t")] == '#') continue;
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    for (std::string cell; std::getline(ss, cell, ',');) {
+      const auto a = cell.find_first_not_of(" \t"), b = cell.find_last_not_of(" \t");
+      cells.push_back(a == std::string::npos ? "" : cell.substr(a, b - a + 1));
+    }
+    if (!line.empty() && line.back() == ',') cells.push_back("");
+    const std::string where = path + " line " + std::to_string(line_no);
+    if (index.empty()) {  // the header
+      for (const std::string& name : columns) {
+        const auto it = std::find(cells.begin(), cells.end(), name);
+        if (it == cells.end()) throw std::runtime_error(where + ": header has no column '" + name + "'");
+        index.push_back(static_cast<std::size_t>(it - cells.begin()));
+      }
+      continue;
+    }
+    auto cell = [&](std::size_t k) -> const std::string& {
+      if (index[k] >= cells.size())
+        throw std::runtime_error(where + " column " + std::to_string(index[k] + 1) + " (" + columns[k] +
+                                 "): missing");
+      return cells[index[k]];
+    };
+    auto number_at = [&](std::size_t k) {
+      const std::string& text = cell(k);
+      char* end = nullptr;
+      const double v = std::strtod(text.c_str(), &end);
+      if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(v) || v < 0)
+        throw std::runtime_error(where + " column " + std::to_string(index[k] + 1) + " (" + columns[k] + "): '" +
+                                 text + "' is not a non-negative number");
+      return v;
+    };
+    PaperRow row;
+    row.label = cell(0);
+    row.object = cell(1);
+    if (row.label.empty() || row.object.empty())
+      throw std::runtime_error(where + ": label and object must not be empty");
+    row.time_experienced = number_at(2);
+    row.time_inexperienced = number_at(3);
+    row.err_experienced = number_at(4);
+    row.err_inexperienced = number_at(5);
+    out.push_back(std::move(row));
+  }
+  if (index.empty()) throw std::runtime_error(path + ": no header row");
+  return out;
+}
+
+json aggregate_json(const ExperimentRun& run) {
+  const std::vector<std::string> modes = modes_of(run), groups = groups_of(run), objects = objects_of(run);
+  json out;
+  out["run"] = {{"protocol", run.protocol},     {"command_line", run.command_line}, {"seed", run.seed},
+                {"wall_seconds", run.wall_seconds}, {"created", run.created},       {"modes", run.modes},
+                {"objects", run.objects},        {"standin_objects", run.standin_objects},
+                {"participants", run.participants}, {"records", run.records.size()}};
+  out["metrics"] = {
+      {"time_to_grasp_s", "spawn to grasp, mean and sample sd over grasped trials"},
+      {"nd_abs_mean_mm", "per grasp: mean |ND| over the capsules that hit at the grasp tick; then mean and sample "
+                         "sd over grasps (this is what the charts plot)"},
+      {"nd_abs_pooled_mean_mm", "mean |ND| over every hit capsule of the grasped trials, at the grasp tick"},
+      {"hand_error_mean_mm", "the paper's HandError (sum over fingers of the per-finger mean |ND|) at the grasp tick"}};
+  json by_mgo = json::array(), by_mg = json::array(), by_mo = json::array(), worst = json::array();
+  for (const std::string& mode : modes) {
+    for (const std::string& group : groups) {
+      for (const std::string& object : objects) {
+        const auto records = select(run, mode, group, object);
+        if (records.empty()) continue;
+        json row = {{"mode", mode}, {"group", group}, {"object", object}};
+        row.update(aggregate_fields(aggregate(records)));
+        by_mgo.push_back(std::move(row));
+      }
+      const auto records = select(run, mode, group, "");
+      if (records.empty()) continue;
+      json row = {{"mode", mode}, {"group", group}};
+      row.update(aggregate_fields(aggregate(records)));
+      by_mg.push_back(std::move(row));
+    }
+    // Per object over both groups, and the objects that were slowest and least plausible.
+    std::vector<std::pair<std::string, Aggregate>> per_object;
+    for (const std::string& object : objects) {
+      const auto records = select(run, mode, "", object);
+      if (records.empty()) continue;
+      per_object.emplace_back(object, aggregate(records));
+      json row = {{"mode", mode}, {"group", "all"}, {"object", object}};
+      row.update(aggregate_fields(per_object.back().second));
+      by_mo.push_back(std::move(row));
+    }
+    auto worst_by = [&](double (*key)(const Aggregate&), const char* field) {
+      std::vector<std::pair<std::string, double>> ranked;
+      for (const auto& [object, a] : per_object)
+        if (std::isfinite(key(a))) ranked.emplace_back(object, key(a));
+      std::stable_sort(ranked.begin(), ranked.end(), [](const auto& x, const auto& y) { return x.second > y.second; });
+      json list = json::array();
+      for (std::size_t i = 0; i < ranked.size() && i < 5; ++i)
+        list.push_back({{"object", ranked[i].first}, {field, ranked[i].second}});
+      return list;
+    };
+    worst.push_back({{"mode", mode},
+                     {"by_time", worst_by([](const Aggregate& a) { return a.time.mean; }, "time_to_grasp_mean_s")},
+                     {"by_nd", worst_by([](const Aggregate& a) { return a.nd.mean; }, "nd_abs_mean_mm")}});
+  }
+  out["by_mode_group_object"] = std::move(by_mgo);
+  out["by_mode_group"] = std::move(by_mg);
+  out["by_mode_object"] = std::move(by_mo);
+  out["worst_objects"] = std::move(worst);
+  return out;
+}
+
+}  // namespace telegrasp::report

@@ -1,0 +1,52 @@
+// Internal to the experiment report (experiment_aggregate.cc, experiment_writers.cc,
+// experiment_html.cc); the public API is experiment_report.h. The statistics of a set of grasp
+// records, and what a run contains in a stable order.
+#pragma once
+
+#include "experiment_report.h"
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace telegrasp::report {
+
+struct Stat {
+  int n = 0;
+  double mean = NAN, sd = NAN;  // sd: sample sd (n - 1), NaN for n < 2.
+};
+
+Stat stat(const std::vector<double>& v);
+
+// A grasp's mean |ND| over the capsules that hit at the grasp tick; NaN when none hit.
+double grasp_nd_abs_mean(const Record& r, int* hits = nullptr);
+
+// The smallest exact signed distance of a blocked capsule at the grasp tick; NaN when none is.
+double grasp_min_signed_distance(const Record& r);
+
+// The aggregate of some trials (one mode, group and object, or wider).
+struct Aggregate {
+  int n = 0, grasped = 0, held = 0, capsules_hit = 0;
+  Stat time, nd, hand_error;   // over grasped trials (nd: those with a hit capsule)
+  double nd_pooled = NAN;      // mean |ND| over every hit capsule of those trials
+};
+
+Aggregate aggregate(const std::vector<const Record*>& records);
+
+// The run's modes in run order, then any mode only the records name.
+std::vector<std::string> modes_of(const ExperimentRun& run);
+
+// The paper's two groups first (its charts put experienced first), then the others by name.
+std::vector<std::string> groups_of(const ExperimentRun& run);
+
+// The objects that have records: the protocol's order, then objects only the records name.
+std::vector<std::string> objects_of(const ExperimentRun& run);
+
+// Records of one mode, group ("" = every group) and object ("" = every object).
+std::vector<const Record*> select(const ExperimentRun& run, const std::string& mode, const std::string& group,
+                                  const std::string& object);
+
+// `v` with `prec` decimals; "" when undefined (NaN), as a CSV cell or data attribute wants it.
+inline std::string number(double v, int prec = 3) { return std::isfinite(v) ? fmt(v, prec) : ""; }
+
+}  // namespace telegrasp::report

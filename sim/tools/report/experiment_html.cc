@@ -1,0 +1,475 @@
+// The experiment report as one self-contained HTML page: the run, the per-mode comparison, the
+// paper's bar charts as inline SVG with their numbers in tables, the paper's published numbers
+// beside ours, and the questionnaire's scores.
+#include "experiment_aggregate.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <sstream>
+
+namespace telegrasp::report {
+namespace {
+
+using nlohmann::json;
+
+const PaperRow* find_paper(const std::vector<PaperRow>& paper, const std::string& object) {
+  for (const PaperRow& p : paper)
+    if (p.object == object) return &p;
+  return nullptr;
+}
+
+// The paper's letter for an object; objects outside the paper's table get their 1-based position
+// on the x axis, so a letter always means the paper's object.
+std::string label_of(const std::vector<PaperRow>& paper, const std::vector<std::string>& objects, std::size_t i) {
+  if (const PaperRow* p = find_paper(paper, objects[i])) return p->label;
+  return "#" + std::to_string(i + 1);
+}
+
+std::string mode_name(const std::string& mode) { return mode.empty() ? "(mode unknown)" : mode; }
+
+// ---------------------------------------------------------------------------------------------
+// Text helpers
+
+std::string esc(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      case '\'': out += "&#39;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+// "1.23 ± 0.10" with the sd left out when undefined; "-" when the mean is.
+std::string mean_sd(const Stat& s, int prec = 2) {
+  if (!std::isfinite(s.mean)) return "-";
+  return fmt(s.mean, prec) + (std::isfinite(s.sd) ? " &plusmn; " + fmt(s.sd, prec) : "");
+}
+
+// ---------------------------------------------------------------------------------------------
+// SVG grouped bar charts
+
+struct Series {
+  std::string mode, group, legend, colour;
+  std::vector<bool> present;       // per object: false draws no bar (no trials, not in the paper)
+  std::vector<double> values;      // per object; NaN draws an empty bar (trials, but no value)
+  std::vector<std::string> cells;  // per object, the table's text
+};
+
+struct Chart {
+  std::string id, title, y_label;
+  std::vector<std::string> objects, labels;
+  std::vector<Series> series;
+  std::vector<std::pair<std::string, std::vector<std::string>>> table_only;  // extra table columns
+};
+
+const char* group_colour(const std::string& group, std::size_t index) {
+  if (group == "experienced") return "#1f77b4";
+  if (group == "inexperienced") return "#ff7f0e";
+  if (group == "all") return "#555555";
+  static const char* const others[] = {"#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#17becf"};
+  return others[index % 5];
+}
+
+const char* mode_colour(const std::string& mode) {
+  if (mode == "paper") return "#9e9e9e";
+  if (mode == "discrete") return "#d62728";
+  return "#2ca02c";  // precise and anything else
+}
+
+// A round axis maximum and tick step for values up to `max`.
+std::pair<double, double> axis_scale(double max) {
+  if (!(max > 0) || !std::isfinite(max)) return {1, 0.2};
+  const double raw = max / 5;
+  const double mag = std::pow(10, std::floor(std::log10(raw)));
+  double step = mag;
+  for (double m : {1.0, 2.0, 2.5, 5.0, 10.0})
+    if (m * mag >= raw) {
+      step = m * mag;
+      break;
+    }
+  return {std::ceil(max / step - 1e-9) * step, step};
+}
+
+std::string svg_chart(const Chart& c) {
+  const double left = 52, right = 12, top = 34, plot_h = 200, bottom = 34;
+  const std::size_t ns = std::max<std::size_t>(1, c.series.size());
+  const double slot = std::max(16.0, 6.0 * static_cast<double>(ns) + 6);
+  const double bar_w = (slot - 4) / static_cast<double>(ns);
+  const double plot_w = slot * static_cast<double>(std::max<std::size_t>(1, c.objects.size()));
+  const double width = left + plot_w + right, height = top + plot_h + bottom;
+
+  double max = 0;
+  for (const Series& s : c.series)
+    for (std::size_t i = 0; i < s.values.size(); ++i)
+      if (s.present[i] && std::isfinite(s.values[i])) max = std::max(max, s.values[i]);
+  const auto [y_max, y_step] = axis_scale(max);
+  auto y_of = [&](double v) { return top + plot_h * (1 - v / y_max); };
+
+  std::ostringstream o;
+  // No xmlns: inline SVG in HTML needs none, and the page names no URL at all.
+  o << "<svg class=\"chart\" data-chart=\"" << esc(c.id) << "\" viewBox=\"0 0 "
+    << fmt(width, 1) << " " << fmt(height, 1) << "\" width=\"" << fmt(width, 0) << "\" height=\"" << fmt(height, 0)
+    << "\" role=\"img\"><title>" << esc(c.title) << "</title>\n";
+  // Grid and y axis.
+  for (double v = 0; v <= y_max + 1e-9; v += y_step) {
+    const double y = y_of(v);
+    o << "<line class=\"grid\" x1=\"" << fmt(left, 1) << "\" x2=\"" << fmt(left + plot_w, 1) << "\" y1=\"" << fmt(y, 1)
+      << "\" y2=\"" << fmt(y, 1) << "\"/><text class=\"tick\" x=\"" << fmt(left - 4, 1) << "\" y=\"" << fmt(y + 3, 1)
+      << "\" text-anchor=\"end\">" << fmt(v, y_step < 0.1 ? 2 : (y_step < 1 ? 1 : 0)) << "</text>\n";
+  }
+  o << "<text class=\"axis\" transform=\"translate(12," << fmt(top + plot_h / 2, 1) << ") rotate(-90)\" "
+    << "text-anchor=\"middle\">" << esc(c.y_label) << "</text>\n";
+  // Legend, one entry per series.
+  double lx = left;
+  for (const Series& s : c.series) {
+    o << "<rect class=\"legend\" x=\"" << fmt(lx, 1) << "\" y=\"8\" width=\"10\" height=\"10\" fill=\"" << s.colour
+      << "\"/><text class=\"legend\" x=\"" << fmt(lx + 14, 1) << "\" y=\"17\">" << esc(s.legend) << "</text>\n";
+    lx += 24 + 6.5 * static_cast<double>(s.legend.size());
+  }
+  // Bars and x labels; the object's name is in a tooltip, as the paper's axis has only letters.
+  for (std::size_t i = 0; i < c.objects.size(); ++i) {
+    const double x0 = left + slot * static_cast<double>(i) + 2;
+    for (std::size_t k = 0; k < c.series.size(); ++k) {
+      const Series& s = c.series[k];
+      if (!s.present[i]) continue;
+      const double v = s.values[i];
+      const double h = std::isfinite(v) ? std::max(0.0, plot_h * std::min(v, y_max) / y_max) : 0;
+      o << "<rect class=\"bar\" data-chart=\"" << esc(c.id) << "\" data-mode=\"" << esc(s.mode) << "\" data-group=\""
+        << esc(s.group) << "\" data-object=\"" << esc(c.objects[i]) << "\" data-value=\"" << number(v, 4) << "\" x=\""
+        << fmt(x0 + bar_w * static_cast<double>(k), 2) << "\" y=\"" << fmt(top + plot_h - h, 2) << "\" width=\""
+        << fmt(bar_w, 2) << "\" height=\"" << fmt(h, 2) << "\" fill=\"" << s.colour << "\"><title>" << esc(c.labels[i])
+        << " " << esc(c.objects[i]) << ", " << esc(s.legend) << ": "
+        << (std::isfinite(v) ? fmt(v, 3) : std::string("no value")) << "</title></rect>\n";
+    }
+    o << "<text class=\"xlabel\" x=\"" << fmt(x0 + (slot - 4) / 2, 1) << "\" y=\"" << fmt(top + plot_h + 13, 1)
+      << "\" text-anchor=\"middle\"><title>" << esc(c.objects[i]) << "</title>" << esc(c.labels[i]) << "</text>\n";
+  }
+  o << "<line class=\"axisline\" x1=\"" << fmt(left, 1) << "\" x2=\"" << fmt(left + plot_w, 1) << "\" y1=\""
+    << fmt(top + plot_h, 1) << "\" y2=\"" << fmt(top + plot_h, 1) << "\"/>\n"
+    << "<text class=\"axis\" x=\"" << fmt(left + plot_w / 2, 1) << "\" y=\"" << fmt(height - 4, 1)
+    << "\" text-anchor=\"middle\">Object ID</text>\n</svg>\n";
+  return o.str();
+}
+
+std::string chart_table(const Chart& c) {
+  std::ostringstream o;
+  o << "<table class=\"numbers\"><tr><th>id</th><th>object</th>";
+  for (const Series& s : c.series) o << "<th>" << esc(s.legend) << "</th>";
+  for (const auto& [name, cells] : c.table_only) o << "<th>" << esc(name) << "</th>";
+  o << "</tr>\n";
+  for (std::size_t i = 0; i < c.objects.size(); ++i) {
+    o << "<tr><td>" << esc(c.labels[i]) << "</td><td>" << esc(c.objects[i]) << "</td>";
+    for (const Series& s : c.series) o << "<td>" << (s.present[i] ? s.cells[i] : "") << "</td>";
+    for (const auto& [name, cells] : c.table_only) o << "<td>" << cells[i] << "</td>";
+    o << "</tr>\n";
+  }
+  o << "</table>\n";
+  return o.str();
+}
+
+std::string figure(const Chart& c) {
+  return "<figure><figcaption>" + esc(c.title) + "</figcaption>\n" + svg_chart(c) + chart_table(c) + "</figure>\n";
+}
+
+// ---------------------------------------------------------------------------------------------
+// Page parts
+
+const char* kCss = R"(body{font-family:sans-serif;margin:1.5em;color:#222;max-width:none}
+h1{font-size:1.5em}h2{font-size:1.2em;margin-top:2em;border-bottom:1px solid #ccc}h3{font-size:1em}
+table{border-collapse:collapse;margin:.5em 0;font-size:.85em}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}
+th{background:#f2f2f2}td:first-child,th:first-child{text-align:left}
+.row{display:flex;flex-wrap:wrap;gap:2em;align-items:flex-start}.col{flex:0 0 auto}
+figure{margin:0 0 1.5em 0}figcaption{font-weight:bold;margin-bottom:.3em}
+svg.chart{background:#fff;display:block}svg .grid{stroke:#e0e0e0;stroke-width:.5}
+svg .axisline{stroke:#333;stroke-width:1}svg text{font-size:9px;fill:#333}svg .axis{font-size:10px}
+svg .legend{font-size:10px}.caveat{background:#fff8e1;border-left:4px solid #f0ad4e;padding:.5em 1em;max-width:60em}
+.rejected{color:#a00}code{background:#f4f4f4;padding:0 3px}
+)";
+
+std::string page(const std::string& title, const std::string& body) {
+  return "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" + esc(title) +
+         "</title>\n<style>\n" + kCss + "</style>\n</head>\n<body>\n" + body + "</body>\n</html>\n";
+}
+
+std::string unit_caveat(const ExperimentRun& run) {
+  std::string out =
+      "<div class=\"caveat\" id=\"unit-caveat\"><p><b>How our numbers compare with the paper's.</b></p><ul>\n"
+      "<li><b>Time</b> is seconds from the object's spawn to the moment the grasp rule turns true, in both. "
+      "The paper's are ten people with a VR headset (4 experienced, 6 inexperienced); ours are a seeded "
+      "<b>scripted bot</b>, not humans: its groups differ only in the reach pose error and speed it is given.</li>\n"
+      "<li><b>Error.</b> The paper's figures plot \"average error (mm)\" per object and group, averaged over its "
+      "participants; its text defines that error as the \"total error for the hand\", HandError (eq. 2): for each "
+      "finger the mean |ND| of its two capsule triggers (middle and distal phalanx), <i>summed over the five "
+      "fingers</i>, with ND from UE4 sphere traces against the object's collision geometry after the "
+      "once-per-frame overlap test stopped the fingers; a per-hand sum in millimetres. The paper does not say on "
+      "which frame it was taken. "
+      "Ours, in the error charts, is the <b>mean |ND| over the capsules that hit</b> (a per-capsule mean, not a "
+      "sum over fingers), in mm, by the exact metric of GRASPING.md section 4 (sphere sweep against the exact "
+      "mesh), taken at the grasp tick and averaged per grasp, then over the grasps of the object and group. "
+      "Our HandError (the paper's per-hand sum, same tick) is in the tables for the paper-vs-ours charts. "
+      "The two error columns therefore differ in metric, geometry and closing method: compare their shape across "
+      "objects, not their values.</li>\n";
+  if (!run.standin_objects.empty())
+    out += "<li>" + std::to_string(run.standin_objects.size()) +
+           " object(s) were procedural stand-ins, not YCB meshes (listed in the run summary): their geometry "
+           "differs from the paper's objects.</li>\n";
+  return out + "</ul></div>\n";
+}
+
+std::string questionnaire_section(const QuestionnaireSummary& q) {
+  std::ostringstream o;
+  o << "<h2 id=\"questionnaire\">Questionnaire</h2>\n<p>Source: <code>" << esc(q.source) << "</code>; "
+    << q.participants.size() << " participant(s) scored, " << q.rejected.size() << " row(s) rejected. "
+    << "Scores (-3..3): Motor Control = ((Q1+Q2)-(Q3+Q4))/4, Finger Movement Realism = (Q5+Q6+Q7)/3, "
+    << "Interaction Realism = ((Q8+Q9)-(Q10+Q11)+Q12+Q13+Q14)/7, Embodiment = (MC+FMR+2&middot;IR)/4; "
+    << "Q3, Q4, Q10 and Q11 are reversed items. Group values are mean &plusmn; sample sd; the paper's Table 2 "
+    << "value is in brackets.</p>\n";
+  o << "<table class=\"numbers\"><tr><th>group</th><th>n</th><th>Motor Control</th><th>Finger Movement "
+       "Realism</th><th>Interaction Realism</th><th>Embodiment</th></tr>\n";
+  for (const QuestionnaireGroup& g : q.groups) {
+    const PaperQuestionnaireRow* paper = paper_questionnaire_row(g.group);
+    auto col = [&](const ScoreStat& st, double QuestionnaireScores::*field) {
+      std::string text = mean_sd({st.n, st.mean, st.sd});
+      if (paper) text += " [" + fmt(paper->scores.*field) + "]";
+      return "<td>" + text + "</td>";
+    };
+    o << "<tr><td>" << esc(g.group) << "</td><td>" << g.n << "</td>"
+      << col(g.motor_control, &QuestionnaireScores::motor_control)
+      << col(g.finger_movement_realism, &QuestionnaireScores::finger_movement_realism)
+      << col(g.interaction_realism, &QuestionnaireScores::interaction_realism)
+      << col(g.embodiment, &QuestionnaireScores::embodiment) << "</tr>\n";
+  }
+  o << "</table>\n<p>The paper reports an embodiment score of 1.97 (experienced) and 2.19 (inexperienced).</p>\n";
+  o << "<details><summary>Per participant</summary><table class=\"numbers\"><tr><th>id</th><th>group</th>";
+  for (int i = 1; i <= kQuestionCount; ++i) o << "<th>Q" << i << "</th>";
+  o << "<th>MC</th><th>FMR</th><th>IR</th><th>Embodiment</th></tr>\n";
+  for (const QuestionnaireParticipant& p : q.participants) {
+    o << "<tr><td>" << esc(p.id) << "</td><td>" << esc(p.group) << "</td>";
+    for (int a : p.answers) o << "<td>" << a << "</td>";
+    o << "<td>" << fmt(p.scores.motor_control) << "</td><td>" << fmt(p.scores.finger_movement_realism) << "</td><td>"
+      << fmt(p.scores.interaction_realism) << "</td><td>" << fmt(p.scores.embodiment) << "</td></tr>\n";
+  }
+  o << "</table></details>\n";
+  if (!q.rejected.empty()) {
+    o << "<p class=\"rejected\">Rejected rows (not scored):</p><ul class=\"rejected\">\n";
+    for (const RejectedRow& r : q.rejected) o << "<li>" << esc(r.message) << "</li>\n";
+    o << "</ul>\n";
+  }
+  return o.str();
+}
+
+// ---------------------------------------------------------------------------------------------
+// The experiment page, section by section
+
+// What the sections draw from: the run's modes, groups and objects in a stable order, each
+// object's x-axis label, and the aggregate per mode, group ("all" = both) and object, computed once.
+struct PageData {
+  std::vector<std::string> modes, groups, objects, labels;
+  std::map<std::string, std::map<std::string, std::vector<Aggregate>>> agg;
+  std::map<std::string, std::map<std::string, std::vector<bool>>> has;  // per object: has records
+};
+
+PageData page_data(const ExperimentRun& run, const std::vector<PaperRow>& paper) {
+  PageData d{modes_of(run), groups_of(run), objects_of(run), {}, {}, {}};
+  for (std::size_t i = 0; i < d.objects.size(); ++i) d.labels.push_back(label_of(paper, d.objects, i));
+  for (const std::string& mode : d.modes) {
+    std::vector<std::string> with_all = d.groups;
+    with_all.push_back("all");
+    for (const std::string& group : with_all) {
+      std::vector<Aggregate>& aggs = d.agg[mode][group];  // present even with no objects
+      std::vector<bool>& has = d.has[mode][group];
+      for (const std::string& object : d.objects) {
+        const auto records = select(run, mode, group == "all" ? "" : group, object);
+        aggs.push_back(aggregate(records));
+        has.push_back(!records.empty());
+      }
+    }
+  }
+  return d;
+}
+
+std::string time_cell(const Aggregate& a) {
+  return mean_sd(a.time) + " (" + std::to_string(a.grasped) + "/" + std::to_string(a.n) + ")";
+}
+
+std::string nd_cell(const Aggregate& a) { return mean_sd(a.nd, 3) + " (" + std::to_string(a.nd.n) + ")"; }
+
+// The bars of one mode and group: mean time to grasp (or mean |ND|) per object, and table cells.
+Series series_of(const PageData& d, const std::string& mode, const std::string& group, const std::string& legend,
+                 const std::string& colour, bool time) {
+  Series s{mode, group, legend, colour, d.has.at(mode).at(group), {}, {}};
+  for (const Aggregate& a : d.agg.at(mode).at(group)) {
+    s.values.push_back(time ? a.time.mean : a.nd.mean);
+    s.cells.push_back(time ? time_cell(a) : nd_cell(a));
+  }
+  return s;
+}
+
+// Run summary: command, time, seed, modes, participants, objects and stand-in fallbacks.
+std::string run_section(const ExperimentRun& run, const PageData& d) {
+  std::ostringstream body;
+  body << "<h2>Run</h2>\n<table class=\"numbers\">\n<tr><th>command</th><td><code>" << esc(run.command_line)
+       << "</code></td></tr>\n<tr><th>created</th><td>" << esc(run.created) << "</td></tr>\n<tr><th>seed</th><td>"
+       << run.seed << "</td></tr>\n<tr><th>wall time</th><td>" << fmt(run.wall_seconds, 1)
+       << " s</td></tr>\n<tr><th>modes</th><td>";
+  for (std::size_t i = 0; i < d.modes.size(); ++i) body << (i ? ", " : "") << esc(mode_name(d.modes[i]));
+  body << "</td></tr>\n<tr><th>participants</th><td>";
+  {
+    bool first = true;
+    for (const auto& [group, count] : run.participants) {
+      body << (first ? "" : ", ") << esc(group) << ": " << count;
+      first = false;
+    }
+  }
+  body << "</td></tr>\n<tr><th>objects</th><td>" << d.objects.size() << " with records of " << run.objects.size()
+       << " in the protocol; " << run.records.size() << " grasp trials</td></tr>\n<tr><th>stand-in fallbacks</th><td>";
+  if (run.standin_objects.empty()) body << "none";
+  for (std::size_t i = 0; i < run.standin_objects.size(); ++i) body << (i ? ", " : "") << esc(run.standin_objects[i]);
+  body << "</td></tr>\n</table>\n";
+  return body.str();
+}
+
+// The slowest and least exact objects of each mode, both groups together (from aggregate_json).
+std::string worst_objects_paragraph(const ExperimentRun& run) {
+  std::ostringstream body;
+  const json aggregates = aggregate_json(run);
+  body << "<p>Worst objects (both groups): ";
+  for (const json& w : aggregates["worst_objects"]) {
+    body << "<br><b>" << esc(mode_name(w["mode"].get<std::string>())) << "</b> by time: ";
+    for (const json& o : w["by_time"])
+      body << esc(o["object"].get<std::string>()) << " (" << fmt(o["time_to_grasp_mean_s"].get<double>()) << " s) ";
+    body << "; by |ND|: ";
+    for (const json& o : w["by_nd"])
+      body << esc(o["object"].get<std::string>()) << " (" << fmt(o["nd_abs_mean_mm"].get<double>(), 3) << " mm) ";
+  }
+  body << "</p>\n";
+  return body.str();
+}
+
+// Overall per mode and group: the discrete-vs-precise comparison at a glance, then the worst
+// objects and how our numbers compare with the paper's.
+std::string overall_section(const ExperimentRun& run, const PageData& d) {
+  std::ostringstream body;
+  body << "<h2>Overall per mode and group</h2>\n<table class=\"numbers\"><tr><th>mode</th><th>group</th><th>trials</th>"
+          "<th>grasped</th><th>held after lift</th><th>time to grasp (s)</th><th>mean |ND| (mm)</th>"
+          "<th>HandError (mm)</th></tr>\n";
+  for (const std::string& mode : d.modes)
+    for (const std::string& group : d.groups) {
+      const auto records = select(run, mode, group, "");
+      if (records.empty()) continue;
+      const Aggregate a = aggregate(records);
+      body << "<tr><td>" << esc(mode_name(mode)) << "</td><td>" << esc(group) << "</td><td>" << a.n << "</td><td>"
+           << a.grasped << "</td><td>" << a.held << "</td><td>" << mean_sd(a.time) << "</td><td>" << mean_sd(a.nd, 3)
+           << "</td><td>" << mean_sd(a.hand_error) << "</td></tr>\n";
+    }
+  body << "</table>\n";
+  return body.str() + worst_objects_paragraph(run) + unit_caveat(run);
+}
+
+// Charts (1) to (3): one column per mode, so discrete and precise sit side by side.
+std::string mode_charts_section(const PageData& d) {
+  struct Kind {
+    const char* id;
+    const char* title;
+    const char* y_label;
+    bool time, overall;
+  };
+  const Kind kinds[] = {
+      {"time_by_group", "Mean time to grasp per object and group", "Time [s]", true, false},
+      {"nd_by_group", "Mean |ND| per object and group (capsules that hit, grasp tick)", "|ND| [mm]", false, false},
+      {"time_overall", "Mean time to grasp per object, all participants", "Time [s]", true, true},
+      {"nd_overall", "Mean |ND| per object, all participants", "|ND| [mm]", false, true},
+  };
+  std::ostringstream body;
+  for (const Kind& kind : kinds) {
+    body << "<h2>" << kind.title << "</h2>\n<div class=\"row\">\n";
+    for (const std::string& mode : d.modes) {
+      Chart c{std::string(kind.id) + "." + mode, kind.title + std::string(", ") + mode_name(mode), kind.y_label,
+              d.objects, d.labels, {}, {}};
+      if (kind.overall) {
+        c.series.push_back(series_of(d, mode, "all", "All participants", group_colour("all", 0), kind.time));
+      } else {
+        for (std::size_t g = 0; g < d.groups.size(); ++g)
+          c.series.push_back(series_of(d, mode, d.groups[g], d.groups[g], group_colour(d.groups[g], g), kind.time));
+      }
+      body << "<div class=\"col\"><h3>" << esc(mode_name(mode)) << "</h3>\n" << figure(c) << "</div>\n";
+    }
+    body << "</div>\n";
+  }
+  return body.str();
+}
+
+// Chart (4) for one of the paper's groups: the paper's time (or error) per object beside ours in
+// every mode; the error chart's table adds our HandError.
+Chart paper_chart(const std::vector<PaperRow>& paper, const PageData& d, const std::string& group, bool time) {
+  const bool experienced = group == "experienced";
+  Chart c{std::string(time ? "paper_time." : "paper_error.") + group,
+          (time ? "Time to grasp, paper vs ours, " : "Error, paper's HandError vs our mean |ND|, ") + group,
+          time ? "Time [s]" : "Error [mm]", d.objects, d.labels, {}, {}};
+  Series p{"paper", group, "paper", mode_colour("paper"), {}, {}, {}};
+  for (const std::string& object : d.objects) {
+    const PaperRow* row = find_paper(paper, object);
+    const double v = !row ? NAN
+                     : time ? (experienced ? row->time_experienced : row->time_inexperienced)
+                            : (experienced ? row->err_experienced : row->err_inexperienced);
+    p.present.push_back(row != nullptr);
+    p.values.push_back(v);
+    p.cells.push_back(number(v, 3));
+  }
+  c.series.push_back(std::move(p));
+  for (const std::string& mode : d.modes) {
+    c.series.push_back(series_of(d, mode, group, "ours, " + mode_name(mode), mode_colour(mode), time));
+    if (!time) {
+      std::vector<std::string> cells;
+      for (const Aggregate& a : d.agg.at(mode).at(group)) cells.push_back(mean_sd(a.hand_error));
+      c.table_only.emplace_back("our HandError, " + mode_name(mode), std::move(cells));
+    }
+  }
+  return c;
+}
+
+// Chart (4): the paper's published numbers beside ours, per group, every mode in one chart.
+std::string paper_section(const std::vector<PaperRow>& paper, const PageData& d) {
+  std::ostringstream body;
+  body << "<h2>The paper's per-object results beside ours</h2>\n";
+  if (paper.empty()) body << "<p>No paper results given.</p>\n";
+  for (const std::string& group : d.groups) {
+    if (paper.empty() || (group != "experienced" && group != "inexperienced")) continue;
+    body << "<div class=\"row\">\n";
+    for (const bool time : {true, false})
+      body << "<div class=\"col\">\n" << figure(paper_chart(paper, d, group, time)) << "</div>\n";
+    body << "</div>\n";
+  }
+  body << "<p>Paper: Oprea et al. 2019, figures \"average elapsed time\" and \"average error (mm)\" per object "
+          "(<code>paper_results_per_object.csv</code>). Table cells of ours: mean &plusmn; sample sd (grasped/trials "
+          "for time; grasps with a hit capsule for |ND|).</p>\n";
+  return body.str();
+}
+
+}  // namespace
+
+std::string html_report(const ExperimentRun& run, const std::vector<PaperRow>& paper,
+                        const QuestionnaireSummary* questionnaire) {
+  const PageData d = page_data(run, paper);
+  std::string body = "<h1>telegrasp: the paper's grasping experiment (" + esc(run.protocol) + ")</h1>\n";
+  body += run_section(run, d);
+  body += overall_section(run, d);
+  body += mode_charts_section(d);
+  body += paper_section(paper, d);
+  if (questionnaire) body += questionnaire_section(*questionnaire);
+  return page("telegrasp experiment report", body);
+}
+
+std::string questionnaire_html_report(const QuestionnaireSummary& questionnaire) {
+  return page("telegrasp questionnaire", "<h1>telegrasp: questionnaire scores</h1>\n" +
+                                             questionnaire_section(questionnaire));
+}
+
+}  // namespace telegrasp::report
