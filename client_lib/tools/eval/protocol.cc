@@ -2,6 +2,7 @@
 // (mode, participant) pair is a job: a telegrasp-server in lockstep on its own DDS domain and a
 // participant process (participant.cc) driving it. Jobs run in parallel, as many as --jobs.
 // Records come from the GraspEvent topic, via the participants.
+#include "child_process.h"
 #include "cli.h"
 #include "commands.h"
 #include "experiment_report.h"
@@ -29,9 +30,7 @@
 #include <thread>
 #include <vector>
 
-#include <fcntl.h>
 #include <poll.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 namespace telegrasp::eval {
@@ -147,72 +146,11 @@ Options parse(int argc, char** argv) {
   return o;
 }
 
-// A child process with its stdout on a pipe (or a file) and its stderr in a file.
-struct Child {
-  pid_t pid = -1;
-  int out_fd = -1;  // read end of its stdout, or -1
-};
-
-Child spawn(const std::vector<std::string>& args, const std::string& log_path, bool pipe_stdout) {
-  int fds[2] = {-1, -1};
-  if (pipe_stdout && pipe(fds) != 0) throw std::runtime_error(std::string("pipe: ") + std::strerror(errno));
-  const pid_t pid = fork();
-  if (pid < 0) throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
-  if (pid == 0) {
-    const int log = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (log >= 0) {
-      dup2(log, STDERR_FILENO);
-      if (!pipe_stdout) dup2(log, STDOUT_FILENO);
-    }
-    if (pipe_stdout) {
-      dup2(fds[1], STDOUT_FILENO);
-      close(fds[0]);
-      close(fds[1]);
-    }
-    std::vector<char*> argv;
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    execv(argv[0], argv.data());
-    std::fprintf(stderr, "cannot run %s: %s\n", argv[0], std::strerror(errno));
-    _exit(127);
-  }
-  Child c;
-  c.pid = pid;
-  if (pipe_stdout) {
-    close(fds[1]);
-    c.out_fd = fds[0];
-    fcntl(c.out_fd, F_SETFL, O_NONBLOCK);
-  }
-  return c;
-}
-
-// Stops a child with SIGTERM (SIGKILL after 5 s); returns its exit status.
-int stop(pid_t pid) {
-  kill(pid, SIGTERM);
-  int status = 0;
-  for (int i = 0; i < 500; ++i) {
-    if (waitpid(pid, &status, WNOHANG) == pid) return status;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  kill(pid, SIGKILL);
-  waitpid(pid, &status, 0);
-  return status;
-}
-
-std::string tail(const std::string& path, std::size_t lines) {
-  std::ifstream in(path);
-  std::vector<std::string> all;
-  for (std::string l; std::getline(in, l);) all.push_back(l);
-  std::string out;
-  for (std::size_t i = all.size() > lines ? all.size() - lines : 0; i < all.size(); ++i) out += "    " + all[i] + "\n";
-  return out;
-}
-
 struct Job {
   std::string mode, group;
   int participant = 0;
   int slot = -1;
-  Child server, bot;
+  tools::ChildProcess server, bot;  // the participant's stdout on a pipe: its "grasp ..." lines
   std::string buffer;  // partial line of the participant's stdout
   int grasps_done = 0;
   bool finished = false, failed = false;
@@ -380,21 +318,20 @@ void start_job(Job& j, int slot, const Options& opt, const Setup& setup) {
   if (!opt.profiles_file.empty())
     for (const char* a : {"--profiles", opt.profiles_file.c_str()}) server.push_back(a), bot.push_back(a);
   if (!opt.record_dir.empty()) server.insert(server.end(), {"--record", (fs::path(opt.record_dir) / (name + ".tgrec")).string()});
-  j.server = spawn(server, (setup.work / (name + ".server.log")).string(), false);
-  j.bot = spawn(bot, (setup.work / (name + ".participant.log")).string(), true);
+  j.server.start(server, (setup.work / (name + ".server.log")).string());
+  j.bot.start(bot, (setup.work / (name + ".participant.log")).string(), true);
 }
 
 // Ends a job whose participant exited with `bot_status`: stops its server, then reads the records
 // the participant wrote, or marks the job failed with the end of both logs.
 void finish_job(Job& j, int bot_status, const fs::path& work) {
   const std::string name = job_name(j);
-  stop(j.server.pid);
-  close(j.bot.out_fd);
+  j.server.stop();
   j.finished = true;
-  if (!WIFEXITED(bot_status) || WEXITSTATUS(bot_status) != 0) {
+  if (bot_status != 0) {
     j.failed = true;
-    j.error = "participant " + std::to_string(j.participant) + " (" + j.mode + ") failed; its log:\n" +
-              tail((work / (name + ".participant.log")).string(), 5) + "  server log:\n" + tail((work / (name + ".server.log")).string(), 5);
+    j.error = "participant " + std::to_string(j.participant) + " (" + j.mode + ") failed; its log:\n" + j.bot.log_tail(5) +
+              "  server log:\n" + j.server.log_tail(5);
     return;
   }
   try {
@@ -417,7 +354,7 @@ struct Progress {
 int read_grasp_lines(Job& j) {
   int grasps = 0;
   char buf[4096];
-  for (ssize_t n; (n = read(j.bot.out_fd, buf, sizeof buf)) > 0;) j.buffer.append(buf, static_cast<std::size_t>(n));
+  for (ssize_t n; (n = read(j.bot.stdout_fd(), buf, sizeof buf)) > 0;) j.buffer.append(buf, static_cast<std::size_t>(n));
   for (std::size_t nl; (nl = j.buffer.find('\n')) != std::string::npos; j.buffer.erase(0, nl + 1))
     if (j.buffer.compare(0, 6, "grasp ") == 0) ++grasps;
   return grasps;
@@ -430,7 +367,7 @@ void poll_jobs(std::vector<Job>& jobs, Progress& progress, const Options& opt, c
   std::vector<Job*> polled;
   for (Job& j : jobs)
     if (j.slot >= 0 && !j.finished) {
-      fds.push_back({j.bot.out_fd, POLLIN, 0});
+      fds.push_back({j.bot.stdout_fd(), POLLIN, 0});
       polled.push_back(&j);
     }
   poll(fds.data(), fds.size(), 200);
@@ -439,8 +376,7 @@ void poll_jobs(std::vector<Job>& jobs, Progress& progress, const Options& opt, c
     const int grasps = read_grasp_lines(j);
     j.grasps_done += grasps;
     progress.done_grasps += grasps;
-    int status = 0;
-    if (waitpid(j.bot.pid, &status, WNOHANG) == j.bot.pid) {
+    if (const int status = j.bot.wait(std::chrono::milliseconds(0)); status >= 0) {
       finish_job(j, status, setup.work);
       progress.slot_busy[static_cast<std::size_t>(j.slot)] = false;
       --progress.running;
