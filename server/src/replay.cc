@@ -1,37 +1,19 @@
 #include "replay.h"
 
+#include "recorded_feed.h"
 #include "scene_server.h"
+#include "server_loop.h"
 #include "server_config.pb.h"
 #include "telegrasp/sim/mesh_loading.h"
 #include "telegrasp/sim/standin_objects.h"
 
 #include <algorithm>
 #include <cstdio>
-#include <deque>
 #include <filesystem>
 #include <memory>
 
 namespace telegrasp::server {
 namespace {
-
-constexpr std::uint64_t kProgressEvery = 4096;  // records between progress callbacks
-
-// Collects what the replayed SceneServer publishes, in order, until it is compared.
-class CaptureSink : public OutputSink {
- public:
-  std::deque<ReplayedOutput> produced;
-
-  void publish(const msg::HandSkeleton& m) override { add(proto::OUTPUT_HAND_SKELETON, to_cdr(m)); }
-  void publish(const msg::GraspState& m) override { add(proto::OUTPUT_GRASP_STATE, to_cdr(m)); }
-  void publish(const msg::ContactSet& m) override { add(proto::OUTPUT_CONTACT_SET, to_cdr(m)); }
-  void publish(const msg::GraspEvent& m) override { add(proto::OUTPUT_GRASP_EVENT, to_cdr(m)); }
-  void publish(const msg::SceneState& m) override { add(proto::OUTPUT_SCENE_STATE, to_cdr(m)); }
-  void publish(const msg::ServerStatus&) override {}  // the server publishes it, not the scene; never compared
-  void hand_removed(const HandAddress& hand) override { produced.push_back({proto::OUTPUT_HAND_REMOVED, "", hand}); }
-
- private:
-  void add(proto::OutputType type, std::string cdr) { produced.push_back({type, std::move(cdr), {}}); }
-};
 
 std::string join(const std::vector<std::string>& parts, const char* sep) {
   std::string out;
@@ -115,6 +97,26 @@ void check_model_order(const proto::ModelSource& ms, const SceneAssets& a, const
   }
 }
 
+// Warnings for a recording made by another build.
+std::vector<std::string> version_warnings(const proto::RecordingHeader& header) {
+  std::vector<std::string> w;
+  if (header.idl_sha256() != idl_sha256())
+    w.push_back("recorded with another idl/telegrasp.idl (SHA-256 " + header.idl_sha256() + ", this build's is " + idl_sha256() +
+                "): messages may not decode or compare");
+  if (header.telegrasp_version() != telegrasp_version())
+    w.push_back("recorded by telegrasp " + header.telegrasp_version() + ", replayed by " + telegrasp_version() +
+                ": the simulation may differ");
+  return w;
+}
+
+ServerSettings recorded_settings(const proto::RecordingHeader& header, const std::string& path) {
+  try {
+    return settings_from_proto(header.config(), "recording " + path + ": header.config");
+  } catch (const std::runtime_error& e) {
+    throw RecordingError(e.what());
+  }
+}
+
 }  // namespace
 
 SceneAssets load_recorded_assets(const proto::RecordingHeader& header, const std::string& recording_path, const std::string& objects_dir) {
@@ -154,118 +156,36 @@ int ReplayResult::exit_code() const {
 
 ReplayResult replay_recording(const std::string& path, const ReplayOptions& options) {
   RecordingReader reader(path);
-  const proto::RecordingHeader& header = reader.header();
   ReplayResult result;
-  if (header.idl_sha256() != idl_sha256())
-    result.warnings.push_back("recorded with another idl/telegrasp.idl (SHA-256 " + header.idl_sha256() + ", this build's is " +
-                              idl_sha256() + "): messages may not decode or compare");
-  if (header.telegrasp_version() != telegrasp_version())
-    result.warnings.push_back("recorded by telegrasp " + header.telegrasp_version() + ", replayed by " + telegrasp_version() +
-                              ": the simulation may differ");
-
-  ServerSettings settings;
-  try {
-    settings = settings_from_proto(header.config(), "recording " + path + ": header.config");
-  } catch (const std::runtime_error& e) {
-    throw RecordingError(e.what());
-  }
-  const SceneAssets assets = load_recorded_assets(header, path, options.objects_dir);
+  result.warnings = version_warnings(reader.header());
+  const ServerSettings settings = recorded_settings(reader.header(), path);
+  const SceneAssets assets = load_recorded_assets(reader.header(), path, options.objects_dir);
   // A fresh mailbox: the scene only asks it to forget removed hands and for the status counts.
   InputMailbox mailbox({assets.left_rig->fingers().size(), assets.right_rig->fingers().size()}, settings.max_hands,
                        [](const std::string&) {});
-  CaptureSink sink;
+  OutputCapture capture;
   std::unique_ptr<SceneServer> scene;
   try {
-    scene = std::make_unique<SceneServer>(settings, assets.models, assets.right_rig, assets.left_rig, mailbox, sink);
+    scene = std::make_unique<SceneServer>(settings, assets.models, assets.right_rig, assets.left_rig, mailbox, capture);
   } catch (const std::runtime_error& e) {
     throw RecordingError("recording " + path + ": the scene cannot be rebuilt from the header: " + e.what());
   }
 
-  auto diverge = [&](std::uint64_t record, Divergence d) {
-    d.record = record;
-    d.tick = scene->world().tick();
-    d.message = "record " + std::to_string(record) + " (tick " + std::to_string(d.tick) + "): " + d.message;
-    result.divergence = std::move(d);
-  };
-  // The replay published something the recording does not have before its next call (or end).
-  auto extra_output = [&](std::uint64_t record) {
-    const ReplayedOutput& p = sink.produced.front();
-    Divergence d;
-    d.type = output_type_name(p.type);
-    d.key = key_of_output(p.type, p.cdr, p.removed);
-    d.message = "the replay published a " + d.type + " (" + d.key + ") that the recording does not have";
-    diverge(record, std::move(d));
-  };
+  // The server's loop, ticking where the recording ticked, fed and checked by the recording.
+  RecordedFeed feed(reader, capture, options.progress);
+  LoopSettings loop = loop_settings(settings);
+  loop.schedule = TickSchedule::kSource;
+  ServerLoop(loop, *scene, feed, feed, capture, &feed).run();
+  feed.finish();
 
-  proto::Record r;
-  while (!result.divergence && reader.next(r)) {
-    const std::uint64_t index = reader.records() - 1;
-    if (options.progress && reader.records() % kProgressEvery == 0) options.progress(reader);
-    if (r.has_output()) {
-      const proto::Output& out = r.output();
-      if (out.type() == proto::OUTPUT_SERVER_STATUS) {
-        ++result.statuses_skipped;  // wall-clock loop timings: not reproducible
-        continue;
-      }
-      if (sink.produced.empty()) {
-        Divergence d;
-        d.type = output_type_name(out.type());
-        d.key = key_of_output(out.type(), out.cdr(), hand_address(out.removed()));
-        d.message = "the recording has a " + d.type + " (" + d.key + ") that the replay did not publish";
-        diverge(index, std::move(d));
-        break;
-      }
-      Divergence d;
-      if (!same_output(out, sink.produced.front(), d)) {
-        diverge(index, std::move(d));
-        break;
-      }
-      sink.produced.pop_front();
-      ++result.outputs_compared;
-      continue;
-    }
-    // A call: everything the previous call published must have been matched by now.
-    if (!sink.produced.empty()) {
-      extra_output(index);
-      break;
-    }
-    if (r.has_inputs()) {
-      std::vector<InputSample> samples;
-      for (const proto::InputSample& p : r.inputs().samples()) {
-        InputSample s;
-        s.hand = hand_address(p.hand());
-        s.received_ns = p.received_ns();
-        if (!from_cdr(p.controller_state_cdr(), s.state)) {
-          Divergence d;
-          d.type = "ControllerState";
-          d.key = hand_text(s.hand.client_id, s.hand.side);
-          d.message = "the recorded ControllerState of the " + d.key + " does not decode with this build's IDL";
-          diverge(index, std::move(d));
-          break;
-        }
-        samples.push_back(std::move(s));
-      }
-      if (result.divergence) break;
-      scene->on_inputs(std::move(samples), r.inputs().now_ns());
-    } else if (r.has_command()) {
-      msg::SceneCommand c;
-      if (!from_cdr(r.command().scene_command_cdr(), c)) {
-        Divergence d;
-        d.type = "SceneCommand";
-        d.message = "the recorded SceneCommand does not decode with this build's IDL";
-        diverge(index, std::move(d));
-        break;
-      }
-      scene->apply_command(c);
-    } else if (r.has_tick()) {
-      scene->tick(r.tick().now_ns());
-      ++result.ticks;
-    }
-  }
-  result.records = reader.records();
-  result.damage = reader.damage();
-  // A complete recording holds every output of its last call; a damaged one may end among them.
-  if (!result.divergence && !result.damage && !sink.produced.empty()) extra_output(result.records);
+  result.divergence = feed.divergence();
+  result.ticks = feed.ticks();
+  result.outputs_compared = feed.outputs_compared();
+  result.statuses_skipped = feed.statuses_skipped();
+  // The feed reads a loop iteration ahead; the records up to a divergence are those reported as
+  // read, and damage beyond it was not reached.
+  result.records = result.divergence ? std::min(result.divergence->record + 1, reader.records()) : reader.records();
+  if (!result.divergence) result.damage = reader.damage();
   if (options.progress) options.progress(reader);
   return result;
 }

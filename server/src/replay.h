@@ -1,6 +1,7 @@
 // Replay of a recording (recording.h): the scene is rebuilt from the header and driven by the
-// recorded calls; every output it publishes is compared, in order, with the recorded one
-// (replay_diff.h).
+// server's own loop (ServerLoop), fed from the recording (RecordedFeed): the recorded inputs and
+// commands are applied at their recorded times and the ticks taken where the recording took them;
+// every output the scene publishes is compared, in order, with the recorded one (replay_diff.h).
 #pragma once
 
 #include "recording.h"
