@@ -42,10 +42,16 @@ bool InputMailbox::offer(const msg::ControllerState& state, const ParticipantKey
   return true;
 }
 
-void InputMailbox::wait(std::chrono::steady_clock::time_point deadline) {
+bool InputMailbox::wait(std::chrono::steady_clock::time_point deadline) {
   std::unique_lock lock(mutex_);
-  cv_.wait_until(lock, deadline, [&] { return woken_ || !pending_.empty(); });
+  bool woken = true;
+  while (!woken_ && pending_.empty())
+    if (cv_.wait_until(lock, deadline) == std::cv_status::timeout) {
+      woken = false;
+      break;
+    }
   woken_ = false;
+  return woken;
 }
 
 void InputMailbox::wake() {

@@ -41,9 +41,10 @@ class InputMailbox {
   /// Validates and stores `state` from participant `writer`; false if it was dropped.
   bool offer(const msg::ControllerState& state, const ParticipantKey& writer, std::int64_t received_ns);
 
-  /// Blocks until a sample is pending, wake() is called, or `deadline` passes.
-  void wait(std::chrono::steady_clock::time_point deadline);
-  /// Wakes wait() (a command arrived, or shutdown).
+  /// Blocks until a sample is pending, wake() is called, or `deadline` passes. True if woken (a
+  /// sample or wake()) before the deadline, false if the deadline came first.
+  bool wait(std::chrono::steady_clock::time_point deadline);
+  /// Wakes wait(), or the next wait() if none is waiting (a command arrived, or shutdown).
   void wake();
   /// Takes the pending samples, the newest per hand, in hand order.
   std::vector<InputSample> drain();

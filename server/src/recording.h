@@ -6,6 +6,7 @@
 #include "input_mailbox.h"
 #include "output_sink.h"
 #include "recording.pb.h"
+#include "scene_call_observer.h"
 #include "scene_setup.h"
 #include "server_config.h"
 
@@ -97,21 +98,21 @@ class RecordingWriter {
   std::string error_;
 };
 
-/// Records a server run at the simulation thread's boundary. Call inputs() before handing the
-/// same samples to SceneServer::on_inputs, command() before apply_command, tick() before tick;
-/// pass the Recorder as the SceneServer's OutputSink (and publish ServerStatus through it): each
-/// output is recorded, then forwarded to `next`. Bytes reach the file at least about once a
-/// second (at a tick or status), so a killed server leaves a file readable up to then; the
-/// destructor closes it with its End record. A write error at run time is logged once to stderr
-/// and ends the recording; the server goes on. Simulation thread only.
-class Recorder : public OutputSink {
+/// Records a server run at the simulation thread's boundary: it is the ServerLoop's
+/// SceneCallObserver (or, driving a SceneServer by hand: inputs() before on_inputs with the same
+/// samples, command() before apply_command, tick() before tick), and the SceneServer's OutputSink
+/// (ServerStatus too): each output is recorded, then forwarded to `next`. Bytes reach the file at
+/// least about once a second (at a tick or status), so a killed server leaves a file readable up
+/// to then; the destructor closes it with its End record. A write error at run time is logged once
+/// to stderr and ends the recording; the server goes on. Simulation thread only.
+class Recorder : public OutputSink, public SceneCallObserver {
  public:
   /// Throws RecordingError naming `path` if it cannot be written.
   Recorder(const std::string& path, const ServerSettings& settings, const SceneAssets& assets, OutputSink& next);
 
-  void inputs(const std::vector<InputSample>& samples, std::int64_t now_ns);
-  void command(const msg::SceneCommand& command, std::int64_t now_ns);
-  void tick(std::int64_t now_ns);
+  void inputs(const std::vector<InputSample>& samples, std::int64_t now_ns) override;
+  void command(const msg::SceneCommand& command, std::int64_t now_ns) override;
+  void tick(std::int64_t now_ns) override;
 
   void publish(const msg::HandSkeleton& m) override;
   void publish(const msg::GraspState& m) override;

@@ -1,9 +1,11 @@
 // Replay of a recording (recording.h): the scene is rebuilt from the header and driven by the
-// recorded calls; every output it publishes is compared, in order, with the recorded one. Also
-// the export of every grasp's contacts as CSV.
+// server's own loop (ServerLoop), fed from the recording (RecordedFeed): the recorded inputs and
+// commands are applied at their recorded times and the ticks taken where the recording took them;
+// every output the scene publishes is compared, in order, with the recorded one (replay_diff.h).
 #pragma once
 
 #include "recording.h"
+#include "replay_diff.h"
 #include "scene_setup.h"
 
 #include <cstdint>
@@ -19,16 +21,6 @@ namespace telegrasp::server {
 /// its recorded size and hash. Throws RecordingError naming every missing or changed mesh file.
 SceneAssets load_recorded_assets(const proto::RecordingHeader& header, const std::string& recording_path,
                                  const std::string& objects_dir = "");
-
-/// The first output that differs from the recording.
-struct Divergence {
-  std::uint64_t record = 0;  ///< Index of the recorded output (or, for an extra output, of the next recorded call).
-  std::uint64_t tick = 0;    ///< Ticks replayed before it (the world tick it belongs to).
-  std::string type;          ///< e.g. "GraspEvent".
-  std::string key;           ///< e.g. "client 'alice' right hand", "event 3, object 0 '005_tomato_soup_can'".
-  std::string field;         ///< The first differing field, e.g. "contacts[2].p_world.x" ("" if not named).
-  std::string message;       ///< All of it in one sentence.
-};
 
 struct ReplayOptions {
   std::string objects_dir;  ///< "": the recorded objects folder.
@@ -54,25 +46,5 @@ struct ReplayResult {
 /// Replays `path` in-process. Stops at the first divergence. Throws RecordingError if the header
 /// cannot be read or the scene cannot be rebuilt from it.
 ReplayResult replay_recording(const std::string& path, const ReplayOptions& options = {});
-
-/// What export_contacts_csv wrote.
-struct ContactExport {
-  std::uint64_t events = 0;  ///< Grasp events (release events carry no contacts).
-  std::uint64_t rows = 0;    ///< Contacts.
-  std::optional<RecordingDamage> damage;
-};
-
-/// The CSV header line export_contacts_csv writes (no newline).
-extern const char* const kContactCsvHeader;
-
-/// Writes one CSV row per contact of every recorded GraspEvent of kind grasp, in event order:
-/// event_id, client_id, hand (left/right), object_id, object_name, tick, time, phalanx (rig index,
-/// -1 = palm), phalanx_name, p_world_{x,y,z}, n_world_{x,y,z}, p_object_{x,y,z}, n_object_{x,y,z},
-/// nd_m, nd_hit. Numbers print as the shortest text that reads back to the same double. Throws
-/// RecordingError if the recording's header cannot be read or the CSV cannot be written.
-ContactExport export_contacts_csv(const std::string& recording_path, const std::string& csv_path);
-
-/// The protobuf output type's name as the IDL calls the message, e.g. "GraspEvent".
-std::string output_type_name(proto::OutputType type);
 
 }  // namespace telegrasp::server

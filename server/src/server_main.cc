@@ -1,26 +1,26 @@
 // telegrasp-server: the authoritative grasp simulation, driven by VR clients over DDS.
 #include "dds_node.h"
 #include "input_mailbox.h"
+#include "live_feed.h"
 #include "recording.h"
 #include "scene_server.h"
 #include "scene_setup.h"
 #include "server_config.h"
+#include "server_loop.h"
 
-#include <algorithm>
-#include <atomic>
-#include <chrono>
-#include <csignal>
+#include <pthread.h>
+#include <signal.h>
+
 #include <cstdlib>
 #include <iostream>
 #include <optional>
 #include <string>
-#include <vector>
+#include <thread>
 
 namespace {
 
 using namespace telegrasp;
 using namespace telegrasp::server;
-using Clock = std::chrono::steady_clock;
 
 constexpr const char* kUsage = R"(Usage: telegrasp-server [options]
 
@@ -51,9 +51,6 @@ Options (override the --config file):
 
 Stops cleanly on SIGINT or SIGTERM.
 )";
-
-std::atomic<bool> g_stop{false};
-extern "C" void on_signal(int) { g_stop = true; }
 
 [[noreturn]] void usage_error(const std::string& what) {
   std::cerr << "telegrasp-server: " << what << "\n(see telegrasp-server --help)\n";
@@ -119,21 +116,35 @@ Flags parse(int argc, char** argv) {
   return f;
 }
 
-// Median and maximum of the tick work times of one status period.
-LoopStats summarize(std::vector<double>& tick_us, std::uint64_t missed) {
-  LoopStats s;
-  s.missed_ticks = missed;
-  if (tick_us.empty()) return s;
-  std::nth_element(tick_us.begin(), tick_us.begin() + tick_us.size() / 2, tick_us.end());
-  s.tick_us_p50 = tick_us[tick_us.size() / 2];
-  s.tick_us_max = *std::max_element(tick_us.begin(), tick_us.end());
-  tick_us.clear();
-  return s;
+// SIGINT and SIGTERM, blocked in every thread (threads started later inherit the mask) and taken
+// by one thread that calls ServerLoop::stop() on the first: no code runs in a signal handler.
+sigset_t block_stop_signals() {
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  return signals;
 }
 
-std::int64_t to_ns(Clock::time_point t) {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
-}
+class StopOnSignal {
+ public:
+  StopOnSignal(ServerLoop& loop, sigset_t signals)
+      : signals_(signals), thread_([this, &loop] {
+          int signal = 0;
+          sigwait(&signals_, &signal);
+          loop.stop();
+        }) {}
+  // Releases the thread if no signal came (the loop ended otherwise): a signal only it takes.
+  ~StopOnSignal() {
+    pthread_kill(thread_.native_handle(), SIGTERM);
+    thread_.join();
+  }
+
+ private:
+  sigset_t signals_;
+  std::thread thread_;
+};
 
 }  // namespace
 
@@ -154,6 +165,7 @@ int main(int argc, char** argv) {
   }
 
   InputMailbox mailbox({assets.left_rig->fingers().size(), assets.right_rig->fingers().size()}, settings.max_hands);
+  const sigset_t stop_signals = block_stop_signals();  // before the DDS threads start
   try {
     DdsNode node(settings.domain, settings.profile, settings.profiles_file, mailbox);
     // Declared before the scene, so the scene goes first and the recorder then closes the file.
@@ -161,60 +173,15 @@ int main(int argc, char** argv) {
     if (!settings.record_path.empty()) recorder.emplace(settings.record_path, settings, assets, node);
     OutputSink& sink = recorder ? static_cast<OutputSink&>(*recorder) : node;
     SceneServer scene(settings, assets.models, assets.right_rig, assets.left_rig, mailbox, sink);
-    std::signal(SIGINT, on_signal);
-    std::signal(SIGTERM, on_signal);
+    LiveFeed feed(mailbox, [&node] { return node.take_commands(); });
+    ServerLoop loop(loop_settings(settings), scene, feed, feed, sink, recorder ? &*recorder : nullptr);
+    const StopOnSignal stop_on_signal(loop, stop_signals);
     std::cerr << "telegrasp-server: domain " << settings.domain << ", profile " << settings.profile << ", "
               << scene.world().objects().size() << " objects, " << settings.tick_hz << " Hz"
               << (settings.lockstep ? " in lockstep" : settings.late_latch ? ", late-latched skeletons" : "") << "; Ctrl-C to stop\n";
-
-    // The simulation thread (this one) owns the scene: it wakes at each tick's due time (in
-    // lockstep: when every hand has answered the last tick), and in between whenever a sample or
-    // command arrives.
-    const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / settings.tick_hz));
-    const auto status_period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(settings.status_period_s));
-    // Lockstep: when nothing (tick, sample or command) has happened for this long, a tick is taken
-    // anyway: it freezes the hands that did not answer, and later ticks no longer wait for them.
-    const auto stall_after = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(settings.freeze_after_s));
-    Clock::time_point next_tick = Clock::now() + period, next_status = Clock::now(), last_activity = Clock::now();
-    std::vector<double> tick_us;
-    std::uint64_t missed = 0;
-    LoopStats stats;
-    while (!g_stop) {
-      mailbox.wait(std::min(settings.lockstep ? last_activity + stall_after : next_tick, next_status));
-      const Clock::time_point now = Clock::now();
-      if (auto inputs = mailbox.drain(); !inputs.empty()) {
-        if (recorder) recorder->inputs(inputs, to_ns(now));
-        scene.on_inputs(std::move(inputs), to_ns(now));
-        last_activity = now;
-      }
-      for (const msg::SceneCommand& c : node.take_commands()) {
-        if (recorder) recorder->command(c, to_ns(now));
-        scene.apply_command(c);
-        last_activity = now;
-      }
-      const bool due = settings.lockstep
-                           ? scene.lockstep_ready() || (scene.hand_count() > 0 && now - last_activity >= stall_after)
-                           : now >= next_tick;
-      if (due) {
-        if (recorder) recorder->tick(to_ns(now));
-        scene.tick(to_ns(now));
-        last_activity = now;
-        tick_us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - now).count());
-        next_tick += period;
-        if (!settings.lockstep && now - next_tick >= period) {  // fell behind by a whole tick or more: count and resync
-          missed += static_cast<std::uint64_t>((now - next_tick) / period);
-          next_tick = now + period;
-        }
-      }
-      if (now >= next_status) {
-        stats = summarize(tick_us, missed);
-        sink.publish(scene.status(stats));
-        next_status += status_period;
-        if (next_status <= now) next_status = now + status_period;
-      }
-    }
+    loop.run();
     std::cerr << "telegrasp-server: stopping after " << scene.world().tick() << " ticks, " << mailbox.accepted()
-              << " inputs accepted, " << missed << " ticks missed\n";
+              << " inputs accepted, " << loop.missed_ticks() << " ticks missed\n";
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-server: " << e.what() << "\n";
     return 1;

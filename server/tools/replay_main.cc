@@ -1,6 +1,7 @@
 // telegrasp-replay: re-runs a telegrasp-server recording in-process and reports the first
 // divergence, or exports every grasp's contacts as CSV.
 #include "replay.h"
+#include "replay_export.h"
 
 #include <nlohmann/json.hpp>
 

@@ -1,5 +1,5 @@
 // Tests server/src/input_mailbox: newest sample per hand, order and ownership checks, counts,
-// one log line per client and reason.
+// one log line per client and reason, and waits ended by a sample or wake().
 #include "input_mailbox.h"
 
 #include <gtest/gtest.h>
@@ -86,14 +86,44 @@ TEST_F(MailboxTest, RefusesHandsBeyondTheLimit) {
   EXPECT_TRUE(box.offer(sample("a", 1, 2), kAlicePc, 0));  // known hands go on
 }
 
-TEST_F(MailboxTest, WaitReturnsWhenASampleArrives) {
+// The waits below end by being woken, long before their guard deadline; wait() says which it was,
+// so a broken wake-up fails the test (after the guard) instead of passing late. The other thread
+// acts after a pause, so the waiter is most likely blocked by then, not about to start waiting.
+constexpr auto kGuard = std::chrono::seconds(3);
+constexpr auto kPause = std::chrono::milliseconds(50);
+
+TEST_F(MailboxTest, ASampleWakesAWaiter) {
   std::thread producer([&] {
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    std::this_thread::sleep_for(kPause);
     box.offer(sample("alice", 1, 1), kAlicePc, 0);
   });
-  box.wait(std::chrono::steady_clock::now() + std::chrono::seconds(30));  // would hang the test if broken
+  const bool woken = box.wait(std::chrono::steady_clock::now() + kGuard);
   producer.join();
+  EXPECT_TRUE(woken) << "the wait ran to its guard deadline: offer() did not wake it";
   EXPECT_EQ(box.drain().size(), 1u);
+}
+
+TEST_F(MailboxTest, WakeWakesAWaiter) {
+  std::thread waker([&] {
+    std::this_thread::sleep_for(kPause);
+    box.wake();
+  });
+  const bool woken = box.wait(std::chrono::steady_clock::now() + kGuard);
+  waker.join();
+  EXPECT_TRUE(woken) << "the wait ran to its guard deadline: wake() did not wake it";
+  EXPECT_TRUE(box.drain().empty());
+}
+
+// A wake() with nobody waiting ends the next wait at once, and only that one.
+TEST_F(MailboxTest, AWakeBeforeTheWaitIsKeptForIt) {
+  box.wake();
+  EXPECT_TRUE(box.wait(std::chrono::steady_clock::now() + kGuard));
+  EXPECT_FALSE(box.wait(std::chrono::steady_clock::now() + std::chrono::milliseconds(1))) << "the wake-up was used up";
+}
+
+TEST_F(MailboxTest, WaitReturnsFalseAtTheDeadline) {
+  EXPECT_FALSE(box.wait(std::chrono::steady_clock::now() + std::chrono::milliseconds(1)));
+  EXPECT_FALSE(box.wait(std::chrono::steady_clock::now() - std::chrono::seconds(1))) << "a past deadline returns at once";
 }
 
 }  // namespace

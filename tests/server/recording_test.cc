@@ -5,6 +5,7 @@
 #include "controller_state.h"
 #include "recording.h"
 #include "replay.h"
+#include "replay_export.h"
 #include "scene_server.h"
 #include "scene_setup.h"
 #include "server_config.pb.h"
