@@ -1,6 +1,7 @@
 // telegrasp-bench-scale: how many hands telegrasp-server sustains at its tick rate without
 // missing a tick, and what each costs in server CPU.
 #include "bench_common.h"
+#include "test_domain.h"
 
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
@@ -15,6 +16,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <thread>
 #include <unistd.h>
 
@@ -59,7 +61,8 @@ Options:
   --json FILE            also write the results as JSON
   --profile NAME         Fast DDS participant profile (default loopback)
   --profiles FILE        Fast DDS XML profiles file (default: the telegrasp one)
-  --domain D             DDS domain of this run, 0..232 (default 121)
+  --domain D             DDS domain of this run, 0..232 (default: a free one, leased as the
+                         tests lease theirs: tests/common/test_domain.h)
   --server PATH          telegrasp-server executable (default: the one next to this program)
   --server-arg ARG       one more argument for the server (repeatable)
   --server-log FILE      server output (default: a temporary file, removed after a clean run)
@@ -78,7 +81,7 @@ struct Options {
   std::string json;
   std::string profile = "loopback";
   std::string profiles_file;
-  int domain = 121;
+  int domain = -1;  // -1: lease one
   std::string server;
   std::vector<std::string> server_args;
   std::string server_log;
@@ -510,6 +513,13 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
+    // Unless told otherwise, a domain that no test run or other benchmark uses meanwhile (the
+    // server and the children started hold it too).
+    std::optional<telegrasp::testing::DomainLease> lease;
+    if (o.domain < 0) {
+      lease.emplace();
+      o.domain = lease->domain();
+    }
     return run(o);
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-bench-scale: " << e.what() << "\n";
