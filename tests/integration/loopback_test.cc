@@ -1,8 +1,10 @@
 // Integration tests on loopback with real processes: telegrasp-server, telegrasp-bot, and a
-// telegrasp::client observer in the test. Each test runs on its own DDS domain with the loopback
-// profile (shared memory and 127.0.0.1 only), so parallel runs never cross.
+// telegrasp::client observer in the test. Each test runs on a DDS domain leased for it
+// (tests/common/test_domain.h) with the loopback profile (shared memory and 127.0.0.1 only), so
+// concurrent runs never cross.
 #include "process.h"
 #include "telegrasp/client/client.h"
+#include "test_domain.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -23,15 +25,10 @@ namespace {
 using namespace std::chrono_literals;
 using client::Client;
 using client::ClientOptions;
-
-std::string temp_path(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / "telegrasp_integration";
-  std::filesystem::create_directories(dir);
-  return (dir / name).string();
-}
+using telegrasp::testing::DomainLease;
 
 std::string write_config(const std::string& name, const std::string& text) {
-  const std::string path = temp_path(name + ".textproto");
+  const std::string path = work_path(name + ".textproto");
   std::ofstream(path) << text;
   return path;
 }
@@ -62,7 +59,7 @@ std::unique_ptr<Client> observe(int domain, Observed& seen, const std::string& i
 std::unique_ptr<ChildProcess> start_server(int domain, const std::string& config, const std::string& name) {
   std::vector<std::string> args{bin("telegrasp-server"), "--domain", std::to_string(domain), "--profile", "loopback"};
   if (!config.empty()) args.insert(args.end(), {"--config", config});
-  return std::make_unique<ChildProcess>(args, temp_path(name + "_server.log"));
+  return std::make_unique<ChildProcess>(args, work_path(name + "_server.log"));
 }
 
 std::unique_ptr<ChildProcess> start_bot(int domain, const std::string& id, const std::string& hands, int trials,
@@ -71,7 +68,7 @@ std::unique_ptr<ChildProcess> start_bot(int domain, const std::string& id, const
       std::vector<std::string>{bin("telegrasp-bot"), "--client-id", id, "--hands", hands, "--trials", std::to_string(trials),
                                "--seed", "3", "--domain", std::to_string(domain), "--profile", "loopback", "--json", json,
                                "--timeout", "30"},
-      temp_path(id + ".log"));
+      work_path(id + ".log"));
 }
 
 // Polls `done` every 10 ms until it holds or `timeout` passes.
@@ -100,16 +97,17 @@ objects { model: "009_gelatin_box" x: 0.8 y: 0.35 yaw: 0.3 }
 // Two bots, four hands, one scene: every grasp event arrives exactly once, and contacts in object
 // coordinates moved by the object pose published for the same tick give the world contacts.
 TEST(LoopbackTest, TwoBotsFourHandsEveryEventOnceContactsConsistent) {
-  const int domain = 151;
+  const DomainLease lease;
+  const int domain = lease.domain();
   Observed seen;
   auto observer = observe(domain, seen);
   auto server = start_server(domain, write_config("four", kFourObjects), "four");
   ASSERT_TRUE(observer->wait_for_server(20s)) << "no server on domain " << domain;
-  const std::string json_a = temp_path("bot_a.json"), json_b = temp_path("bot_b.json");
+  const std::string json_a = work_path("bot_a.json"), json_b = work_path("bot_b.json");
   auto a = start_bot(domain, "bot-a", "both", 1, json_a);
   auto b = start_bot(domain, "bot-b", "both", 1, json_b);
-  EXPECT_EQ(a->wait(240s), 0) << "see " << temp_path("bot-a.log");
-  EXPECT_EQ(b->wait(240s), 0) << "see " << temp_path("bot-b.log");
+  EXPECT_EQ(a->wait(240s), 0) << "see " << work_path("bot-a.log");
+  EXPECT_EQ(b->wait(240s), 0) << "see " << work_path("bot-b.log");
   std::this_thread::sleep_for(500ms);  // the last releases
 
   int grasped_records = 0;
@@ -157,13 +155,14 @@ TEST(LoopbackTest, TwoBotsFourHandsEveryEventOnceContactsConsistent) {
 // A bot killed with SIGKILL while holding: its object is back to physics within 1 s, and the
 // other bot carries on to the end of its trials.
 TEST(LoopbackTest, KilledBotsObjectIsReleasedWithinOneSecond) {
-  const int domain = 152;
+  const DomainLease lease;
+  const int domain = lease.domain();
   Observed seen;
   auto observer = observe(domain, seen);
   auto server = start_server(domain, write_config("kill", kFourObjects), "kill");
   ASSERT_TRUE(observer->wait_for_server(20s));
-  auto victim = start_bot(domain, "victim", "right", 3, temp_path("victim.json"));
-  auto survivor = start_bot(domain, "survivor", "left", 1, temp_path("survivor.json"));
+  auto victim = start_bot(domain, "victim", "right", 3, work_path("victim.json"));
+  auto survivor = start_bot(domain, "survivor", "left", 1, work_path("survivor.json"));
 
   // Wait until the victim lifts something.
   int held_object = -1;
@@ -207,13 +206,14 @@ TEST(LoopbackTest, KilledBotsObjectIsReleasedWithinOneSecond) {
       if (o.id == held_object) return o.X_WorldObject.translation().z() < rest_z + 0.02;
     return false;
   }, 3s));
-  EXPECT_EQ(survivor->wait(240s), 0) << "see " << temp_path("survivor.log");
+  EXPECT_EQ(survivor->wait(240s), 0) << "see " << work_path("survivor.log");
 }
 
 // Every kind of bad input is dropped and counted once per sample under its reason, and the server
 // keeps serving: a valid sample afterwards is reflected in a skeleton.
 TEST(LoopbackTest, BadInputsAreRejectedAndCounted) {
-  const int domain = 153;
+  const DomainLease lease;
+  const int domain = lease.domain();
   Observed seen;
   auto observer = observe(domain, seen);
   auto server = start_server(domain, "", "bad");
@@ -272,7 +272,8 @@ TEST(LoopbackTest, BadInputsAreRejectedAndCounted) {
 
 // A second participant claiming another client's id cannot move that client's hand.
 TEST(LoopbackTest, ASpoofedClientIdCannotMoveAnotherClientsHand) {
-  const int domain = 154;
+  const DomainLease lease;
+  const int domain = lease.domain();
   Observed seen;
   auto observer = observe(domain, seen);
   auto server = start_server(domain, "", "spoof");
