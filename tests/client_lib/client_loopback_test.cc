@@ -445,10 +445,10 @@ TEST(ClientLoopbackTest, NoCallbackRunsAfterTheDestructorReturns) {
   });
   // A writer keeps publishing while the client goes away.
   std::atomic<bool> stop{false};
+  std::atomic<std::uint64_t> written{0};
   std::thread spammer([&] {
-    std::uint64_t tick = 0;
     while (!stop) {
-      msg::HandSkeleton s = make_skeleton("bob", msg::HAND_RIGHT, ++tick);
+      msg::HandSkeleton s = make_skeleton("bob", msg::HAND_RIGHT, ++written);
       skeleton_writer->write(&s);
       std::this_thread::sleep_for(1ms);
     }
@@ -457,7 +457,9 @@ TEST(ClientLoopbackTest, NoCallbackRunsAfterTheDestructorReturns) {
   client.reset();
   destroyed = true;
   const int calls_at_destruction = calls;
-  std::this_thread::sleep_for(50ms);  // let the writer keep going (not an assertion on timing)
+  // The writer goes on for 50 more samples: a callback after the destructor would show.
+  const std::uint64_t written_at_destruction = written;
+  EXPECT_TRUE(eventually([&] { return written >= written_at_destruction + 50; }));
   stop = true;
   spammer.join();
   EXPECT_TRUE(delivered);
