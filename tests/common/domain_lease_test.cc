@@ -19,6 +19,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <iostream>
 #include <set>
@@ -120,6 +121,32 @@ TEST(DomainLeaseTest, SkipsADomainWhoseDiscoveryPortIsBound) {
   EXPECT_TRUE(pool_exhausted(pool.get()));
   ::close(s);
   EXPECT_FALSE(pool_exhausted(pool.get()));
+}
+
+TEST(DomainLeaseTest, StartsWithoutTheSharedMemoryPortsAKilledParticipantLeft) {
+  PrivatePool pool(2);
+  // Stand-ins for what participants killed on both domains leave behind.
+  auto left_on = [](int domain) {
+    const std::string port = std::to_string(7400 + 250 * domain + 10);
+    return std::vector<std::string>{"/dev/shm/fastrtps_port" + port, "/dev/shm/sem.fastrtps_port" + port + "_mutex",
+                                    "/dev/shm/fastrtps_port" + std::to_string(7400 + 250 * domain + 249)};
+  };
+  // Whatever happens below, no made-up file stays for a participant to open.
+  struct RemoveAtExit {
+    std::vector<std::string> files;
+    ~RemoveAtExit() {
+      for (const std::string& f : files) std::filesystem::remove(f);
+    }
+  } made;
+  for (int d : {pool.get().first, pool.get().last})
+    for (const std::string& f : left_on(d)) {
+      made.files.push_back(f);
+      std::ofstream(f) << "stale";
+    }
+  DomainLease lease(1, pool.get());
+  const int other = lease.domain() == pool.get().first ? pool.get().last : pool.get().first;
+  for (const std::string& f : left_on(lease.domain())) EXPECT_FALSE(std::filesystem::exists(f)) << f;
+  for (const std::string& f : left_on(other)) EXPECT_TRUE(std::filesystem::exists(f)) << f << ": not the lease's";
 }
 
 TEST(DomainLeaseTest, SeesAFastDdsParticipantOnTheDomain) {

@@ -83,6 +83,15 @@ DomainPool test_domain_pool() {
   throw std::runtime_error("TELEGRASP_TEST_DOMAINS is '" + s + "'; expected FIRST-LAST with 0 <= FIRST <= LAST <= 232");
 }
 
+void remove_shared_memory_ports(int domain) {
+  const int first = kPortBase + kDomainGain * domain;
+  for (int port = first; port < first + kDomainGain; ++port) {
+    const std::string name = "/dev/shm/fastrtps_port" + std::to_string(port);
+    for (const std::string& path : {name, name + "_el", "/dev/shm/sem.fastrtps_port" + std::to_string(port) + "_mutex"})
+      ::unlink(path.c_str());  // mostly ENOENT: nothing to remove
+  }
+}
+
 bool domain_ports_in_use(int domain) {
   const int base = kPortBase + kDomainGain * domain;
   return !udp_port_free(base + kDiscoveryMulticastOffset) || !udp_port_free(base + kDiscoveryUnicastOffset);
@@ -115,6 +124,7 @@ DomainLease::DomainLease(int count, const DomainPool& pool) {
       fds_.push_back(fd);
     }
     if (static_cast<int>(fds_.size()) == count) {
+      for (int d = first; d < first + count; ++d) remove_shared_memory_ports(d);
       first_ = first;
       cursor = (first - pool.first + count) % size;
       return;

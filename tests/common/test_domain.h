@@ -8,7 +8,8 @@
 // needs cleaning up. The descriptors are inherited by child processes (no close-on-exec): a
 // server or bot started by a test keeps the domain taken until it too has exited. As a second
 // guard, a domain on which some process that takes no lease (a server started by hand, an older
-// test) has bound the domain's discovery ports is skipped.
+// test) has bound the domain's discovery ports is skipped. A leased domain starts without the
+// shared-memory ports a killed participant left in /dev/shm (remove_shared_memory_ports).
 //
 // The directory is fixed (not $TMPDIR), so runs with different temporary folders still agree.
 // Scripts lease through the program telegrasp-test-domains (test_domains_main.cc).
@@ -60,6 +61,16 @@ class DomainLease {
   int first_ = -1;
   std::vector<int> fds_;
 };
+
+/// Removes the Fast DDS shared-memory port files of `domain` (/dev/shm/fastrtps_port<port> and
+/// its semaphore, for the domain's 250 ports). A participant killed with SIGKILL leaves them, and a
+/// mutex inside may stay locked: the next participant with the same port then stalls
+/// ("Interprocess mutex timeout when locking"). DomainLease calls it once it holds a domain and has
+/// seen none of its discovery ports bound, that is with no participant of the domain alive in this
+/// network namespace. (A participant in another network namespace that shares /dev/shm, e.g.
+/// under a bare `unshare -n`, and takes no lease would lose its ports: keep such runs out of the
+/// test range or give them a /dev/shm of their own.)
+void remove_shared_memory_ports(int domain);
 
 /// Whether a process outside the lease scheme runs a Fast DDS participant on `domain`: its
 /// discovery multicast port (7400 + 250 domain) or participant 0's unicast discovery port is
