@@ -7,6 +7,7 @@
 #include "telegrasp/client/client.h"
 #include "test_domain.h"
 
+#include <fastrtps/xmlparser/XMLProfileManager.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -62,6 +63,10 @@ std::unique_ptr<Client> observe(int domain, Observed& seen, const std::string& i
   c->on_scene_state([&](const client::SceneState& s) { std::lock_guard l(seen.mutex); seen.scenes[s.tick] = s; });
   c->on_hand_skeleton([&](const client::HandSkeleton& s) { std::lock_guard l(seen.mutex); seen.skeletons.push_back(s); });
   c->on_server_status([&](const client::ServerStatus& s) { std::lock_guard l(seen.mutex); seen.status = s; });
+  // The tests add clients beside the observer: several participants in this process.
+  EXPECT_EQ(eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings().intraprocess_delivery,
+            eprosima::fastrtps::INTRAPROCESS_OFF)
+      << "Fast DDS intraprocess delivery is on (tests/common/intraprocess_off.cc not linked, or undone by a profile)";
   return c;
 }
 
