@@ -111,6 +111,11 @@ class MeshDistance {
     bool found = false;
   };
 
+  // Construction phases, in the constructor's order.
+  [[nodiscard]] std::vector<std::uint32_t> build_bvh(const TriangleMesh& mesh);
+  void store_in_leaf_order(const TriangleMesh& mesh, const std::vector<std::uint32_t>& order);
+  void build_pseudo_normals();
+
   template <class Reach, class Leaf>
   void traverse(Reach&& reach, Leaf&& leaf) const;
   [[nodiscard]] Candidate nearest_to_point(const Eigen::Vector3d& p, double max_distance) const;
