@@ -142,8 +142,24 @@ class HandController {
   Capsule capsule_in_object(PhalanxId id, const Eigen::Isometry3d& X_ObjectPalm) const;
   // Recomputes X_PalmPhalanx along one finger from state_.q.
   void update_finger_poses(int finger);
+  // The phases of tick(), in order (interaction manager and finger movement in step_finger).
+  const ObjectView* choose_object(std::span<const ObjectView> objects, ObjectView& held_view, HandTickEvents& events);
   void select_object(std::span<const ObjectView> objects);
+  void carry_gap_bounds(const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm);
   void step_finger(int finger, double u, double dt, const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm);
+  void apply_grasp_rule(const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm, HandTickEvents& events);
+  // The phases of step_finger(), on one finger's FingerStep.
+  struct FingerStep;
+  enum class Probe { kFree, kBlocked, kDepenetrated };  // what probe_capsule found
+  bool unblock_phalanges(const FingerStep& step);
+  bool plan_motion(const FingerStep& step, double dt, int held, bool& closing);
+  void block_at_rest(const FingerStep& step);
+  void close_discrete(const FingerStep& step);
+  void close_precise(const FingerStep& step);
+  Probe probe_capsule(const FingerStep& step, std::size_t m, double s, double rate, double& ds);
+  void set_fraction(const FingerStep& step, double s);
+  void forget_bounds(const FingerStep& step);
+  void block(int id);
   void refresh_contacts() const;
   // Exact closest pair between capsule `id`'s segment [a, b] (object frame) and the object's mesh:
   // the cached one while the capsule has not moved since, else searched within `reach` first (a
