@@ -55,14 +55,51 @@ struct HandController::Capsule {
   double radius;
 };
 
-bool HandController::TouchCache::matches(ObjectId o, const Capsule& c, bool touch) const {
-  return object.valid() && object == o && touching == touch && a == c.a && b == c.b;
-}
+struct HandController::Scratch {
+  // Where a capsule was last checked (object frame) and whether it touched; an identical pose
+  // gives the same answer without a query.
+  struct TouchCache {
+    ObjectId object;
+    Eigen::Vector3d a{0, 0, 0}, b{0, 0, 0};
+    bool touching = false;
+    bool matches(ObjectId o, const Capsule& c, bool touch) const {
+      return object.valid() && object == o && touching == touch && a == c.a && b == c.b;
+    }
+  };
+  // The last exact closest pair found for a capsule and where the capsule was: the contact
+  // search, the grasp tick's signed distances and the contacts all ask about the same resting
+  // capsules, and a bit-identical pose has the identical answer (the one a new search would
+  // give: the contact search makes the pair's triangle the capsule's hint).
+  struct ClosestCache {
+    ObjectId object;
+    const MeshDistance* mesh = nullptr;
+    Eigen::Vector3d a{0, 0, 0}, b{0, 0, 0};
+    SegmentQuery pair;  // found
+    bool matches(ObjectId o, const MeshDistance& m, const Eigen::Vector3d& pa, const Eigen::Vector3d& pb) const {
+      return object.valid() && object == o && mesh == &m && a == pa && b == pb;
+    }
+  };
+  // step_finger's work space, kept between ticks so that a tick allocates nothing.
+  struct StepWork {
+    std::vector<double> q0, delta, rate;  // per position along the finger
+    std::vector<std::size_t> affected;
+  };
 
-bool HandController::ClosestCache::matches(ObjectId o, const MeshDistance& m, const Eigen::Vector3d& pa,
-                                           const Eigen::Vector3d& pb) const {
-  return object.valid() && object == o && mesh == &m && a == pa && b == pb;
+  std::vector<TouchCache> touch;      // per phalanx
+  std::vector<ClosestCache> closest;  // per phalanx
+  StepWork work;
+};
+
+HandController::ScratchHolder::ScratchHolder() : scratch(std::make_unique<Scratch>()) {}
+HandController::ScratchHolder::ScratchHolder(const ScratchHolder& other)
+    : scratch(std::make_unique<Scratch>(*other.scratch)) {}
+HandController::ScratchHolder& HandController::ScratchHolder::operator=(const ScratchHolder& other) {
+  if (this != &other) scratch = std::make_unique<Scratch>(*other.scratch);
+  return *this;
 }
+HandController::ScratchHolder::ScratchHolder(ScratchHolder&& other) noexcept = default;
+HandController::ScratchHolder& HandController::ScratchHolder::operator=(ScratchHolder&& other) noexcept = default;
+HandController::ScratchHolder::~ScratchHolder() = default;
 
 HandController::HandController(std::shared_ptr<const HandRig> rig, GraspSettings settings)
     : rig_(std::move(rig)), settings_(settings) {
@@ -75,8 +112,8 @@ HandController::HandController(std::shared_ptr<const HandRig> rig, GraspSettings
   for (std::size_t i = 0; i < n; ++i) state_.q[i] = rig_->phalanges()[i].open;
   state_.blocked.assign(n, 0);
   state_.blocked_angle.assign(n, 0.0);
-  touch_cache_.assign(n, {});
-  closest_.assign(n, {});
+  scratch_->touch.assign(n, {});
+  scratch_->closest.assign(n, {});
   hint_.assign(n, MeshDistance::kNoHint);
   gap_bound_.assign(n, -kInf);
   forward_kinematics(*rig_, state_.q, &state_.X_PalmPhalanx);
@@ -192,7 +229,7 @@ bool HandController::depenetrate(int finger, const Eigen::Isometry3d& X_ObjectPa
     const bool touching = mesh.capsule_overlaps(c.a, c.b, c.radius + tol, hint_[id.value]);
     state_.blocked[id.value] = touching;
     state_.blocked_angle[id.value] = state_.q[id.value];
-    touch_cache_[id.value] = {object.id, c.a, c.b, touching};
+    scratch_->touch[id.value] = {object.id, c.a, c.b, touching};
   }
   return true;
 }
@@ -216,14 +253,15 @@ void HandController::forget_bounds(const FingerStep& step) {
 }
 
 void HandController::set_fraction(const FingerStep& step, double s) {
-  for (std::size_t k = 0; k < step.size(); ++k) state_.q[step.id(k)] = work_.q0[k] + s * work_.delta[k];
+  const Scratch::StepWork& work = scratch_->work;
+  for (std::size_t k = 0; k < step.size(); ++k) state_.q[step.id(k)] = work.q0[k] + s * work.delta[k];
   update_finger_poses(step.finger);
 }
 
 void HandController::block(int id) {
   state_.blocked[id] = 1;
   state_.blocked_angle[id] = state_.q[id];
-  touch_cache_[id] = {};  // checked afresh next tick
+  scratch_->touch[id] = {};  // checked afresh next tick
 }
 
 // Interaction manager: unblock phalanges whose hand opened past them or whose contact ended.
@@ -242,7 +280,7 @@ bool HandController::unblock_phalanges(const FingerStep& step) {
     bool unblock = (target - state_.blocked_angle[id]) * closing_sign(specs[id]) < -1e-12 || step.object == nullptr;
     if (!unblock && specs[id].capsule) {
       const Capsule c = capsule_in_object(step.chain[k], step.X_ObjectPalm);
-      TouchCache& cache = touch_cache_[id];
+      Scratch::TouchCache& cache = scratch_->touch[id];
       if (cache.matches(step.object->id, c, true)) continue;
       const MeshDistance& mesh = step.object->model->distance;
       unblock = !mesh.capsule_overlaps(c.a, c.b, c.radius + release_gap, hint_[id]);
@@ -255,11 +293,11 @@ bool HandController::unblock_phalanges(const FingerStep& step) {
   return pushed_in;
 }
 
-// Finger movement: rate-limited steps toward the targets into work_.delta, where joints up to
-// `held` may only open; true when some joint moves (`closing`: some joint closes).
+// Finger movement: rate-limited steps toward the targets into the work space's delta, where
+// joints up to `held` may only open; true when some joint moves (`closing`: some joint closes).
 bool HandController::plan_motion(const FingerStep& step, double dt, int held, bool& closing) {
   const auto& specs = rig_->phalanges();
-  std::vector<double>& delta = work_.delta;
+  std::vector<double>& delta = scratch_->work.delta;
   delta.assign(step.size(), 0.0);
   bool moving = false;
   closing = false;
@@ -284,7 +322,7 @@ void HandController::block_at_rest(const FingerStep& step) {
     const int id = step.id(m);
     if (state_.blocked[id] || !specs[id].capsule || gap_bound_[id] > touch) continue;
     const Capsule c = capsule_in_object(step.chain[m], step.X_ObjectPalm);
-    TouchCache& cache = touch_cache_[id];
+    Scratch::TouchCache& cache = scratch_->touch[id];
     if (cache.matches(step.object->id, c, false)) continue;
     const MeshDistance& mesh = step.object->model->distance;
     const bool touching = mesh.capsule_overlaps(c.a, c.b, c.radius + touch, hint_[id]);
@@ -306,7 +344,7 @@ void HandController::close_discrete(const FingerStep& step) {
   const MeshDistance& mesh = step.object->model->distance;
   set_fraction(step, 1.0);
   forget_bounds(step);
-  for (std::size_t m : work_.affected) {
+  for (std::size_t m : scratch_->work.affected) {
     const Capsule c = capsule_in_object(step.chain[m], step.X_ObjectPalm);
     if (mesh.capsule_overlaps(c.a, c.b, c.radius, hint_[step.id(m)])) block(step.id(m));
   }
@@ -315,11 +353,12 @@ void HandController::close_discrete(const FingerStep& step) {
 // Precise: conservative advancement along the step s in [0, 1]. A capsule point moves at most
 // rate(m) per unit s, so advancing by (gap - tol/2) / rate never crosses the surface.
 void HandController::close_precise(const FingerStep& step) {
-  const std::vector<std::size_t>& affected = work_.affected;
-  std::vector<double>& rate = work_.rate;
+  Scratch::StepWork& work = scratch_->work;
+  const std::vector<std::size_t>& affected = work.affected;
+  std::vector<double>& rate = work.rate;
   rate.assign(step.size(), 0.0);
   for (std::size_t m : affected)
-    for (std::size_t k = 0; k <= m; ++k) rate[m] += std::abs(work_.delta[k]) * reach_[step.id(k)][step.id(m)];
+    for (std::size_t k = 0; k <= m; ++k) rate[m] += std::abs(work.delta[k]) * reach_[step.id(k)][step.id(m)];
 
   // Each affected capsule carries a lower bound on its gap (from earlier ticks, or from its last
   // exact query this step, minus its motion since): while the bound exceeds the tolerance it
@@ -368,7 +407,7 @@ HandController::Probe HandController::probe_capsule(const FingerStep& step, std:
   const SegmentQuery hit = mesh.closest_to_segment(c.a, c.b, c.radius + horizon, hint);
   if (hit.found) {
     hint = hit.triangle;
-    closest_[step.id(m)] = {step.object->id, &mesh, c.a, c.b, hit};
+    scratch_->closest[step.id(m)] = {step.object->id, &mesh, c.a, c.b, hit};
   }
   const bool inside = !hit.found || hit.distance == 0 || (hit.point_on_segment - hit.point_on_mesh).dot(hit.normal) < 0;
   const double gap = inside ? -c.radius - (hit.found ? hit.distance : kInf) : hit.distance - c.radius;
@@ -412,10 +451,11 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
     return;
   }
 
-  work_.q0.resize(n);
-  for (std::size_t k = 0; k < n; ++k) work_.q0[k] = state_.q[step.id(k)];
+  Scratch::StepWork& work = scratch_->work;
+  work.q0.resize(n);
+  for (std::size_t k = 0; k < n; ++k) work.q0[k] = state_.q[step.id(k)];
   // Free capsules this step can move into the object.
-  std::vector<std::size_t>& affected = work_.affected;
+  std::vector<std::size_t>& affected = work.affected;
   affected.clear();
   for (std::size_t m = static_cast<std::size_t>(held + 1); m < n; ++m)
     if (rig_->phalanges()[step.id(m)].capsule && !state_.blocked[step.id(m)]) affected.push_back(m);
@@ -602,7 +642,7 @@ std::optional<Eigen::Isometry3d> HandController::grasped_object_pose() const {
 
 SegmentQuery HandController::closest_pair(PhalanxId id, ObjectId object, const MeshDistance& mesh,
                                           const Eigen::Vector3d& a, const Eigen::Vector3d& b, double reach) const {
-  ClosestCache& cache = closest_[id.value];
+  Scratch::ClosestCache& cache = scratch_->closest[id.value];
   if (cache.matches(object, mesh, a, b)) return cache.pair;
   SegmentQuery q;
   if (std::isfinite(reach)) q = mesh.closest_to_segment(a, b, reach, hint_[id.value]);
