@@ -367,7 +367,7 @@ SceneAssets load_recorded_assets(const proto::RecordingHeader& header, const std
       throw RecordingError(origin + ": the meshes it was recorded with are not in " + dir + ": " + join(problems, "; "));
     for (const std::string& path : paths) {
       try {
-        a.models.push_back(sim::load_object_model(path));
+        a.models.push_back(sim::load_protocol_object_model(path));
       } catch (const sim::MeshLoadError& e) {
         throw RecordingError(origin + ": " + e.what());
       }

@@ -2,6 +2,7 @@
 // trials on stand-ins, including a fast close on the knife that must not tunnel.
 #include "telegrasp/sim/scripted_operator.h"
 
+#include "telegrasp/sim/standin_objects.h"
 #include "telegrasp/sim/world.h"
 
 #include <gtest/gtest.h>
@@ -81,7 +82,7 @@ void fast_close_on(const ObjectModelPtr& knife);
 std::vector<ObjectModelPtr> knives() {
   std::vector<ObjectModelPtr> out{standin("032_knife")};
   const std::string scan = std::string(TELEGRASP_YCB_DIR) + "/032_knife.ply";
-  if (std::ifstream(scan).good()) out.push_back(load_object_model(scan));
+  if (std::ifstream(scan).good()) out.push_back(load_protocol_object_model(scan));
   return out;
 }
 
