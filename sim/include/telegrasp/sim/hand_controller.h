@@ -1,4 +1,5 @@
-// HandController: the grasp system of GRASPING.md for one hand, advanced one tick at a time.
+// HandController: the grasp system of ../shared/docs/GRASPING.md for one hand, advanced one tick
+// at a time.
 #pragma once
 
 #include "telegrasp/sim/hand_rig.h"
