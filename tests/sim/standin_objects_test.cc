@@ -166,10 +166,10 @@ TEST(ProtocolObjectFiles, ProtocolNamesGetTheirRealMass) {
   EXPECT_NEAR(protocol[1]->mass_kg, kVolumeMass, kTol);
   EXPECT_EQ(load_protocol_object_model(baseball)->mass_kg, real_mass);
 
-  const std::vector<ObjectModelPtr> generic = load_object_dir(dir.string());
+  const std::vector<ObjectModelPtr> generic = load_object_dir(dir.string(), nullptr);
   ASSERT_EQ(generic.size(), 2u);
   EXPECT_NEAR(generic[0]->mass_kg, kVolumeMass, kTol);
-  EXPECT_NEAR(load_object_model(baseball)->mass_kg, kVolumeMass, kTol);
+  EXPECT_NEAR(load_object_model(baseball, 0.0)->mass_kg, kVolumeMass, kTol);
   EXPECT_EQ(load_object_model(baseball, 2.0)->mass_kg, 2.0);
   fs::remove_all(dir);
 }

@@ -38,14 +38,14 @@ ObjectModelPtr make_object_model(const std::string& name, const TriangleMesh& me
 
 /// Loads a mesh file as an object named after the file stem, of mass `mass_kg` (<= 0: volume x
 /// 500 kg/m^3, as make_object_model). Throws MeshLoadError naming the file.
-ObjectModelPtr load_object_model(const std::string& path, double mass_kg = 0);
+ObjectModelPtr load_object_model(const std::string& path, double mass_kg);
 
 /// The mass in kg of the object a file stem names (<= 0: unknown, taken from its volume).
 using MassLookup = std::function<double(const std::string& stem)>;
 
-/// Every mesh file in `dir` (sorted by name), each of the mass `mass_kg_of` gives its stem (none:
-/// from its volume); throws MeshLoadError if `dir` is not a folder, holds no mesh file, or a file
-/// fails to load.
-std::vector<ObjectModelPtr> load_object_dir(const std::string& dir, const MassLookup& mass_kg_of = {});
+/// Every mesh file in `dir` (sorted by name), each of the mass `mass_kg_of` gives its stem (null:
+/// all from their volumes); throws MeshLoadError if `dir` is not a folder, holds no mesh file, or
+/// a file fails to load.
+std::vector<ObjectModelPtr> load_object_dir(const std::string& dir, const MassLookup& mass_kg_of);
 
 }  // namespace telegrasp::sim
