@@ -8,6 +8,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <numbers>
@@ -565,6 +566,28 @@ TriangleMesh make_standin_mesh(const ProtocolObject& object) {
   TriangleMesh mesh =
       it != builders.end() ? it->second(object.extent) : subdivided_box(object.extent);
   return fit_to_extent(std::move(mesh), object.extent);
+}
+
+ObjectModelPtr make_standin_model(const ProtocolObject& object) {
+  return make_object_model(object.name, make_standin_mesh(object), object.mass_kg, "built-in stand-in");
+}
+
+namespace {
+
+// The real mass of the protocol object a file stem names, or 0 (from the volume) if none.
+double protocol_mass_kg(const std::string& stem) {
+  const auto known = find_protocol_object(stem);
+  return known ? known->mass_kg : 0.0;
+}
+
+}  // namespace
+
+ObjectModelPtr load_protocol_object_model(const std::string& path) {
+  return load_object_model(path, protocol_mass_kg(std::filesystem::path(path).stem().string()));
+}
+
+std::vector<ObjectModelPtr> load_protocol_object_dir(const std::string& dir) {
+  return load_object_dir(dir, protocol_mass_kg);
 }
 
 }  // namespace telegrasp::sim

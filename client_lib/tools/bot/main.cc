@@ -134,7 +134,7 @@ int main(int argc, char** argv) {
     if (opt.objects_dir.empty()) {
       for (const auto& o : sim::protocol_objects()) models.emplace(o.name, sim::make_standin_model(o));
     } else {
-      for (auto& m : sim::load_object_dir(opt.objects_dir)) models.emplace(m->name, std::move(m));
+      for (auto& m : sim::load_protocol_object_dir(opt.objects_dir)) models.emplace(m->name, std::move(m));
     }
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-bot: --objects " << opt.objects_dir << ": " << e.what() << "\n";

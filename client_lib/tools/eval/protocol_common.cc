@@ -33,7 +33,7 @@ const std::vector<std::string>& paper_object_order() {
 std::map<std::string, sim::ObjectModelPtr> protocol_models(const std::string& objects_dir, std::vector<std::string>* standins) {
   std::map<std::string, sim::ObjectModelPtr> models;
   if (!objects_dir.empty())
-    for (auto& m : sim::load_object_dir(objects_dir)) models.emplace(m->name, std::move(m));
+    for (auto& m : sim::load_protocol_object_dir(objects_dir)) models.emplace(m->name, std::move(m));
   for (const auto& o : sim::protocol_objects()) {
     if (models.count(o.name)) continue;
     models.emplace(o.name, sim::make_standin_model(o));

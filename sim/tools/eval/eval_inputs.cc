@@ -15,7 +15,7 @@ EvalInputs load_eval_inputs(const std::string& rig_path, const std::string& obje
     for (const auto& o : sim::protocol_objects()) in.models.push_back(sim::make_standin_model(o));
   } else {
     std::cerr << "loading meshes from " << objects_dir << " ...\n";
-    in.models = sim::load_object_dir(objects_dir);
+    in.models = sim::load_protocol_object_dir(objects_dir);
   }
   return in;
 }

@@ -1,7 +1,7 @@
-// Reports of a protocol run (the paper's experiment, GRASPING.md section 6): aggregates per mode,
-// operator group and object as JSON; the per-grasp and per-object CSV tables; and one
-// self-contained HTML page (inline CSS and SVG, nothing fetched) with the paper's bar charts,
-// the paper's published per-object numbers beside ours, and the questionnaire's scores.
+// Reports of a protocol run (the paper's experiment, ../shared/docs/GRASPING.md section 6):
+// aggregates per mode, operator group and object as JSON; the per-grasp and per-object CSV
+// tables; and one self-contained HTML page (inline CSS and SVG, nothing fetched) with the paper's
+// bar charts, the paper's published per-object numbers beside ours, and the questionnaire's scores.
 //
 // Which numbers: every error metric here is taken at the grasp tick (the moment the paper measures
 // "for each grasping", and what a GraspEvent carries), i.e. Record::grasp_tick_capsules and
