@@ -174,5 +174,17 @@ TEST(ProtocolObjectFiles, ProtocolNamesGetTheirRealMass) {
   fs::remove_all(dir);
 }
 
+// The paper presented the objects in its own order (labels a..ad of its per-object figures):
+// every object has one place in it, lemon first and the toy airplane last.
+TEST(ProtocolObjects, PaperOrderIsAPermutationFromLemonToAirplane) {
+  const std::vector<ProtocolObject> ordered = protocol_objects_in_paper_order();
+  ASSERT_EQ(ordered.size(), protocol_objects().size());
+  for (std::size_t i = 0; i < ordered.size(); ++i) EXPECT_EQ(ordered[i].paper_order, static_cast<int>(i));
+  EXPECT_EQ(ordered.front().name, "014_lemon");
+  EXPECT_EQ(ordered[11].name, "002_master_chef_can");
+  EXPECT_EQ(ordered.back().name, "072-a_toy_airplane");
+}
+
+
 }  // namespace
 }  // namespace telegrasp::sim

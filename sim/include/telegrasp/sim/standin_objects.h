@@ -19,10 +19,14 @@ struct ProtocolObject {
   std::string name;        ///< YCB file stem, e.g. "002_master_chef_can".
   Eigen::Vector3d extent;  ///< Bounding-box size in metres (x, y, z), as the YCB table gives it.
   double mass_kg;          ///< Typical real mass, for dynamics.
+  int paper_order = 0;     ///< Place in the paper's presentation order (0 = its label a, 29 = ad).
 };
 
-/// All 30 protocol objects in the protocol's fixed order.
+/// All 30 protocol objects in the protocol's fixed order (by YCB id).
 const std::vector<ProtocolObject>& protocol_objects();
+
+/// The same objects in the order the paper presented them to its participants (paper_order).
+std::vector<ProtocolObject> protocol_objects_in_paper_order();
 
 /// The protocol object whose name or id matches (e.g. "032_knife", "032", "knife").
 std::optional<ProtocolObject> find_protocol_object(const std::string& name_or_id);
