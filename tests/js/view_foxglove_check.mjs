@@ -7,8 +7,9 @@
 //      in its phalanx frames, one per object of the scene in the object's frame;
 //   3. every palm pose on /tf is one the server published for that hand (echo's HandSkeleton,
 //      within 1e-6 m and 1e-6 in the quaternion);
-//   4. after each grasp, the grasped object's entity is held by that hand, and its /tf pose is one
-//      the server published (echo's SceneState) and lies within 20 cm of the holding palm;
+//   4. after each grasp, the grasped object's entity is held by that hand, and its /tf poses (sent
+//      when it moves: /tf carries the frames that moved) are poses the server published (echo's
+//      SceneState), within 20 cm of the holding palm;
 //   5. /grasp_events carries the events echo saw (same ids, objects, HandError).
 // Usage: node view_foxglove_check.mjs --bin BUILD/bin --out DIR   (ctest: view.foxglove_client)
 import path from "node:path";
@@ -61,7 +62,8 @@ const echo = start(path.join(bin, "telegrasp-echo"), ["--domain", String(domain)
 // What the viewer received.
 const channels = new Map();        // topic -> advertised channel
 const entities = new Map();        // id -> entity
-const tfMessages = [];             // [{ frames: Map(child -> {parent, p, q}), heldBy: Map(objectId -> hand) }]
+const tfMessages = [];             // [{ frames: Map(child -> {parent, p, q}), world, heldBy: Map(objectId -> hand) }]
+const world = new Map();           // every frame as the /tf messages so far leave it (they carry what moved)
 const viewEvents = [];
 let statusCount = 0;
 let graspStateCount = 0;
@@ -93,12 +95,13 @@ client.on("message", ({ subscriptionId, data }) => {
     for (const e of message.entities) entities.set(e.id, e);
   } else if (topic === "/tf") {
     const frames = new Map(message.transforms.map((t) => [t.child_frame_id, { parent: t.parent_frame_id, ...fromTransform(t) }]));
+    for (const [child, t] of frames) world.set(child, t);
     const heldBy = new Map();
     for (const e of entities.values()) {
       const m = meta(e);
       if (m.kind === "object" && m.held === "true") heldBy.set(Number(e.id.slice(7)), m.holder);
     }
-    tfMessages.push({ frames, heldBy });
+    tfMessages.push({ frames, world: new Map(world), heldBy });
   } else if (topic === "/grasp_events") {
     viewEvents.push(message);
   } else if (topic === "/server_status") {
@@ -156,7 +159,7 @@ for (const key of hands) {
 }
 const sceneIds = (echoScene?.objects ?? []).map((o) => o.id);
 checks.check(sceneIds.length > 0 && sceneIds.every((id) => scene.get(`object/${id}`)?.frame_id === `object/${id}` &&
-  tfMessages.length > 0 && tfMessages[tfMessages.length - 1].frames.get(`object/${id}`)?.parent === "world"),
+  world.get(`object/${id}`)?.parent === "world"),
   `every object of the scene (${sceneIds.length}) has an entity and a /tf frame`);
 
 // 3. Palm poses.
@@ -170,7 +173,7 @@ for (const key of hands) {
     if (published.some((p) => samePose(p, palm))) ++matched;
   }
   // echo's best-effort reader may miss a sample the view got: allow 5 %.
-  checks.check(seen >= 20 && matched >= 0.95 * seen, `hand ${key}: ${matched} of ${seen} palm poses on /tf are poses the server published`);
+  checks.check(seen >= 15 && matched >= 0.95 * seen, `hand ${key}: ${matched} of ${seen} palm poses on /tf are poses the server published`);
 }
 
 // 4. Grasped objects.
@@ -179,14 +182,14 @@ checks.check(grasps.length >= 1, `${grasps.length} grasp events on /grasp_events
 for (const g of grasps) {
   const key = `${g.hand.client_id}/${g.hand.side}`;
   const frame = `object/${g.object_id}`;
-  const held = tfMessages.filter((tf) => tf.heldBy.get(g.object_id) === key && tf.frames.has(frame) && tf.frames.has(`${key}/palm`));
+  const held = tfMessages.filter((tf) => tf.heldBy.get(g.object_id) === key && tf.frames.has(frame) && tf.world.has(`${key}/palm`));
   const published = echoObjects.get(g.object_id) ?? [];
   const matched = held.filter((tf) => published.some((p) => samePose(p, tf.frames.get(frame))));
   const near = held.filter((tf) => {
-    const o = tf.frames.get(frame).p, p = tf.frames.get(`${key}/palm`).p;
+    const o = tf.frames.get(frame).p, p = tf.world.get(`${key}/palm`).p;
     return Math.hypot(o[0] - p[0], o[1] - p[1], o[2] - p[2]) <= kHeldDistance;
   });
-  checks.check(held.length >= 10, `${g.object_name} (#${g.object_id}): held by ${key} in ${held.length} /tf messages`);
+  checks.check(held.length >= 3, `${g.object_name} (#${g.object_id}): held by ${key} and moving in ${held.length} /tf messages`);
   checks.check(matched.length >= 0.95 * held.length && near.length === held.length,
     `${g.object_name}: ${matched.length} of ${held.length} held poses are poses the server published, all within ${kHeldDistance} m of the palm`);
 }

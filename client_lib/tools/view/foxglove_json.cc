@@ -1,6 +1,7 @@
 #include "foxglove_json.h"
 
 #include <array>
+#include <cmath>
 
 namespace telegrasp::view {
 namespace {
@@ -133,12 +134,14 @@ Json scene_update(std::vector<Json> entities, const std::vector<std::string>& de
 
 Json frame_transform(const std::string& parent, const std::string& child, const Eigen::Isometry3d& X_ParentChild,
                      std::uint64_t stamp_ns) {
+  const auto r = [](double v) { return std::round(v * 1e7) / 1e7; };  // prints as at most ~9 digits
   const Eigen::Quaterniond q(X_ParentChild.linear());
+  const Eigen::Vector3d& p = X_ParentChild.translation();
   return Json{{"timestamp", stamp(stamp_ns)},
               {"parent_frame_id", parent},
               {"child_frame_id", child},
-              {"translation", vec3(X_ParentChild.translation())},
-              {"rotation", Json{{"x", q.x()}, {"y", q.y()}, {"z", q.z()}, {"w", q.w()}}}};
+              {"translation", Json{{"x", r(p.x())}, {"y", r(p.y())}, {"z", r(p.z())}}},
+              {"rotation", Json{{"x", r(q.x())}, {"y", r(q.y())}, {"z", r(q.z())}, {"w", r(q.w())}}}};
 }
 
 Json grasp_state_message(const client::GraspState& s, const std::vector<std::string>& phalanx_names) {

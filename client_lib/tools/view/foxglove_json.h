@@ -67,7 +67,8 @@ void add_text(Json& entity, const Eigen::Vector3d& p_FrameText, const std::strin
 /// A foxglove.SceneUpdate of `entities` and of deletions of the entity ids `deleted`.
 Json scene_update(std::vector<Json> entities, const std::vector<std::string>& deleted, std::uint64_t stamp_ns);
 
-/// One foxglove.FrameTransform: `child` in `parent` is X_ParentChild.
+/// One foxglove.FrameTransform: `child` in `parent` is X_ParentChild, its numbers rounded to
+/// 1e-7 (0.1 um; a quaternion to 1e-7 per component) to keep /tf small.
 Json frame_transform(const std::string& parent, const std::string& child, const Eigen::Isometry3d& X_ParentChild,
                      std::uint64_t stamp_ns);
 

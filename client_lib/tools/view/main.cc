@@ -238,7 +238,11 @@ int main(int argc, char** argv) {
     const view::ViewUpdate update = model.update(snap, now);
     // Scene changes first, so a viewer knows an entity before the frames that move it.
     if (update.scene) server->publish(view::kSceneChannel, payload(*update.scene), now);
-    if (update.transforms) server->publish(view::kTransformsChannel, payload(*update.transforms), now);
+    if (update.transforms) {
+      const auto delta = payload(*update.transforms);
+      if (update.transforms_complete) server->publish(view::kTransformsChannel, delta, now);
+      else server->publish(view::kTransformsChannel, delta, now, [&] { return payload(*model.transforms_full(now)); });
+    }
     for (const view::Json& s : update.grasp_states) server->publish(view::kGraspStateChannel, payload(s), now);
     for (const view::Json& e : update.grasp_events) server->publish(view::kGraspEventsChannel, payload(e), now);
     if (update.server_status) server->publish(view::kServerStatusChannel, payload(*update.server_status), now);

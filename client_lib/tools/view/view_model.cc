@@ -70,7 +70,6 @@ void ViewModel::grow_placeholder(int object_id, const std::vector<client::Contac
 
 ViewUpdate ViewModel::update(const ClientSnapshot& snap, std::uint64_t stamp_ns) {
   ViewUpdate out;
-  bool transforms_changed = false;
 
   // Hands: one per skeleton the client holds; a hand the server removed is gone from it.
   std::set<client::HandKey> present;
@@ -81,24 +80,12 @@ ViewUpdate ViewModel::update(const ClientSnapshot& snap, std::uint64_t stamp_ns)
     if (added) hand.colour = next_colour_++;
     if (added || hand.skeleton.rig != s.rig) hand.rig = rig(s.rig);
     hand.skeleton = s;
-    const auto key = std::make_pair(s.tick, s.input_sequence);
-    if (added || last_skeleton_[s.hand] != key) transforms_changed = true;
-    last_skeleton_[s.hand] = key;
   }
-  for (auto it = hands_.begin(); it != hands_.end();) {
-    if (present.contains(it->first)) {
-      ++it;
-    } else {
-      last_skeleton_.erase(it->first);
-      it = hands_.erase(it);
-      transforms_changed = true;
-    }
-  }
+  std::erase_if(hands_, [&](const auto& entry) { return !present.contains(entry.first); });
 
   // Objects: those of the newest scene state.
   if (snap.scene && (objects_.empty() || snap.scene->tick != last_scene_tick_)) {
     last_scene_tick_ = snap.scene->tick;
-    transforms_changed = true;
     std::set<int> ids;
     for (const client::ObjectState& o : snap.scene->objects) {
       ids.insert(o.id);
@@ -153,7 +140,13 @@ ViewUpdate ViewModel::update(const ClientSnapshot& snap, std::uint64_t stamp_ns)
   sent_.clear();
   for (const auto& [id, look] : now) sent_.emplace(id, look.key);
 
-  if (transforms_changed) out.transforms = transforms_full(stamp_ns);
+  const bool all = stamp_ns >= last_full_transforms_ns_ + kFullTransformsEveryNs;
+  Json moved = moved_transforms(all, stamp_ns);
+  if (all) last_full_transforms_ns_ = stamp_ns;
+  if (!moved["transforms"].empty()) {
+    out.transforms = std::move(moved);
+    out.transforms_complete = all;
+  }
   return out;
 }
 
@@ -280,6 +273,40 @@ std::optional<Json> ViewModel::transforms_full(std::uint64_t stamp_ns) const {
   }
   for (const auto& [id, object] : objects_)
     transforms.push_back(frame_transform("world", object_frame(id), object.state.X_WorldObject, stamp_ns));
+  return Json{{"transforms", std::move(transforms)}};
+}
+
+Json ViewModel::moved_transforms(bool all, std::uint64_t stamp_ns) {
+  // Exact comparison: a frame is re-sent when any bit of its pose changed.
+  const auto moved = [all](const std::optional<Eigen::Isometry3d>& sent, const Eigen::Isometry3d& X) {
+    return all || !sent || !(sent->matrix() == X.matrix());
+  };
+  Json transforms = Json::array();
+  for (auto& [key, hand] : hands_) {
+    const Eigen::Isometry3d& X_WorldPalm = hand.skeleton.X_WorldPalm;
+    if (moved(hand.sent_X_WorldPalm, X_WorldPalm)) {
+      transforms.push_back(frame_transform("world", palm_frame(key), X_WorldPalm, stamp_ns));
+      hand.sent_X_WorldPalm = X_WorldPalm;
+    }
+    const Eigen::Isometry3d X_PalmWorld = X_WorldPalm.inverse();
+    const std::size_t n = hand.skeleton.X_WorldPhalanx.size();
+    const bool resend = all || hand.sent_X_PalmPhalanx.size() != n;
+    hand.sent_X_PalmPhalanx.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Eigen::Isometry3d X_PalmPhalanx = X_PalmWorld * hand.skeleton.X_WorldPhalanx[i];
+      // Re-posing the hand leaves X_PalmPhalanx equal up to rounding: compare at 1e-9.
+      if (resend || !X_PalmPhalanx.matrix().isApprox(hand.sent_X_PalmPhalanx[i].matrix(), 1e-9)) {
+        transforms.push_back(frame_transform(palm_frame(key), phalanx_frame(key, phalanx_name(hand.rig, i)), X_PalmPhalanx, stamp_ns));
+        hand.sent_X_PalmPhalanx[i] = X_PalmPhalanx;
+      }
+    }
+  }
+  for (auto& [id, object] : objects_) {
+    if (moved(object.sent_X_WorldObject, object.state.X_WorldObject)) {
+      transforms.push_back(frame_transform("world", object_frame(id), object.state.X_WorldObject, stamp_ns));
+      object.sent_X_WorldObject = object.state.X_WorldObject;
+    }
+  }
   return Json{{"transforms", std::move(transforms)}};
 }
 

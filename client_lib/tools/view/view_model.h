@@ -33,7 +33,10 @@ struct ClientSnapshot {
 /// What one update produced, each ready to send on its channel.
 struct ViewUpdate {
   std::optional<Json> scene;           ///< /scene: changed entities and deletions (absent: nothing changed).
-  std::optional<Json> transforms;      ///< /tf: every frame (absent: no new skeleton or scene state).
+  /// /tf: the frames that moved since the last update, and every frame every kFullTransformsEvery
+  /// (absent: none moved). `transforms_full` is then every frame, for a viewer that missed one.
+  std::optional<Json> transforms;
+  bool transforms_complete = false;   ///< `transforms` holds every frame.
   std::vector<Json> grasp_states;      ///< /grasp_state: one per hand whose state changed.
   std::vector<Json> grasp_events;      ///< /grasp_events: in arrival order.
   std::optional<Json> server_status;   ///< /server_status: when a new one arrived.
@@ -62,6 +65,8 @@ class ViewModel {
   const std::optional<Json>& server_status() const { return server_status_; }
 
   static constexpr std::size_t kEventHistory = 256;
+  /// How often /tf carries every frame even if none moved (for viewers' transform buffers).
+  static constexpr std::uint64_t kFullTransformsEveryNs = 2'000'000'000;
 
   std::size_t hand_count() const { return hands_.size(); }
   std::size_t object_count() const { return objects_.size(); }
@@ -69,6 +74,8 @@ class ViewModel {
  private:
   struct Hand {
     client::HandSkeleton skeleton;
+    std::vector<Eigen::Isometry3d> sent_X_PalmPhalanx;  ///< On /tf last.
+    std::optional<Eigen::Isometry3d> sent_X_WorldPalm;
     const sim::HandRig* rig = nullptr;
     std::size_t colour = 0;
     std::optional<client::GraspState> state;
@@ -77,6 +84,7 @@ class ViewModel {
   struct Object {
     client::ObjectState state;
     Eigen::Vector3d half_extent{0.02, 0.02, 0.02};  ///< Of the placeholder box.
+    std::optional<Eigen::Isometry3d> sent_X_WorldObject;  ///< On /tf last.
   };
 
   const sim::HandRig* rig(const std::string& name);
@@ -100,6 +108,8 @@ class ViewModel {
   };
   std::map<std::string, Look> appearance() const;
   Json build(const Look& look, std::uint64_t stamp_ns) const;
+  /// The frames that moved since they were last on /tf (all if `all`), marked as sent.
+  Json moved_transforms(bool all, std::uint64_t stamp_ns);
 
   RigLookup rig_lookup_;
   std::map<std::string, const sim::HandRig*> rigs_;
@@ -108,8 +118,8 @@ class ViewModel {
   std::size_t next_colour_ = 0;
   std::map<std::string, std::string> sent_;      ///< Entity id -> appearance key last sent.
   std::uint64_t last_scene_tick_ = 0;
-  std::map<client::HandKey, std::pair<std::uint64_t, std::uint64_t>> last_skeleton_;  ///< tick, input sequence.
   std::optional<std::uint64_t> last_status_tick_;
+  std::uint64_t last_full_transforms_ns_ = 0;
   std::deque<Json> event_history_;
   std::optional<Json> server_status_;
 };

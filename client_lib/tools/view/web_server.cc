@@ -93,10 +93,11 @@ class ViewerSession : public std::enable_shared_from_this<ViewerSession> {
 
   // Queues a Message Data frame of `channel` if this viewer subscribed to it.
   void offer(std::uint32_t channel, const std::shared_ptr<const std::string>& payload, std::uint64_t stamp_ns,
-             bool latest_only) {
+             bool latest_only, const WebServer::Complete& complete = {}) {
     const auto sub = subscription_of_channel_.find(channel);
     if (sub == subscription_of_channel_.end()) return;
-    enqueue(Out{message_header(sub->second, stamp_ns), payload, false, static_cast<std::int64_t>(channel), latest_only});
+    enqueue(Out{message_header(sub->second, stamp_ns), payload, false, static_cast<std::int64_t>(channel), latest_only},
+            complete);
   }
 
   void close() {
@@ -199,12 +200,14 @@ class ViewerSession : public std::enable_shared_from_this<ViewerSession> {
     }
   }
 
-  void enqueue(Out out) {
+  void enqueue(Out out, const WebServer::Complete& complete = {}) {
     if (closing_) return;
     if (out.latest_only) {
-      // Newest wins: replace an unsent message of the same channel (never the one being written).
+      // Newest wins: replace an unsent message of the same channel (never the one being written),
+      // by the complete message when the channel sends deltas.
       for (std::size_t i = writing_ ? 1 : 0; i < queue_.size(); ++i) {
         if (queue_[i].channel == out.channel && queue_[i].latest_only) {
+          if (complete) out.payload = complete();
           queued_bytes_ = queued_bytes_ - queue_[i].size() + out.size();
           queue_[i] = std::move(out);
           ++hub_.stats.messages_replaced;
@@ -398,13 +401,22 @@ std::uint16_t WebServer::port() const {
   return ec ? 0 : endpoint.port();
 }
 
-void WebServer::publish(std::uint32_t channel, std::shared_ptr<const std::string> payload, std::uint64_t stamp_ns) {
+void WebServer::publish(std::uint32_t channel, std::shared_ptr<const std::string> payload, std::uint64_t stamp_ns,
+                        const Complete& complete) {
   const auto it = hub_->channel_by_id.find(channel);
   if (it == hub_->channel_by_id.end()) return;
   const bool latest_only = it->second->latest_only;
+  // Built once, for the first slow viewer that needs it.
+  std::shared_ptr<const std::string> built;
+  Complete once;
+  if (complete)
+    once = [&] {
+      if (!built) built = complete();
+      return built;
+    };
   // A viewer may drop out of the set while offered a message (a full queue): iterate a copy.
   const std::vector<std::shared_ptr<ViewerSession>> viewers(hub_->viewers.begin(), hub_->viewers.end());
-  for (const auto& viewer : viewers) viewer->offer(channel, payload, stamp_ns, latest_only);
+  for (const auto& viewer : viewers) viewer->offer(channel, payload, stamp_ns, latest_only, once);
 }
 
 void WebServer::close() {

@@ -57,9 +57,15 @@ class WebServer {
 
   /// The port listened on.
   std::uint16_t port() const;
+  /// Builds a complete message of a channel whose messages are deltas; called at most once.
+  using Complete = std::function<std::shared_ptr<const std::string>()>;
+
   /// Sends `payload` on `channel` to every viewer subscribed to it, stamped `stamp_ns`. Call on
-  /// the io_context's thread.
-  void publish(std::uint32_t channel, std::shared_ptr<const std::string> payload, std::uint64_t stamp_ns);
+  /// the io_context's thread. For a latest-only channel whose messages are deltas (/tf carries
+  /// only the frames that moved), `complete` gives the complete message that replaces an unsent
+  /// older one in a slow viewer's queue, so that viewer misses no change.
+  void publish(std::uint32_t channel, std::shared_ptr<const std::string> payload, std::uint64_t stamp_ns,
+               const Complete& complete = {});
   /// Closes the listener and every connection (on the io_context's thread).
   void close();
   WebServerStats stats() const;
