@@ -33,7 +33,7 @@ scene3d.add(table, grid);
 
 const camera = new THREE.PerspectiveCamera(40, 1, 0.01, 50);
 camera.up.set(0, 0, 1);  // +z up, as the server's world
-camera.position.set(1.05, -0.75, 0.75);
+camera.position.set(0.72, -0.42, 0.24);
 const controls = new OrbitControls(camera, canvas);
 controls.target.set(0.45, 0, 0.1);
 controls.enableDamping = true;
