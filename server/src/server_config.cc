@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -42,9 +43,9 @@ void apply_config(const proto::ServerConfig& c, ServerSettings& s, const std::st
   if (has("right_rig")) s.right_rig = c.right_rig();
   if (has("left_rig")) s.left_rig = c.left_rig();
   if (has("closing_mode")) {
-    if (c.closing_mode() == "precise") s.closing_mode = sim::ClosingMode::kPrecise;
-    else if (c.closing_mode() == "discrete") s.closing_mode = sim::ClosingMode::kDiscrete;
-    else throw std::runtime_error(origin + ": closing_mode must be precise or discrete, got '" + c.closing_mode() + "'");
+    const std::optional<sim::ClosingMode> mode = sim::parse_closing_mode(c.closing_mode());
+    if (!mode) throw std::runtime_error(origin + ": closing_mode must be precise or discrete, got '" + c.closing_mode() + "'");
+    s.closing_mode = *mode;
   }
   if (has("freeze_after_s")) s.freeze_after_s = c.freeze_after_s();
   if (has("remove_after_s")) s.remove_after_s = c.remove_after_s();
@@ -105,7 +106,7 @@ proto::ServerConfig to_proto(const ServerSettings& s) {
   c.set_empty_scene(s.empty_scene);
   c.set_right_rig(s.right_rig);
   c.set_left_rig(s.left_rig);
-  c.set_closing_mode(s.closing_mode == sim::ClosingMode::kDiscrete ? "discrete" : "precise");
+  c.set_closing_mode(sim::closing_mode_name(s.closing_mode));
   c.set_freeze_after_s(s.freeze_after_s);
   c.set_remove_after_s(s.remove_after_s);
   c.set_late_latch(s.late_latch);

@@ -103,9 +103,9 @@ Flags parse(int argc, char** argv) {
     else if (a == "--record") s.record_path = value();
     else if (a == "--mode") {
       const std::string m = value();
-      if (m == "precise") s.closing_mode = sim::ClosingMode::kPrecise;
-      else if (m == "discrete") s.closing_mode = sim::ClosingMode::kDiscrete;
-      else usage_error("--mode expects precise or discrete, got '" + m + "'");
+      const std::optional<sim::ClosingMode> mode = sim::parse_closing_mode(m);
+      if (!mode) usage_error("--mode expects precise or discrete, got '" + m + "'");
+      s.closing_mode = *mode;
     } else usage_error("unknown option '" + a + "'");
   }
   try {

@@ -10,6 +10,7 @@
 #include "grasp_report.h"
 #include "protocol_common.h"
 #include "telegrasp/client/client.h"
+#include "telegrasp/sim/hand_controller.h"
 #include "telegrasp/sim/hand_rig.h"
 
 #include <nlohmann/json.hpp>
@@ -86,7 +87,10 @@ Options parse(int argc, char** argv) {
     else if (a == "--group") o.group = value();
     else if (a == "--participant") o.participant = static_cast<int>(number(1, 100000));
     else if (a == "--seed") o.seed = static_cast<std::uint64_t>(number(0, 1e15));
-    else if (a == "--mode") o.mode = value();
+    else if (a == "--mode") {
+      o.mode = value();
+      if (!sim::parse_closing_mode(o.mode)) usage_error("--mode expects precise or discrete, got '" + o.mode + "'");
+    }
     else if (a == "--objects") o.objects_dir = value();
     else if (a == "--count") o.count = static_cast<int>(number(1, 30));
     else if (a == "--json") o.json_path = value();

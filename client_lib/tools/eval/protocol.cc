@@ -9,6 +9,7 @@
 #include "grasp_report.h"
 #include "protocol_common.h"
 #include "questionnaire.h"
+#include "telegrasp/sim/hand_controller.h"
 #include "telegrasp/sim/standin_objects.h"
 
 #include <nlohmann/json.hpp>
@@ -93,7 +94,7 @@ Exit status: 0 when every grasp was run (held or not), 1 if a run failed, 2 for 
 
 struct Options {
   int experienced = 4, inexperienced = 6, count = 30, jobs = 2, domain = -1;
-  std::vector<std::string> modes{"precise"};
+  std::vector<std::string> modes{sim::closing_mode_name(sim::ClosingMode::kPrecise)};  // names, as records write them
   std::string objects_dir, json_path, csv_path, report_path, questionnaire_path, profile = "loopback", profiles_file, logs_dir, record_dir;
   std::uint64_t seed = 1;
 };
@@ -121,8 +122,9 @@ Options parse(int argc, char** argv) {
       if (o.experienced + o.inexperienced == 0) usage_error("--participants: at least one participant");
     } else if (a == "--mode") {
       const std::string m = value();
-      if (m == "both") o.modes = {"precise", "discrete"};
-      else if (m == "precise" || m == "discrete") o.modes = {m};
+      using sim::ClosingMode;
+      if (m == "both") o.modes = {closing_mode_name(ClosingMode::kPrecise), closing_mode_name(ClosingMode::kDiscrete)};
+      else if (const std::optional<ClosingMode> mode = sim::parse_closing_mode(m)) o.modes = {closing_mode_name(*mode)};
       else usage_error("--mode expects precise, discrete or both, got '" + m + "'");
     }
     else if (a == "--objects") o.objects_dir = value();

@@ -96,9 +96,8 @@ Options parse(int argc, char** argv) {
     else if (a == "--seed") o.seed = static_cast<std::uint64_t>(telegrasp::cli::parse_whole(a, value(), 0, 1L << 62, usage_error));
     else if (a == "--mode") {
       const std::string m = value();
-      if (m == "precise") o.modes = {ClosingMode::kPrecise};
-      else if (m == "discrete") o.modes = {ClosingMode::kDiscrete};
-      else if (m == "both") o.modes = {ClosingMode::kPrecise, ClosingMode::kDiscrete};
+      if (m == "both") o.modes = {ClosingMode::kPrecise, ClosingMode::kDiscrete};
+      else if (const std::optional<ClosingMode> mode = parse_closing_mode(m)) o.modes = {*mode};
       else usage_error("--mode expects precise, discrete or both, got '" + m + "'");
     } else if (a == "--speed-scale") {
       o.speeds.clear();
@@ -116,8 +115,6 @@ Options parse(int argc, char** argv) {
   });
   return o;
 }
-
-const char* mode_name(ClosingMode m) { return m == ClosingMode::kPrecise ? "precise" : "discrete"; }
 
 // The eval's view of a trial: the shared grasp record and its picture.
 struct Trial {
@@ -160,7 +157,7 @@ Trial run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRig
   Trial out;
   Record& rec = out.record;
   rec.object = model->name;
-  rec.mode = mode_name(cfg.mode);
+  rec.mode = closing_mode_name(cfg.mode);
   rec.speed_scale = cfg.speed;
   rec.trial = trial;
   double z_held = -1e9;
@@ -258,7 +255,7 @@ Trial run_job(const Job& job, const std::vector<Config>& configs, const EvalInpu
     Trial failed;
     Record& rec = failed.record;
     rec.object = in.models[job.object]->name;
-    rec.mode = mode_name(configs[job.config].mode);
+    rec.mode = closing_mode_name(configs[job.config].mode);
     rec.speed_scale = configs[job.config].speed;
     rec.trial = job.trial;
     std::lock_guard lock(log_mutex);
@@ -300,7 +297,7 @@ json print_summaries(const std::vector<Config>& configs, const std::vector<Job>&
                      const std::vector<ObjectModelPtr>& models, const Options& opt) {
   json summaries = json::array();
   for (std::size_t c = 0; c < configs.size(); ++c) {
-    std::cout << "\n== mode " << mode_name(configs[c].mode) << ", closing speed x" << configs[c].speed << ", skill " << opt.skill << " ==\n";
+    std::cout << "\n== mode " << closing_mode_name(configs[c].mode) << ", closing speed x" << configs[c].speed << ", skill " << opt.skill << " ==\n";
     std::vector<telegrasp::report::ObjectRows> rows(models.size());
     std::vector<const Record*> all;
     for (std::size_t o = 0; o < models.size(); ++o) rows[o].object = models[o]->name;
@@ -311,7 +308,7 @@ json print_summaries(const std::vector<Config>& configs, const std::vector<Job>&
     }
     telegrasp::report::print_object_table(rows);
     json s = summarize(all);
-    s["mode"] = mode_name(configs[c].mode);
+    s["mode"] = closing_mode_name(configs[c].mode);
     s["speed_scale"] = configs[c].speed;
     s["skill"] = opt.skill;
     std::cout << "summary: " << s.dump() << "\n";
