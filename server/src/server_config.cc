@@ -2,6 +2,8 @@
 
 #include "server_config.pb.h"
 
+#include "cli.h"
+
 #include <google/protobuf/io/tokenizer.h>
 #include <google/protobuf/text_format.h>
 
@@ -76,7 +78,8 @@ void validate_settings(const ServerSettings& s, const std::string& origin) {
   auto fail = [&](const std::string& what) { throw std::runtime_error(origin + ": " + what); };
   if (s.domain < 0 || s.domain > 232) fail("domain must be in [0, 232], got " + std::to_string(s.domain));
   if (s.profile.empty()) fail("profile must not be empty");
-  if (!(s.tick_hz >= 1 && s.tick_hz <= 2000)) fail("tick_hz must be in [1, 2000], got " + std::to_string(s.tick_hz));
+  if (!(s.tick_hz >= 1 && s.tick_hz <= 2000))
+    fail("tick_hz must be in [1, 2000], got " + cli::format_number(s.tick_hz));
   if (!(s.freeze_after_s > 0)) fail("freeze_after_s must be > 0");
   if (!(s.remove_after_s >= s.freeze_after_s)) fail("remove_after_s must be >= freeze_after_s");
   if (!(s.remove_after_s <= 0.9)) fail("remove_after_s must be <= 0.9 (a silent client's object is released within 1 s)");

@@ -4,10 +4,11 @@
 // Poses are {"p":[x,y,z],"q":[w,x,y,z]} in metres; NaN prints as null.
 #include "telegrasp/client/client.h"
 
+#include "cli.h"
+
 #include <nlohmann/json.hpp>
 
 #include <atomic>
-#include <charconv>
 #include <chrono>
 #include <csignal>
 #include <cstdint>
@@ -16,10 +17,8 @@
 #include <map>
 #include <mutex>
 #include <optional>
-#include <set>
 #include <sstream>
 #include <string>
-#include <string_view>
 #include <thread>
 #include <unistd.h>
 
@@ -50,8 +49,10 @@ Prints every sample a telegrasp server publishes as one JSON object per line on 
   --profiles FILE  Fast DDS XML profiles (default $TELEGRASP_PROFILES, else the shipped file)
   --count N        exit after N lines
   --seconds S      exit after S seconds
-  --help           this text
-Stops cleanly on SIGINT or SIGTERM.
+  -h, --help       this text
+Stops cleanly on SIGINT or SIGTERM, or when stdout is closed (e.g. piped into head).
+Exit status: 0 done (count, seconds, a signal or a closed stdout), 1 a runtime failure (DDS could
+not start, e.g. an unknown --profile), 2 a usage error (a bad or missing option or value).
 )";
 
 // ---------------------------------------------------------------------------------------------
@@ -189,22 +190,9 @@ struct Args {
   tc::ClientOptions options;
   std::optional<std::uint64_t> count;
   std::optional<double> seconds;
-  bool help = false;
 };
 
-[[noreturn]] void usage_error(const std::string& message) {
-  std::cerr << "telegrasp-echo: " << message << "\n" << kUsage;
-  std::exit(2);
-}
-
-template <class T>
-T parse_number(std::string_view flag, std::string_view text) {
-  T value{};
-  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (error != std::errc() || end != text.data() + text.size())
-    usage_error(std::string(flag) + " expects a number, got '" + std::string(text) + "'");
-  return value;
-}
+[[noreturn]] void usage_error(const std::string& what) { telegrasp::cli::usage_exit("telegrasp-echo", what); }
 
 unsigned parse_topics(const std::string& list) {
   unsigned bits = 0;
@@ -212,42 +200,29 @@ unsigned parse_topics(const std::string& list) {
   for (std::string name; std::getline(stream, name, ',');) {
     const auto it = topic_bits().find(name);
     if (it == topic_bits().end())
-      usage_error("unknown topic '" + name + "' in --topics (known: HandSkeleton,GraspState,ContactSet,GraspEvent,SceneState,ServerStatus)");
+      usage_error("--topics: unknown topic '" + name +
+                  "' (known: HandSkeleton,GraspState,ContactSet,GraspEvent,SceneState,ServerStatus)");
     bits |= it->second;
   }
   if (bits == 0) usage_error("--topics names no topic");
   return bits;
 }
 
+// Every flag is checked here, so the client library never sees a bad option.
 Args parse_args(int argc, char** argv) {
+  namespace cli = telegrasp::cli;
   Args args;
   args.options.client_id = "echo-" + std::to_string(::getpid());
-  for (int i = 1; i < argc; ++i) {
-    const std::string_view flag = argv[i];
-    if (flag == "--help" || flag == "-h") {
-      args.help = true;
-      continue;
-    }
-    static const std::set<std::string_view> kTakesValue = {"--topics", "--domain", "--profile", "--profiles", "--count", "--seconds"};
-    if (!kTakesValue.contains(flag)) usage_error("unknown argument " + std::string(flag));
-    if (i + 1 >= argc) usage_error(std::string(flag) + " needs a value");
-    const std::string value = argv[++i];
-    if (flag == "--topics") {
-      args.options.topics = parse_topics(value);
-    } else if (flag == "--domain") {
-      args.options.domain = parse_number<int>(flag, value);
-    } else if (flag == "--profile") {
-      args.options.profile = value;
-    } else if (flag == "--profiles") {
-      args.options.profiles_file = value;
-    } else if (flag == "--count") {
-      args.count = parse_number<std::uint64_t>(flag, value);
-      if (*args.count == 0) usage_error("--count must be at least 1");
-    } else if (flag == "--seconds") {
-      args.seconds = parse_number<double>(flag, value);
-      if (!(*args.seconds > 0) || *args.seconds > 1e9) usage_error("--seconds must be in (0, 1e9]");
-    }
-  }
+  cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
+    if (a == "--topics") args.options.topics = parse_topics(value());
+    else if (a == "--domain") args.options.domain = cli::parse_domain(a, value(), usage_error);
+    else if (a == "--profile") args.options.profile = cli::parse_profile(a, value(), usage_error);
+    else if (a == "--profiles") args.options.profiles_file = value();
+    else if (a == "--count") args.count = static_cast<std::uint64_t>(cli::parse_whole(a, value(), 1, 1'000'000'000'000, usage_error));
+    else if (a == "--seconds") args.seconds = cli::parse_number(a, value(), 0.001, 1e9, usage_error);
+    else return false;
+    return true;
+  });
   return args;
 }
 
@@ -280,10 +255,6 @@ class LinePrinter {
 
 int main(int argc, char** argv) {
   const Args args = parse_args(argc, argv);
-  if (args.help) {
-    std::cout << kUsage;
-    return 0;
-  }
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   std::signal(SIGPIPE, SIG_IGN);  // a closed stdout shows up as a failed write instead
@@ -293,7 +264,7 @@ int main(int argc, char** argv) {
     client.emplace(args.options);
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-echo: " << e.what() << "\n";
-    return 1;
+    return telegrasp::cli::kExitFailure;
   }
   LinePrinter printer(args.count);
   client->on_hand_skeleton([&](const tc::HandSkeleton& s) { printer.print(s); });

@@ -32,11 +32,13 @@ using Fail = void (*)(const std::string& what);
   std::exit(kExitUsage);
 }
 
-/// `x` as people write it: the shortest text that reads back as `x` ("0", "0.25", "90", "1e+15",
-/// "nan"), never std::to_string's "0.000000".
+/// `x` as people write it: the shortest text that reads back as `x` ("0", "0.25", "90",
+/// "1000000000", "1e+20", "nan"), never std::to_string's "0.000000".
 [[nodiscard]] inline std::string format_number(double x) {
   char text[32];
-  const auto [end, error] = std::to_chars(text, text + sizeof text, x);
+  const bool whole = std::isfinite(x) && x == std::trunc(x) && std::abs(x) < 1e15;
+  const auto [end, error] = whole ? std::to_chars(text, text + sizeof text, static_cast<long long>(x))
+                                  : std::to_chars(text, text + sizeof text, x);
   return error == std::errc() ? std::string(text, end) : std::string("?");
 }
 

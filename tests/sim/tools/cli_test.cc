@@ -33,6 +33,8 @@ TEST(CliTest, FormatsNumbersAsPeopleWriteThem) {
   EXPECT_EQ(format_number(90.0), "90");
   EXPECT_EQ(format_number(-1.5), "-1.5");
   EXPECT_EQ(format_number(0.1), "0.1");
+  EXPECT_EQ(format_number(1e9), "1000000000");
+  EXPECT_EQ(format_number(-0.0), "0");
   EXPECT_EQ(std::stod(format_number(1.0 / 3.0)), 1.0 / 3.0);  // shortest text that reads back
 }
 
