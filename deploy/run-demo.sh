@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# The main job: installs dependencies, builds telegrasp-server and telegrasp-bot, starts the server
-# in the background on a private DDS domain with the loopback profile, and lets a bot with two
-# hands grasp every object of the scene once over DDS; prints the bot's per-object table, stops
-# the server (SIGTERM) and exits with the bot's status (0: every trial done).
+# The main job: installs dependencies, builds the tools (the build's output goes to a log file
+# whose path is printed), starts telegrasp-server in the background on a private DDS domain with
+# the loopback profile, and lets a bot with two hands grasp every object of the scene once over
+# DDS; prints the bot's per-object table, stops the server (SIGTERM), prints its log and where to
+# look next, and exits with the bot's status (0: every trial done; 1 the build or the server failed).
 #
 #   deploy/run-demo.sh [--objects DIR] [--domain N] [--trials N] [--skill NAME]
 #
@@ -33,8 +34,18 @@ done
 cd "$(dirname "$0")/.."
 build="${TELEGRASP_BUILD_DIR:-build}"
 deploy/install-deps.sh
-cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
-cmake --build "$build" -j"$(nproc)" --target telegrasp-server telegrasp-bot
+# The build's output goes to a log, not between the results; only its end is shown if it fails.
+mkdir -p "$build"
+build_log="$(cd "$build" && pwd)/run-demo-build.log"
+echo "run-demo: building telegrasp-server, -bot, -eval and -echo (log: $build_log) ..." >&2
+build_start=$SECONDS
+if ! { cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo &&
+       cmake --build "$build" -j"$(nproc)" --target telegrasp-server telegrasp-bot telegrasp-eval telegrasp-echo; } >"$build_log" 2>&1; then
+  echo "run-demo: the build failed; the end of $build_log:" >&2
+  tail -n 30 "$build_log" | sed 's/^/  /' >&2
+  exit 1
+fi
+echo "run-demo: built in $((SECONDS - build_start)) s" >&2
 
 server_log="$(mktemp -t telegrasp-demo-server.XXXXXX)"
 server_pid=""
@@ -72,4 +83,15 @@ if [ "$finished" = "$server_pid" ]; then
 fi
 bot_pid=""
 echo "run-demo: bot finished with status $status in $((SECONDS - start)) s" >&2
+cleanup || true  # stops the server and prints its log, before the pointers below
+cat >&2 <<NEXT
+
+run-demo: where to look next
+  the paper's experiment through servers over DDS, with an HTML report (about 30 s):
+    $build/bin/telegrasp-eval protocol --mode both --json run.json --csv run.csv --report run.html
+  a server's outputs as JSON lines, one per sample, while a bot drives it:
+    $build/bin/telegrasp-server --domain $domain & $build/bin/telegrasp-bot --domain $domain --hands both &
+    $build/bin/telegrasp-echo --domain $domain --topics GraspEvent
+  the same grasps in-process, no network: deploy/run-eval.sh; every tool explains itself with --help
+NEXT
 exit "$status"
