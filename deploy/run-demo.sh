@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# The main job: installs dependencies, builds telegrasp-server and telegrasp-bot, starts the server
-# in the background on a private DDS domain with the loopback profile, and lets a bot with two
-# hands grasp every object of the scene once over DDS; prints the bot's per-object table, stops
-# the server (SIGTERM) and exits with the bot's status (0: every trial done). telegrasp-view runs
-# beside them: open the URL it prints (http://localhost:8765/) to watch the grasps in the browser,
-# or connect Foxglove / Lichtblick to ws://localhost:8765.
+# The main job: installs dependencies, builds the tools (the build's output goes to a log file
+# whose path is printed), starts telegrasp-server in the background on a private DDS domain with
+# the loopback profile, and lets a bot with two hands grasp every object of the scene once over
+# DDS; prints the bot's per-object table, stops the server (SIGTERM), prints its log and where to
+# look next, and exits with the bot's status (0: every trial done; 1 the build or the server failed).
+# telegrasp-view runs beside them: open the URL it prints (http://localhost:8765/) to watch the
+# grasps in the browser, or connect Foxglove / Lichtblick to ws://localhost:8765.
 #
 #   deploy/run-demo.sh [--objects DIR] [--domain N] [--trials N] [--skill NAME] [--view-seconds N]
 #
@@ -39,8 +40,18 @@ done
 cd "$(dirname "$0")/.."
 build="${TELEGRASP_BUILD_DIR:-build}"
 deploy/install-deps.sh
-cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
-cmake --build "$build" -j"$(nproc)" --target telegrasp-server telegrasp-bot telegrasp-view
+# The build's output goes to a log, not between the results; only its end is shown if it fails.
+mkdir -p "$build"
+build_log="$(cd "$build" && pwd)/run-demo-build.log"
+echo "run-demo: building telegrasp-server, -bot, -view, -eval and -echo (log: $build_log) ..." >&2
+build_start=$SECONDS
+if ! { cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo &&
+       cmake --build "$build" -j"$(nproc)" --target telegrasp-server telegrasp-bot telegrasp-view telegrasp-eval telegrasp-echo; } >"$build_log" 2>&1; then
+  echo "run-demo: the build failed; the end of $build_log:" >&2
+  tail -n 30 "$build_log" | sed 's/^/  /' >&2
+  exit 1
+fi
+echo "run-demo: built in $((SECONDS - build_start)) s" >&2
 
 server_log="$(mktemp -t telegrasp-demo-server.XXXXXX)"
 server_pid=""
@@ -97,4 +108,16 @@ if [ "$view_seconds" -gt 0 ] && kill -0 "$view_pid" 2>/dev/null; then
   echo "run-demo: the view stays up for $view_seconds s at http://localhost:8765/" >&2
   sleep "$view_seconds"
 fi
+cleanup || true  # stops the server and prints its log, before the pointers below
+cat >&2 <<NEXT
+
+run-demo: where to look next
+  the grasps in the browser: deploy/run-demo.sh --view-seconds 300, then open http://localhost:8765/
+  the paper's experiment through servers over DDS, with an HTML report (about 30 s):
+    $build/bin/telegrasp-eval protocol --mode both --json run.json --csv run.csv --report run.html
+  a server's outputs as JSON lines, one per sample, while a bot drives it:
+    $build/bin/telegrasp-server --domain $domain & $build/bin/telegrasp-bot --domain $domain --hands both &
+    $build/bin/telegrasp-echo --domain $domain --topics GraspEvent
+  the same grasps in-process, no network: deploy/run-eval.sh; every tool explains itself with --help
+NEXT
 exit "$status"

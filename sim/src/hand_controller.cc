@@ -742,4 +742,12 @@ std::vector<Contact> HandController::contacts() const {
   return out;
 }
 
+std::optional<ClosingMode> parse_closing_mode(std::string_view name) {
+  if (name == "precise") return ClosingMode::kPrecise;
+  if (name == "discrete") return ClosingMode::kDiscrete;
+  return std::nullopt;
+}
+
+const char* closing_mode_name(ClosingMode mode) { return mode == ClosingMode::kDiscrete ? "discrete" : "precise"; }
+
 }  // namespace telegrasp::sim

@@ -531,5 +531,15 @@ TEST(HandControllerTest, GraspMetricsAndContactsEqualFreshExactQueries) {
   }
 }
 
+// The closing modes' names, as flags, configuration files and records write them, read back.
+TEST(ClosingModeTest, NamesReadBackAndOthersAreRefused) {
+  for (ClosingMode m : {ClosingMode::kPrecise, ClosingMode::kDiscrete}) EXPECT_EQ(parse_closing_mode(closing_mode_name(m)), m);
+  EXPECT_STREQ(closing_mode_name(ClosingMode::kPrecise), "precise");
+  EXPECT_STREQ(closing_mode_name(ClosingMode::kDiscrete), "discrete");
+  EXPECT_EQ(parse_closing_mode("Precise"), std::nullopt);
+  EXPECT_EQ(parse_closing_mode("both"), std::nullopt);
+  EXPECT_EQ(parse_closing_mode(""), std::nullopt);
+}
+
 }  // namespace
 }  // namespace telegrasp::sim

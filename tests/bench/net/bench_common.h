@@ -1,5 +1,5 @@
 // Shared pieces of the network benchmarks (telegrasp-bench-latency, telegrasp-bench-scale):
-// flag parsing, the server child process, profile loading (the entities are
+// the deprecated --hz flag, the server child process, profile loading (the entities are
 // idl::DdsParticipant's), ServerStatus collection, CPU time from /proc, and latency summaries.
 #pragma once
 
@@ -34,29 +34,11 @@ using Clock = std::chrono::steady_clock;
 std::int64_t now_ns();
 
 // ---------------------------------------------------------------------------------------------
-// Command line.
+// Command line (the option loop is cli::for_each_option).
 
-/// A command-line mistake: main prints it with the program name and exits 2.
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-/// Walks argv; `value()` takes the argument of the current flag or throws naming it.
-class ArgReader {
- public:
-  ArgReader(int argc, char** argv) : argc_(argc), argv_(argv) {}
-  bool next();                      ///< Advances to the next argument; false at the end.
-  const std::string& flag() const { return flag_; }
-  std::string value();              ///< The current flag's value; throws UsageError if missing.
-  long long integer(long long lo, long long hi);  ///< value() as an integer in [lo, hi].
-  double number(double lo, double hi);            ///< value() as a finite number in [lo, hi].
-
- private:
-  int argc_;
-  char** argv_;
-  int i_ = 0;
-  std::string flag_;
-};
+/// The controller sample rate per hand was --hz until it became --sample-hz (the server's tick
+/// rate is --tick-hz everywhere): says so on stderr, naming `tool`. --hz goes in the next release.
+void warn_deprecated_hz(const char* tool);
 
 // ---------------------------------------------------------------------------------------------
 // Signals and child processes.
@@ -129,6 +111,7 @@ struct ServerOptions {
   std::string profile = "loopback";
   std::string profiles_file;        ///< "" = the server's default.
   bool late_latch = true;
+  double tick_hz = 0;               ///< The server's --tick-hz; 0 = its default.
   std::vector<std::string> extra;   ///< More arguments (--server-arg).
   std::string log_path;
 };

@@ -13,6 +13,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace telegrasp::sim {
@@ -22,6 +23,12 @@ enum class ClosingMode {
   kPrecise,   ///< Conservative advancement within each step: contact within the tolerance, no tunnelling.
   kDiscrete,  ///< The paper's: move a whole step, then test overlap (may sink by up to one step).
 };
+
+/// The mode named "precise" or "discrete" (as configuration files, flags and records write it);
+/// nothing for any other name.
+std::optional<ClosingMode> parse_closing_mode(std::string_view name);
+/// The name parse_closing_mode reads: "precise" or "discrete".
+const char* closing_mode_name(ClosingMode mode);
 
 /// How "nearest object" is measured for object selection.
 enum class SelectionMetric {
