@@ -3,6 +3,7 @@
 #include "telegrasp/idl/dds_participant.h"
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
+#include "test_domain.h"
 
 #include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
 #include <gtest/gtest.h>
@@ -21,6 +22,7 @@ namespace {
 
 namespace dds = eprosima::fastdds::dds;
 using namespace std::chrono_literals;
+using telegrasp::testing::DomainLease;
 
 bool matched(dds::DataWriter* writer) {
   dds::PublicationMatchedStatus status;
@@ -28,7 +30,8 @@ bool matched(dds::DataWriter* writer) {
 }
 
 TEST(EchoToolTest, PrintsOneJsonObjectPerSampleAndStopsAtTheCount) {
-  const int domain = 208;
+  const DomainLease lease;  // held by the echo process too while it runs
+  const int domain = lease.domain();
   // Owns every DDS entity of the test, so a failed assertion below frees them too.
   idl::DdsParticipant participant(domain, "loopback");
   dds::DataWriter* status_writer = participant.writer<msg::ServerStatusPubSubType>(idl::kServerStatusTopic);

@@ -2,6 +2,7 @@
 // missing a tick, and what each costs in server CPU.
 #include "bench_common.h"
 #include "cli.h"
+#include "test_domain.h"
 
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
@@ -16,6 +17,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <thread>
 #include <unistd.h>
 
@@ -63,7 +65,8 @@ Options:
   --json FILE            also write the results as JSON
   --profile NAME         Fast DDS participant profile (default loopback)
   --profiles FILE        Fast DDS XML profiles file (default: the telegrasp one)
-  --domain D             DDS domain of this run, 0..232 (default 121)
+  --domain D             DDS domain of this run, 0..232 (default: a free one, leased as the
+                         tests lease theirs: tests/common/test_domain.h)
   --server PATH          telegrasp-server executable (default: the one next to this program)
   --server-arg ARG       one more argument for the server (repeatable)
   --server-log FILE      server output (default: a temporary file, removed after a clean run)
@@ -84,7 +87,7 @@ struct Options {
   std::string json;
   std::string profile = "loopback";
   std::string profiles_file;
-  int domain = 121;
+  int domain = -1;  // -1: lease one
   std::string server;
   std::vector<std::string> server_args;
   std::string server_log;
@@ -519,6 +522,13 @@ int run(const Options& o) {
 int main(int argc, char** argv) {
   const Options o = parse(argc, argv);
   try {
+    // Unless told otherwise, a domain that no test run or other benchmark uses meanwhile (the
+    // server and the children started hold it too).
+    std::optional<telegrasp::testing::DomainLease> lease;
+    if (o.domain < 0) {
+      lease.emplace();
+      o.domain = lease->domain();
+    }
     return run(o);
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-bench-scale: " << e.what() << "\n";
