@@ -363,10 +363,27 @@ TEST(GraspRecordJsonTest, RoundTrips) {
   r.group = "experienced";
   r.participant = 4;
   r.contacts = {{"palm", {0.1, 0.2, 0.3}, {0, 0, 1}, {-0.01, 0.02, 0.03}, {1, 0, 0}}};
+  // The hand at the grasp tick, in the object's frame (written rounded to 1e-6).
+  r.grasp_tick_X_WorldObject = Eigen::Translation3d(0.45, -0.05, 0.027) * Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ());
+  r.grasp_tick_hand = {{"palm", Eigen::Translation3d(0.01, 0.02, 0.06) * Eigen::AngleAxisd(-2.0, Eigen::Vector3d(1, 1, 0).normalized())},
+                       {"index_dist", Eigen::Isometry3d(Eigen::Translation3d(0.03, 0.0, 0.01))}};
   const Record back = record_from_json(record_json(r));
   EXPECT_EQ(record_json(back), record_json(r));
   EXPECT_EQ(back.participant, 4);
   EXPECT_EQ(back.contacts.at(0).p_object, Eigen::Vector3d(-0.01, 0.02, 0.03));
+  ASSERT_EQ(back.grasp_tick_hand.size(), 2u);
+  EXPECT_EQ(back.grasp_tick_hand[0].frame, "palm");
+  constexpr double kRounding = 2e-6;  // 1e-6 per written number
+  EXPECT_TRUE(back.grasp_tick_hand[0].X_ObjectFrame.isApprox(r.grasp_tick_hand[0].X_ObjectFrame, kRounding));
+  EXPECT_TRUE(back.grasp_tick_X_WorldObject.isApprox(r.grasp_tick_X_WorldObject, kRounding));
+
+  // A record without the hand writes no "grasp_tick_hand", and an in-process record (no group)
+  // never does.
+  r.grasp_tick_hand.clear();
+  EXPECT_FALSE(record_json(r).contains("grasp_tick_hand"));
+  Record in_process = back;
+  in_process.group.clear();
+  EXPECT_FALSE(record_json(in_process).contains("grasp_tick_hand"));
 }
 
 }  // namespace
