@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <limits>
-#include <set>
+#include <map>
 #include <sstream>
 #include <unordered_map>
 
@@ -168,8 +168,9 @@ std::string stadium_path(const Eigen::Vector2d& a, const Eigen::Vector2d& b, dou
 }
 
 // The picture's elements inside the panel (x, y, w, h): everything of `snap` seen along `view`.
-std::string draw_view(const GraspSnapshot& snap, const TriangleMesh& drawn, const View& view, double x, double y,
+std::string draw_view(const GraspSnapshot& snap, const DrawingMesh& object, const View& view, double x, double y,
                       double w, double h) {
+  const TriangleMesh& drawn = object.mesh;
   std::vector<Eigen::Vector3d> world_vertices;
   for (const auto& v : drawn.vertices) world_vertices.push_back(snap.X_WorldObject * v);
 
@@ -262,13 +263,15 @@ std::string draw_view(const GraspSnapshot& snap, const TriangleMesh& drawn, cons
     std::string d, fill;
   };
   std::vector<Face> faces;
-  for (const auto& t : drawn.triangles) {
+  // Facing and shade come from the original surface the triangle stands for (object.normals).
+  for (std::size_t i = 0; i < drawn.triangles.size(); ++i) {
+    const auto& t = drawn.triangles[i];
     const Eigen::Vector3d &A = world_vertices[t[0]], &B = world_vertices[t[1]], &C = world_vertices[t[2]];
-    const Eigen::Vector3d n = (B - A).cross(C - A);
-    if (n.norm() < 1e-14 || n.dot(view.toward) <= 0) continue;
+    const Eigen::Vector3d n = snap.X_WorldObject.linear() * object.normals[i];
+    if (n.dot(view.toward) <= 0) continue;
     faces.push_back({(A + B + C).dot(view.toward) / 3,
                      "M" + point(screen(A)) + "L" + point(screen(B)) + "L" + point(screen(C)) + "Z",
-                     hex(shade(kObjectRgb, n.normalized(), view))});
+                     hex(shade(kObjectRgb, n, view))});
   }
   std::stable_sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) { return a.depth < b.depth; });
   o << "<g class=\"object\" stroke-width=\"0.4\" stroke-linejoin=\"round\">\n";
@@ -295,11 +298,6 @@ std::string draw_view(const GraspSnapshot& snap, const TriangleMesh& drawn, cons
       << "\" stroke-width=\"" << (hidden ? "1.4" : "0.8") << "\"/>\n";
   }
   return o.str();
-}
-
-const TriangleMesh& empty_mesh() {
-  static const TriangleMesh none;
-  return none;
 }
 
 }  // namespace
@@ -345,7 +343,7 @@ View orbit_view(double azimuth_deg, double elevation_deg) {
   const double az = azimuth_deg * kPi / 180, el = elevation_deg * kPi / 180;
   View v;
   char name[64];
-  std::snprintf(name, sizeof name, "azimuth %.0f deg, elevation %.0f deg", azimuth_deg, elevation_deg);
+  std::snprintf(name, sizeof name, "azimuth %.0f\u00b0, elevation %.0f\u00b0", azimuth_deg, elevation_deg);
   v.name = name;
   v.toward = Eigen::Vector3d(std::cos(az) * std::cos(el), std::sin(az) * std::cos(el), std::sin(el));
   v.right = Eigen::Vector3d::UnitZ().cross(v.toward).normalized();
@@ -354,7 +352,8 @@ View orbit_view(double azimuth_deg, double elevation_deg) {
 }
 
 View readable_view(const GraspSnapshot& snap) {
-  const TriangleMesh drawn = snap.model ? decimate_for_drawing(snap.model->mesh, PictureOptions{}.max_triangles) : TriangleMesh{};
+  const TriangleMesh drawn =
+      snap.model ? decimate_for_drawing(snap.model->mesh, PictureOptions{}.max_triangles).mesh : TriangleMesh{};
   std::vector<Eigen::Vector3d> world_vertices;
   for (const auto& v : drawn.vertices) world_vertices.push_back(snap.X_WorldObject * v);
   View best;
@@ -372,11 +371,24 @@ View readable_view(const GraspSnapshot& snap) {
   return best;
 }
 
-TriangleMesh decimate_for_drawing(const TriangleMesh& mesh, int max_triangles) {
-  if (static_cast<int>(mesh.triangles.size()) <= max_triangles || mesh.vertices.empty()) return mesh;
+DrawingMesh decimate_for_drawing(const TriangleMesh& mesh, int max_triangles) {
+  // Each original triangle's area-weighted normal (its cross product), summed into the drawn
+  // triangle it becomes: a clustered triangle can fold over, its source cannot.
+  auto cross = [&](const std::array<std::uint32_t, 3>& t) {
+    return Eigen::Vector3d((mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]));
+  };
+  auto finish = [](DrawingMesh& out) {
+    for (Eigen::Vector3d& n : out.normals) n = n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::Zero();
+  };
+  DrawingMesh out;
+  if (static_cast<int>(mesh.triangles.size()) <= max_triangles || mesh.vertices.empty()) {
+    out.mesh = mesh;
+    for (const auto& t : mesh.triangles) out.normals.push_back(cross(t));
+    finish(out);
+    return out;
+  }
   const Eigen::Vector3d lo = mesh.min_corner();
   const double extent = std::max((mesh.max_corner() - lo).maxCoeff(), 1e-9);
-  TriangleMesh out;
   for (double cells = 128; cells >= 2; cells *= 0.8) {
     const double size = extent / cells;
     const std::int64_t n = static_cast<std::int64_t>(cells) + 2;
@@ -393,24 +405,29 @@ TriangleMesh decimate_for_drawing(const TriangleMesh& mesh, int max_triangles) {
       sum[it->second] += mesh.vertices[i];
       ++count[it->second];
     }
-    out.vertices.clear();
-    out.triangles.clear();
-    for (std::size_t k = 0; k < sum.size(); ++k) out.vertices.push_back(sum[k] / count[k]);
-    std::set<std::array<std::uint32_t, 3>> seen;
+    out = {};
+    for (std::size_t k = 0; k < sum.size(); ++k) out.mesh.vertices.push_back(sum[k] / count[k]);
+    // A triangle and its reverse both stay (the two sides of a collapsed sheet); repeats merge.
+    std::map<std::array<std::uint32_t, 3>, std::size_t> index_of;
     for (const auto& t : mesh.triangles) {
-      const std::array<std::uint32_t, 3> c = {cluster[t[0]], cluster[t[1]], cluster[t[2]]};
+      std::array<std::uint32_t, 3> c = {cluster[t[0]], cluster[t[1]], cluster[t[2]]};
       if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2]) continue;
-      std::array<std::uint32_t, 3> key = c;
-      std::sort(key.begin(), key.end());
-      if (seen.insert(key).second) out.triangles.push_back(c);
+      std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
+      const auto [it, added] = index_of.emplace(c, out.mesh.triangles.size());
+      if (added) {
+        out.mesh.triangles.push_back(c);
+        out.normals.emplace_back(Eigen::Vector3d::Zero());
+      }
+      out.normals[it->second] += cross(t);
     }
-    if (static_cast<int>(out.triangles.size()) <= max_triangles) break;
+    if (static_cast<int>(out.mesh.triangles.size()) <= max_triangles) break;
   }
+  finish(out);
   return out;
 }
 
 std::string render_view_svg(const GraspSnapshot& snap, const View& view, const PictureOptions& options) {
-  const TriangleMesh drawn = snap.model ? decimate_for_drawing(snap.model->mesh, options.max_triangles) : empty_mesh();
+  const DrawingMesh drawn = snap.model ? decimate_for_drawing(snap.model->mesh, options.max_triangles) : DrawingMesh{};
   std::ostringstream svg;
   // No xmlns: inline SVG in HTML needs none, and the page names no URL at all.
   svg << "<svg class=\"grasp\" viewBox=\"0 0 " << f1(options.width_px) << " " << f1(options.height_px) << "\" width=\""
@@ -425,7 +442,7 @@ std::string render_svg(const GraspSnapshot& snap) {
   const View views[] = {{"top (x right, y up)", Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()},
                         {"front (x right, z up)", Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitY()},
                         {"side (y right, z up)", Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitX()}};
-  const TriangleMesh drawn = snap.model ? decimate_for_drawing(snap.model->mesh, PictureOptions{}.max_triangles) : empty_mesh();
+  const DrawingMesh drawn = snap.model ? decimate_for_drawing(snap.model->mesh, PictureOptions{}.max_triangles) : DrawingMesh{};
   std::ostringstream svg;
   const double width = 3 * kViewPx + 40, height = kViewPx + 84;
   svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height

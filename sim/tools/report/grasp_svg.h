@@ -74,10 +74,18 @@ View orbit_view(double azimuth_deg, double elevation_deg);
 /// (azimuth first, 20 deg first).
 View readable_view(const GraspSnapshot& snap);
 
+/// A mesh to draw, with each triangle's unit normal taken from the surface it stands for.
+struct DrawingMesh {
+  TriangleMesh mesh;
+  std::vector<Eigen::Vector3d> normals;  ///< Per triangle: the area-weighted mean of its source triangles' normals.
+};
+
 /// `mesh` with at most `max_triangles` triangles, by vertex clustering on a uniform grid (the
 /// finest grid, shrinking by 20 % a step, that meets the budget; a cluster's vertex is the mean of
-/// its vertices; collapsed and repeated triangles dropped). Meant for drawing, not for metrics.
-TriangleMesh decimate_for_drawing(const TriangleMesh& mesh, int max_triangles);
+/// its vertices; collapsed triangles dropped, repeats merged). Each drawn triangle keeps the normal
+/// of the original triangles it replaces, so one that folds over in the clustering still faces
+/// and is shaded the way the surface does. Meant for drawing, not for metrics.
+DrawingMesh decimate_for_drawing(const TriangleMesh& mesh, int max_triangles);
 
 /// How a single-view picture is drawn.
 struct PictureOptions {

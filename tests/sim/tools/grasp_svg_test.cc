@@ -99,14 +99,15 @@ TEST(GraspSvgTest, OrbitViewIsOrthonormalRightHandedAndZUp) {
   EXPECT_TRUE(v.right.isApprox(Eigen::Vector3d(-1, 0, 0), 1e-12)) << v.right.transpose();
   EXPECT_TRUE(v.up.isApprox(Eigen::Vector3d(0, -s, c), 1e-12)) << v.up.transpose();
   EXPECT_TRUE(v.right.cross(v.up).isApprox(v.toward, 1e-12));
-  EXPECT_EQ(v.name, "azimuth 90 deg, elevation 30 deg");
+  EXPECT_EQ(v.name, "azimuth 90\u00b0, elevation 30\u00b0");
 }
 
 TEST(GraspSvgTest, DecimationMeetsTheBudgetAndKeepsTheBounds) {
   // A UV sphere of 5 cm radius with 160 x 160 cells: 50880 triangles.
   const TriangleMesh sphere = testing::uv_sphere_mesh(0.05, 160, 160);
   ASSERT_GT(sphere.triangles.size(), 50000u);
-  const TriangleMesh drawn = decimate_for_drawing(sphere, 1500);
+  const DrawingMesh decimated = decimate_for_drawing(sphere, 1500);
+  const TriangleMesh& drawn = decimated.mesh;
   EXPECT_LE(drawn.triangles.size(), 1500u);
   EXPECT_GT(drawn.triangles.size(), 300u);  // still a sphere, not a handful of faces
   // A cluster's vertex is a mean of vertices within one grid cell of the surface: the bounds
@@ -115,9 +116,20 @@ TEST(GraspSvgTest, DecimationMeetsTheBudgetAndKeepsTheBounds) {
   constexpr double kBoundsTol = 0.005;
   EXPECT_NEAR(drawn.max_corner().x(), 0.05, kBoundsTol);
   EXPECT_NEAR(drawn.min_corner().z(), -0.05, kBoundsTol);
-  // A mesh within the budget is returned as it is.
+  // Every drawn triangle keeps the outward normal of the sphere where it lies: within 30 deg of
+  // the direction from the centre (cells of a few degrees; a folded triangle would point inward).
+  ASSERT_EQ(decimated.normals.size(), drawn.triangles.size());
+  const double kCos30 = std::cos(30 * 3.14159265358979 / 180);
+  for (std::size_t i = 0; i < drawn.triangles.size(); ++i) {
+    const auto& t = drawn.triangles[i];
+    const Eigen::Vector3d centre = (drawn.vertices[t[0]] + drawn.vertices[t[1]] + drawn.vertices[t[2]]) / 3;
+    EXPECT_GT(decimated.normals[i].dot(centre.normalized()), kCos30) << "triangle " << i;
+  }
+  // A mesh within the budget is returned as it is, with its own normals.
   const TriangleMesh box = testing::box_mesh(Eigen::Vector3d::Constant(kHalf));
-  EXPECT_EQ(decimate_for_drawing(box, 1500).triangles, box.triangles);
+  const DrawingMesh same = decimate_for_drawing(box, 1500);
+  EXPECT_EQ(same.mesh.triangles, box.triangles);
+  EXPECT_TRUE(same.normals.at(0).isApprox(Eigen::Vector3d(0, 0, -1))) << same.normals.at(0).transpose();
 }
 
 }  // namespace
