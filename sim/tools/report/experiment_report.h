@@ -8,8 +8,10 @@
 // Record::grasp_tick_hand_error_mm. A grasp's |ND| is the mean |ND| over its capsules that hit;
 // per object and group, "nd_abs_mean_mm" is the mean of those per-grasp values (every grasp weighs
 // the same, as each of the paper's grasps gives one error), and the charts plot that. The pooled
-// mean over all hit capsules is in the JSON too ("nd_abs_pooled_mean_mm"). Times are the mean over
-// grasped trials of spawn-to-grasp seconds; sd is the sample sd (n - 1), null/empty for n < 2.
+// mean over all hit capsules is in the JSON too ("nd_abs_pooled_mean_mm"). HandError, like |ND|,
+// exists only for a grasp with a capsule that hit (a grasp without one has no value, not zero).
+// Times are the mean over grasped trials of spawn-to-grasp seconds; sd is the sample sd (n - 1),
+// null/empty for n < 2. Undefined values are null in JSON, empty in CSV, "no data" in HTML.
 #pragma once
 
 #include "grasp_report.h"
@@ -70,7 +72,9 @@ std::string write_csv(const ExperimentRun& run, const std::string& path);
 /// null (no questionnaire section). Every bar is an SVG
 /// `<rect class="bar" data-chart=".." data-mode=".." data-group=".." data-object=".." data-value="..">`
 /// (data-mode "paper" for the paper's bars; data-group "all" for both groups together; data-value
-/// empty when the value is undefined, e.g. no grasp succeeded).
+/// empty when the value is undefined, e.g. no grasp succeeded: then the bar is a hatched slot of
+/// the plot's height marked "no data"). A series with no trials of an object (or a paper without
+/// the object) gets a hatched `<rect class="nodata">` slot instead of a bar.
 std::string html_report(const ExperimentRun& run, const std::vector<PaperRow>& paper,
                         const QuestionnaireSummary* questionnaire);
 

@@ -1,7 +1,10 @@
 // Tests experiment_report.h on a handmade protocol run with known means: the aggregates, the two
-// CSV files, the HTML report's bars (one per object per group per mode per chart), that the page
-// is self-contained and states the unit caveat, and loading the paper's per-object numbers.
+// CSV files, the HTML report's bars (one per object per group per mode per chart), its axis ticks,
+// that a missing value reads "no data" and never 0, the precise-vs-discrete time comparison, that
+// the page is self-contained and states the unit caveat, and loading the paper's per-object numbers.
+#include "experiment_aggregate.h"
 #include "experiment_report.h"
+
 
 #include <gtest/gtest.h>
 
@@ -121,6 +124,12 @@ int count_bars(const std::vector<std::map<std::string, std::string>>& all, const
   return n;
 }
 
+int count_substr(const std::string& text, const std::string& what) {
+  int n = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
 std::vector<std::string> read_lines(const std::string& path) {
   std::ifstream in(path);
   std::vector<std::string> lines;
@@ -215,7 +224,7 @@ TEST(ExperimentReportTest, HtmlHasOneBarPerObjectPerGroupPerModePerChart) {
       const std::string chart = kind + "." + mode;
       for (const std::string& object : recorded) {
         EXPECT_EQ(count_bars(all, chart, mode, "experienced", object), 1) << chart << " " << object;
-        // Nobody inexperienced tried the custom object: no bar, not a zero bar.
+        // Nobody inexperienced tried the custom object: no bar, not a zero bar (a hatched slot).
         EXPECT_EQ(count_bars(all, chart, mode, "inexperienced", object), object == "999_custom" ? 0 : 1)
             << chart << " " << object;
       }
@@ -242,7 +251,8 @@ TEST(ExperimentReportTest, HtmlHasOneBarPerObjectPerGroupPerModePerChart) {
   //   modes: 2 x 16 = 32; paper_*.experienced: 2 x (2 + 3 + 3) = 16; inexperienced: 2 x (2 + 2 + 2) = 12.
   EXPECT_EQ(all.size(), 32u + 16u + 12u);
 
-  // Values: the bar is the mean the aggregates computed; an undefined value is an empty bar.
+  // Values: the bar is the mean the aggregates computed; an undefined value is a hatched slot of
+  // the plot's full height (200 px) saying "no data", not a bar of height 0.
   for (const auto& b : all) {
     if (b.at("data-chart") == "time_by_group.precise" && b.at("data-group") == "experienced" &&
         b.at("data-object") == "014_lemon") {
@@ -259,13 +269,93 @@ TEST(ExperimentReportTest, HtmlHasOneBarPerObjectPerGroupPerModePerChart) {
     if (b.at("data-chart") == "time_by_group.discrete" && b.at("data-group") == "inexperienced" &&
         b.at("data-object") == "003_cracker_box") {
       EXPECT_EQ(b.at("data-value"), "");
-      EXPECT_EQ(b.at("height"), "0.00");
+      EXPECT_EQ(b.at("height"), "200.00");
+      EXPECT_EQ(b.at("fill").rfind("url(#nd-", 0), 0u) << b.at("fill");
     }
   }
-  // The x axis uses the paper's letters, the object's name in a tooltip; other objects a number.
-  EXPECT_NE(html.find("<title>014_lemon</title>a</text>"), std::string::npos);
-  EXPECT_NE(html.find("<title>003_cracker_box</title>b</text>"), std::string::npos);
-  EXPECT_NE(html.find("<title>999_custom</title>#3</text>"), std::string::npos);
+  const std::string time_chart = html.substr(html.find("data-chart=\"time_by_group.discrete\""));
+  EXPECT_NE(time_chart.find("003_cracker_box, inexperienced: no data</title>"), std::string::npos);
+  // The inexperienced never tried 999_custom: a hatched slot (class "nodata"), titled why.
+  EXPECT_NE(html.find("999_custom, inexperienced: no data (no trials)</title>"), std::string::npos);
+  // The x axis names the objects (rotated), not the paper's letters.
+  for (const std::string object : {"014_lemon", "003_cracker_box", "999_custom"})
+    EXPECT_NE(html.find("rotate(-60)\" text-anchor=\"end\">" + object + "</text>"), std::string::npos) << object;
+  EXPECT_EQ(html.find(">a</text>"), std::string::npos);
+  EXPECT_EQ(html.find(">#3</text>"), std::string::npos);
+}
+
+// Nice steps of 1, 2 or 5 x 10^k, at least a fifth of the largest value, worked by hand.
+TEST(AxisTicksTest, NiceStepsAndExactLabels) {
+  auto labels = [](double largest) {
+    std::string out;
+    for (const std::string& l : axis_ticks(largest).labels) out += (out.empty() ? "" : " ") + l;
+    return out;
+  };
+  // 12.3 / 5 = 2.46: 1 and 2 are too small, 5 is the step; the top is 3 x 5 = 15.
+  EXPECT_EQ(labels(12.3), "0 5 10 15");
+  EXPECT_DOUBLE_EQ(axis_ticks(12.3).top, 15);
+  EXPECT_DOUBLE_EQ(axis_ticks(12.3).step, 5);
+  // The report's old axis: 12 would have had ticks every 2.5 labelled 0 2 5 8 10 12.
+  EXPECT_EQ(labels(12), "0 5 10 15");
+  // 10 / 5 = 2: the step is 2, and 10 is a tick.
+  EXPECT_EQ(labels(10), "0 2 4 6 8 10");
+  // 4.16 / 5 = 0.832: 0.1, 0.2 and 0.5 are too small, so 1.
+  EXPECT_EQ(labels(4.16), "0 1 2 3 4 5");
+  // 0.87 / 5 = 0.174: the step is 0.2 and every label has one decimal.
+  EXPECT_EQ(labels(0.87), "0.0 0.2 0.4 0.6 0.8 1.0");
+  // 0.046 / 5 = 0.0092: the step is 0.01, two decimals, top 0.05.
+  EXPECT_EQ(labels(0.046), "0.00 0.01 0.02 0.03 0.04 0.05");
+  // 250 / 5 = 50: a step of 50 exactly.
+  EXPECT_EQ(labels(250), "0 50 100 150 200 250");
+  // Nothing to plot: 0 to 1 in steps of 0.2.
+  EXPECT_EQ(labels(0), "0.0 0.2 0.4 0.6 0.8 1.0");
+  EXPECT_EQ(labels(NAN), "0.0 0.2 0.4 0.6 0.8 1.0");
+}
+
+// A grasp whose capsules all missed has no |ND| and no HandError (the server sends 0): the
+// aggregates say null, the CSV leaves the cell empty, the page says "no data" and never 0.00.
+TEST(ExperimentReportTest, NoCapsuleHitIsNoDataNotZero) {
+  ExperimentRun run = handmade_run();
+  run.objects.push_back("032_knife");
+  for (const std::string mode : {"precise", "discrete"}) {
+    Record knife = grasp(mode, "experienced", 1, "032_knife", 3, 1.25, 0.0, {});
+    run.records.push_back(knife);
+  }
+  const nlohmann::json j = aggregate_json(run);
+  const auto& row = find_row(j["by_mode_group_object"], "precise", "experienced", "032_knife");
+  EXPECT_EQ(row["grasped"], 1);
+  EXPECT_NEAR(row["time_to_grasp_mean_s"].get<double>(), 1.25, kTol);
+  EXPECT_TRUE(row["hand_error_mean_mm"].is_null());
+  EXPECT_TRUE(row["nd_abs_mean_mm"].is_null());
+
+  const std::string html = html_report(run, paper(), nullptr);
+  // The paper's error table row for the knife: paper, ours per mode, our HandError per mode.
+  const auto paper_table = html.find("data-chart=\"paper_error.experienced\"");
+  ASSERT_NE(paper_table, std::string::npos);
+  const auto knife_row = html.find("<td>032_knife</td>", paper_table);
+  ASSERT_NE(knife_row, std::string::npos);
+  const std::string row_html = html.substr(knife_row, html.find("</tr>", knife_row) - knife_row);
+  EXPECT_EQ(row_html.find("0.00"), std::string::npos) << row_html;
+  EXPECT_EQ(count_substr(row_html, "no data"), 4) << row_html;  // |ND| and HandError, both modes
+  // The |ND| bar of the knife is a "no data" slot.
+  for (const auto& b : bars(html)) {
+    if (b.at("data-object") == "032_knife" && b.at("data-chart").rfind("nd_", 0) == 0) {
+      EXPECT_EQ(b.at("data-value"), "") << b.at("data-chart");
+    }
+  }
+}
+
+// Precise against discrete, grasp by grasp: four grasps succeeded in both modes in the handmade
+// run, all at different times (lemon 1.0 / 1.1 and 3.0 / 1.3, cracker box 1.2 / 1.5, custom
+// 0.8 / 0.9): the largest difference is 1.3 - 3.0 = -1.7 s.
+TEST(ExperimentReportTest, PreciseAndDiscreteTimesAreComparedGraspByGrasp) {
+  const std::string html = html_report(handmade_run(), paper(), nullptr);
+  EXPECT_NE(html.find("id=\"mode-times\""), std::string::npos);
+  EXPECT_NE(html.find("same simulated person in both modes"), std::string::npos);
+  EXPECT_NE(html.find("Of the 4 grasps made in both modes (same group, participant, object and trial), 0 have the same "
+                      "time to grasp and 4 differ, by at most 1.700 s"),
+            std::string::npos);
+  EXPECT_NE(html.find("<td>3.000</td><td>1.300</td><td>-1.700</td>"), std::string::npos);
 }
 
 TEST(ExperimentReportTest, HtmlIsSelfContainedAndStatesTheCaveat) {
