@@ -1,12 +1,14 @@
-// The experiment report as one self-contained HTML page: the run, the per-mode comparison, the
-// paper's bar charts as inline SVG with their numbers in tables, the paper's published numbers
-// beside ours, and the questionnaire's scores.
+// The experiment report as one self-contained HTML page: the run, the per-mode comparison, a
+// picture of one grasp per object, the paper's bar charts as inline SVG with their numbers in
+// tables, the paper's published numbers beside ours, and the questionnaire's scores.
 #include "experiment_aggregate.h"
+#include "grasp_svg.h"
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <tuple>
 
@@ -229,6 +231,9 @@ svg.chart{background:#fff;display:block}svg .grid{stroke:#e0e0e0;stroke-width:.5
 svg .axisline{stroke:#333;stroke-width:1}svg text{font-size:9px;fill:#333}svg .axis{font-size:10px}
 svg .legend{font-size:10px}svg .nodata-label{font-size:7px;fill:#333}.caveat{background:#fff8e1;border-left:4px solid #f0ad4e;padding:.5em 1em;max-width:60em}
 .rejected{color:#a00}code{background:#f4f4f4;padding:0 3px}
+.pictures{display:flex;flex-wrap:wrap;gap:1em}.pictures figure{margin:0;width:260px}
+.pictures figcaption{font-weight:normal;font-size:.8em;margin-top:.2em}.pictures b{font-size:1.1em}
+svg.grasp{display:block;border:1px solid #ddd}.legend-key{font-size:.85em;max-width:60em}
 )";
 
 std::string page(const std::string& title, const std::string& body) {
@@ -444,6 +449,76 @@ std::string mode_times_section(const ExperimentRun& run, const PageData& d) {
   return o.str();
 }
 
+// The hand and object of a record at its grasp tick, in the world frame; nothing when the record
+// lacks the palm or a phalanx of `rig`.
+std::optional<sim::GraspSnapshot> record_snapshot(const Record& r, const sim::HandRig& rig, const sim::ObjectModel& model) {
+  std::map<std::string, const Eigen::Isometry3d*> frames;
+  for (const HandFrameRecord& f : r.grasp_tick_hand) frames[f.frame] = &f.X_ObjectFrame;
+  const Eigen::Isometry3d& X_WorldObject = r.grasp_tick_X_WorldObject;
+  if (!frames.count("palm")) return std::nullopt;
+  std::vector<Eigen::Isometry3d> X_WorldPhalanx;
+  std::vector<bool> blocked;
+  for (const sim::PhalanxSpec& p : rig.phalanges()) {
+    const auto it = frames.find(p.name);
+    if (it == frames.end()) return std::nullopt;
+    X_WorldPhalanx.push_back(X_WorldObject * *it->second);
+    bool b = false;
+    for (const CapsuleRecord& c : r.grasp_tick_capsules) b = b || (c.phalanx == p.name && c.blocked);
+    blocked.push_back(b);
+  }
+  sim::GraspSnapshot snap;
+  snap.title = r.object;
+  snap.model = &model;
+  snap.X_WorldObject = X_WorldObject;
+  sim::add_hand(snap, rig, X_WorldObject * *frames.at("palm"), X_WorldPhalanx, blocked);
+  for (const ContactRecord& c : r.contacts)
+    snap.contacts.push_back({X_WorldObject * c.p_object, X_WorldObject.linear() * c.n_object});
+  return snap;
+}
+
+// One picture per object: the representative grasp in its readable view, with what it shows.
+std::string pictures_section(const ExperimentRun& run, const PageData& d, const GraspPictureInputs& in) {
+  std::ostringstream o;
+  o << "<h2 id=\"pictures\">The grasps, one per object</h2>\n<p class=\"legend-key\">Each picture is one grasp at the "
+       "tick its grasp rule turned true: the first experienced participant's in precise mode, held after the lift "
+       "(failing that, the first record by: held, precise mode, experienced, participant, trial). The hand is the "
+       "server's HandSkeleton of that tick, kept in the object's frame. <b>Grey</b>: the object, its mesh decimated "
+       "to at most " << sim::PictureOptions{}.max_triangles << " triangles for drawing, flat shaded. <b>Light</b> "
+       "capsules: free phalanges; <b>dark</b>: blocked; <b>dashed</b> outline: behind the object. Pale see-through "
+       "shapes: the palm and the phalanges without a capsule, for context. <b>Red</b> dots: the contacts, with a 10 mm "
+       "tick along the surface normal; hollow: behind the object. Viewpoint: world z up; of the 16 views from azimuths "
+       "0, 45, ..., 315&deg; at elevations 20&deg; and 50&deg;, the one that shows the most of the hand and of where it "
+       "touches (capsule points the object does not hide, and contacts that neither the object nor a finger hides).</p>\n"
+       "<div class=\"pictures\">\n";
+  for (const std::string& object : d.objects) {
+    o << "<figure data-object=\"" << esc(object) << "\">";
+    const Record* r = representative_grasp(run, object);
+    const auto model = in.models.find(object);
+    std::optional<sim::GraspSnapshot> snap;
+    if (r && model != in.models.end() && model->second && in.rig) snap = record_snapshot(*r, *in.rig, *model->second);
+    const bool standin = std::find(run.standin_objects.begin(), run.standin_objects.end(), object) != run.standin_objects.end();
+    if (!snap) {
+      o << "<figcaption><b>" << esc(object) << "</b><br>no picture: "
+        << (!r ? "no record has the hand at the grasp tick" : "its model or the hand's rig is not known") << "</figcaption>";
+    } else {
+      const sim::View view = sim::readable_view(*snap);
+      int blocked = 0;
+      for (const auto& c : snap->capsules) blocked += c.blocked;
+      int hits = 0;
+      grasp_nd_abs_mean(*r, &hits);
+      o << sim::render_view_svg(*snap, view) << "<figcaption><b>" << esc(object) << "</b>" << (standin ? " (stand-in)" : "")
+        << "<br>" << esc(mode_name(r->mode)) << ", " << esc(r->group) << " participant " << r->participant << ", "
+        << (r->held_after_lift ? "held" : "grasped, not held") << "; " << fmt(r->time_to_grasp_s) << " s; HandError "
+        << (hits ? fmt(r->grasp_tick_hand_error_mm) + " mm" : std::string(kNoData)) << "<br>" << r->contacts.size()
+        << " contact(s), " << blocked << " of " << snap->capsules.size() << " capsules blocked<br>view from " << esc(view.name)
+        << "</figcaption>";
+    }
+    o << "</figure>\n";
+  }
+  o << "</div>\n";
+  return o.str();
+}
+
 // Overall per mode and group: the discrete-vs-precise comparison at a glance, then the worst
 // objects and how our numbers compare with the paper's.
 std::string overall_section(const ExperimentRun& run, const PageData& d) {
@@ -546,12 +621,24 @@ std::string paper_section(const std::vector<PaperRow>& paper, const PageData& d)
 
 }  // namespace
 
+const Record* representative_grasp(const ExperimentRun& run, const std::string& object) {
+  auto rank = [](const std::string& value, const char* first) { return value == first ? 0 : 1; };
+  auto key = [&](const Record& r) {
+    return std::make_tuple(!r.held_after_lift, rank(r.mode, "precise"), rank(r.group, "experienced"), r.participant, r.trial);
+  };
+  const Record* best = nullptr;
+  for (const Record& r : run.records)
+    if (r.object == object && r.grasped && !r.grasp_tick_hand.empty() && (!best || key(r) < key(*best))) best = &r;
+  return best;
+}
+
 std::string html_report(const ExperimentRun& run, const std::vector<PaperRow>& paper,
-                        const QuestionnaireSummary* questionnaire) {
+                        const QuestionnaireSummary* questionnaire, const GraspPictureInputs* pictures) {
   const PageData d = page_data(run, paper);
   std::string body = "<h1>telegrasp: the paper's grasping experiment (" + esc(run.protocol) + ")</h1>\n";
   body += run_section(run, d);
   body += overall_section(run, d);
+  if (pictures) body += pictures_section(run, d, *pictures);
   body += mode_charts_section(d);
   body += paper_section(paper, d);
   if (questionnaire) body += questionnaire_section(*questionnaire);

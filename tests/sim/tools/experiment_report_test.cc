@@ -1,10 +1,12 @@
 // Tests experiment_report.h on a handmade protocol run with known means: the aggregates, the two
 // CSV files, the HTML report's bars (one per object per group per mode per chart), its axis ticks,
-// that a missing value reads "no data" and never 0, the precise-vs-discrete time comparison, that
-// the page is self-contained and states the unit caveat, and loading the paper's per-object numbers.
+// that a missing value reads "no data" and never 0, the precise-vs-discrete time comparison, the
+// grasp pictures and which grasp they draw, that the page is self-contained and states the unit
+// caveat, and loading the paper's per-object numbers.
 #include "experiment_aggregate.h"
 #include "experiment_report.h"
 
+#include "../test_meshes.h"
 
 #include <gtest/gtest.h>
 
@@ -356,6 +358,70 @@ TEST(ExperimentReportTest, PreciseAndDiscreteTimesAreComparedGraspByGrasp) {
                       "time to grasp and 4 differ, by at most 1.700 s"),
             std::string::npos);
   EXPECT_NE(html.find("<td>3.000</td><td>1.300</td><td>-1.700</td>"), std::string::npos);
+}
+
+// The hand of a grasp as a participant records it: the palm 5 cm above the object's origin and
+// each phalanx 1 cm further along x than the one before (a picture needs poses, not a real hand).
+void give_hand(Record& r, const sim::HandRig& rig) {
+  r.grasp_tick_X_WorldObject = Eigen::Isometry3d(Eigen::Translation3d(0.45, 0, 0.03));
+  r.grasp_tick_hand.push_back({"palm", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 0.05))});
+  for (std::size_t i = 0; i < rig.phalanges().size(); ++i)
+    r.grasp_tick_hand.push_back(
+        {rig.phalanges()[i].name, Eigen::Isometry3d(Eigen::Translation3d(0.01 * static_cast<double>(i), 0.02, 0.03))});
+}
+
+// The drawn grasp: held before merely grasped, precise before discrete, experienced before
+// inexperienced, then the lowest participant; records without the hand never.
+TEST(ExperimentReportTest, RepresentativeGraspFollowsTheStatedOrder) {
+  const sim::HandRig rig = sim::HandRig::load(sim::HandRig::builtin_path("human_right"));
+  ExperimentRun run;
+  run.objects = {"014_lemon"};
+  auto add = [&](const std::string& mode, const std::string& group, int participant, bool held, bool hand) {
+    Record r = grasp(mode, group, participant, "014_lemon", 0, 1.0, 1.0, {1.0});
+    r.held_after_lift = held;
+    if (hand) give_hand(r, rig);
+    run.records.push_back(r);
+  };
+  add("precise", "experienced", 1, true, false);   // no hand: never drawn
+  add("precise", "experienced", 1, false, true);   // not held
+  add("discrete", "experienced", 2, true, true);   // not precise
+  add("precise", "inexperienced", 5, true, true);  // not experienced
+  add("precise", "experienced", 3, true, true);    // the one
+  add("precise", "experienced", 4, true, true);    // a later participant
+  const Record* r = representative_grasp(run, "014_lemon");
+  ASSERT_NE(r, nullptr);
+  EXPECT_EQ(r, &run.records[4]);
+  EXPECT_EQ(representative_grasp(run, "003_cracker_box"), nullptr);
+}
+
+// With the models and the rig, the page has one picture per object that has a record with the
+// hand, an explanation for the others, and still nothing to fetch.
+TEST(ExperimentReportTest, HtmlDrawsOneGraspPerObjectWithoutUrls) {
+  ExperimentRun run = handmade_run();
+  GraspPictureInputs pictures;
+  pictures.rig = std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")));
+  pictures.models["014_lemon"] = sim::make_object_model("014_lemon", sim::testing::uv_sphere_mesh(0.027, 24, 24), 0.05, "test");
+  pictures.models["003_cracker_box"] =
+      sim::make_object_model("003_cracker_box", sim::testing::box_mesh(Eigen::Vector3d(0.08, 0.03, 0.105)), 0.4, "test");
+  for (Record& r : run.records)
+    if (r.object != "999_custom" && r.grasped) give_hand(r, *pictures.rig);
+  const std::string html = html_report(run, paper(), nullptr, &pictures);
+
+  EXPECT_NE(html.find("id=\"pictures\""), std::string::npos);
+  EXPECT_EQ(count_substr(html, "<figure data-object="), 3);
+  EXPECT_EQ(count_substr(html, "<svg class=\"grasp\""), 2);
+  // The lemon's drawn grasp is the first experienced participant's, precise, held (trial 0).
+  const auto lemon = html.find("<figure data-object=\"014_lemon\">");
+  ASSERT_NE(lemon, std::string::npos);
+  const std::string lemon_figure = html.substr(lemon, html.find("</figure>", lemon) - lemon);
+  EXPECT_NE(lemon_figure.find("precise, experienced participant 1, held; 1.00 s"), std::string::npos) << lemon_figure;
+  // Capsules of the rig: ten, every one drawn (in front of or behind the object).
+  EXPECT_EQ(count_substr(lemon_figure, "<path class=\"capsule"), 10);
+  // The custom object has no hand recorded: said, not drawn.
+  EXPECT_NE(html.find("no picture: no record has the hand at the grasp tick"), std::string::npos);
+  EXPECT_EQ(html.find("http"), std::string::npos);
+  EXPECT_EQ(html.find("xmlns"), std::string::npos);
+  EXPECT_EQ(html.find("<img"), std::string::npos);
 }
 
 TEST(ExperimentReportTest, HtmlIsSelfContainedAndStatesTheCaveat) {
