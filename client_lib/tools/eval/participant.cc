@@ -4,6 +4,8 @@
 // it, removes it, and records each grasp from the server's GraspEvent. Every decision is a
 // function of the SceneState sequence alone, so with a lockstep server a run is deterministic.
 // Progress: one line per grasp on stdout ("grasp I/N OBJECT held|not-held"), read by the runner.
+// Each record also keeps the hand at the grasp tick (the server's HandSkeleton of that tick, in the
+// object's frame), so the report can draw the grasp.
 #include "cli.h"
 #include "commands.h"
 #include "grasp_event_record.h"
@@ -232,7 +234,35 @@ class Participant {
   }
 
   // The trial starts when the object appears: the hand waits at home, free to reach.
-  void take_grasp_event(const client::GraspEvent& e) { tools::record_grasp_event(e, e.object_spawn_time, *rig_, rec_); }
+  void take_grasp_event(const client::GraspEvent& e) {
+    tools::record_grasp_event(e, e.object_spawn_time, *rig_, rec_);
+    record_grasp_tick_hand(e);
+  }
+
+  // The hand of the grasp tick, from that tick's HandSkeleton (published before the tick's
+  // SceneState; a lockstep server does not tick again before this participant answers). Best
+  // effort: a skeleton lost on the way leaves the record without the hand.
+  void record_grasp_tick_hand(const client::GraspEvent& e) {
+    const auto deadline = Clock::now() + std::chrono::duration<double>(kEventWait);
+    while (true) {
+      for (const client::HandSkeleton& s : client_.latest_hand_skeletons()) {
+        if (s.hand != e.hand || s.tick != e.tick || s.late_latched) continue;
+        if (s.rig != rig_->name() || s.X_WorldPhalanx.size() != rig_->phalanges().size()) return;  // not our rig
+        const Eigen::Isometry3d X_ObjectWorld = e.X_WorldObject.inverse();
+        rec_.grasp_tick_X_WorldObject = e.X_WorldObject;
+        rec_.grasp_tick_hand.push_back({"palm", X_ObjectWorld * s.X_WorldPalm});
+        for (std::size_t i = 0; i < s.X_WorldPhalanx.size(); ++i)
+          rec_.grasp_tick_hand.push_back({rig_->phalanges()[i].name, X_ObjectWorld * s.X_WorldPhalanx[i]});
+        return;
+      }
+      if (Clock::now() > deadline) {
+        std::cerr << "telegrasp-eval participant: no hand skeleton of grasp tick " << e.tick << " (" << rec_.object
+                  << "): the record has no hand pose\n";
+        return;
+      }
+      std::this_thread::sleep_for(std::chrono::microseconds(100));
+    }
+  }
 
   void finish(std::uint64_t tick) {
     rec_.mode = opt_.mode;
@@ -294,7 +324,7 @@ int run_participant(int argc, char** argv) {
   copt.domain = opt.domain;
   copt.profile = opt.profile;
   copt.profiles_file = opt.profiles_file;
-  copt.topics = client::kGraspEvents | client::kSceneStates | client::kServerStatuses;
+  copt.topics = client::kGraspEvents | client::kSceneStates | client::kServerStatuses | client::kHandSkeletons;
   try {
     client::Client c(copt);
     if (!c.wait_for_server(std::chrono::milliseconds(static_cast<long>(1000 * opt.timeout_s)))) {

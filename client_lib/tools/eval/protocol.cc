@@ -11,6 +11,7 @@
 #include "protocol_common.h"
 #include "questionnaire.h"
 #include "telegrasp/sim/hand_controller.h"
+#include "telegrasp/sim/hand_rig.h"
 #include "telegrasp/sim/standin_objects.h"
 
 #include <nlohmann/json.hpp>
@@ -26,6 +27,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -74,9 +76,10 @@ Options:
   --seed S               random seed: placements, operators (default 1)
   --jobs J               (mode, participant) runs at a time (default: the number of cores)
   --json FILE            every grasp record (as telegrasp-eval writes them, plus "group",
-                         "participant", "contacts") and the aggregates
+                         "participant", "contacts", "grasp_tick_hand") and the aggregates
   --csv FILE             one row per grasp; FILE's stem + _by_object.csv: per object and group
-  --report FILE.html     self-contained HTML report with bar charts, the paper's numbers beside ours
+  --report FILE.html     self-contained HTML report with a picture of one grasp per object, bar
+                         charts, the paper's numbers beside ours
   --questionnaire FILE   questionnaire answers (see telegrasp-eval questionnaire --help) to score
                          into the report
   --domain N             first DDS domain of the servers; job slot k uses N + k (default: from
@@ -222,6 +225,7 @@ struct ReportInputs {
   std::vector<std::string> standins;  // protocol objects with no mesh in --objects
   std::optional<report::QuestionnaireSummary> questionnaire;
   std::vector<report::PaperRow> paper;
+  report::GraspPictureInputs pictures;  // the models and the participants' rig, to draw the grasps
 };
 
 // Loads the objects (to fail early, naming a bad mesh), the questionnaire and the paper's numbers;
@@ -229,7 +233,7 @@ struct ReportInputs {
 std::optional<ReportInputs> load_report_inputs(const Options& opt) {
   ReportInputs in;
   try {
-    protocol_models(opt.objects_dir, &in.standins);  // fails early, naming a bad mesh
+    in.pictures.models = protocol_models(opt.objects_dir, &in.standins);  // fails early, naming a bad mesh
   } catch (const std::exception& e) {  // MeshLoadError, naming the folder or the file in it
     std::cerr << kTool << ": --objects " << e.what() << "\n";
     return std::nullopt;
@@ -240,6 +244,7 @@ std::optional<ReportInputs> load_report_inputs(const Options& opt) {
       for (const auto& r : in.questionnaire->rejected) std::cerr << kTool << ": --questionnaire: " << r.message << "\n";
     }
     in.paper = load_paper_rows();
+    in.pictures.rig = std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")));
   } catch (const std::exception& e) {
     std::cerr << kTool << ": " << e.what() << "\n";
     return std::nullopt;
@@ -501,7 +506,8 @@ bool write_reports(const report::ExperimentRun& run, const json& summaries, cons
       std::cerr << "wrote " << opt.csv_path << " and " << by_object << "\n";
     }
     if (!opt.report_path.empty()) {
-      report::write_text_file(opt.report_path, report::html_report(run, in.paper, in.questionnaire ? &*in.questionnaire : nullptr));
+      report::write_text_file(opt.report_path,
+                              report::html_report(run, in.paper, in.questionnaire ? &*in.questionnaire : nullptr, &in.pictures));
       std::cerr << "wrote " << opt.report_path << "\n";
     }
   } catch (const std::exception& e) {
