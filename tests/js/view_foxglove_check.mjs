@@ -44,14 +44,15 @@ const echo = start(path.join(bin, "telegrasp-echo"), ["--domain", String(domain)
     if (m.topic === "HandSkeleton") {
       const key = `${m.hand.client_id}/${m.hand.side}`;
       if (!echoSkeletons.has(key)) echoSkeletons.set(key, []);
-      echoSkeletons.get(key).push(m.X_WorldPalm);
+      echoSkeletons.get(key).push(echoPose(m.X_WorldPalm));
     } else if (m.topic === "SceneState") {
       echoScene = m;
       for (const o of m.objects) {
         if (!echoObjects.has(o.id)) echoObjects.set(o.id, []);
         const poses = echoObjects.get(o.id);
         const last = poses[poses.length - 1];
-        if (!last || !samePose(last, o.X_WorldObject)) poses.push(o.X_WorldObject);  // objects at rest: once
+        const X = echoPose(o.X_WorldObject);
+        if (!last || !samePose(last, X)) poses.push(X);  // objects at rest: once
       }
     } else if (m.topic === "GraspEvent") {
       echoEvents.set(m.event_id, m);
@@ -67,6 +68,11 @@ const world = new Map();           // every frame as the /tf messages so far lea
 const viewEvents = [];
 let statusCount = 0;
 let graspStateCount = 0;
+
+// telegrasp-echo writes a pose as {p_m: [x, y, z], q_wxyz: [w, x, y, z]}.
+function echoPose(X) {
+  return { p: X.p_m, q: X.q_wxyz };
+}
 
 function samePose(a, b) {
   // a, b: {p: [x, y, z], q: [w, x, y, z]}; q and -q are the same rotation.
