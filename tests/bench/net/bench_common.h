@@ -4,6 +4,7 @@
 #pragma once
 
 #include "child_process.h"
+#include "cli.h"
 
 #include "telegrasp/idl/dds_participant.h"
 #include "telegrasp/idl/telegrasp.h"
@@ -39,6 +40,42 @@ std::int64_t now_ns();
 /// The controller sample rate per hand was --hz until it became --sample-hz (the server's tick
 /// rate is --tick-hz everywhere): says so on stderr, naming `tool`. --hz goes in the next release.
 void warn_deprecated_hz(const char* tool);
+
+/// The options both network benchmarks take: the controller rate, the server they start, how they
+/// reach it and where the results go. Each benchmark's Options extends it.
+struct CommonOptions {
+  double sample_hz = 90;
+  double tick_hz = 0;  // 0: the server's default
+  std::string json;
+  std::string profile = "loopback";
+  std::string profiles_file;
+  int domain = -1;  // -1: lease one
+  std::string server;
+  std::vector<std::string> server_args;
+  std::string server_log;
+  bool late_latch = true;
+};
+
+/// Takes flag `f` into `o` if it is one of CommonOptions' (--sample-hz, --hz, --tick-hz, --json,
+/// --profile, --profiles, --domain, --server, --server-arg, --server-log, --no-late-latch);
+/// `value()` gives its value, `usage_error` rejects a bad one. False for any other flag.
+template <class Value>
+bool parse_common_option(const char* tool, const std::string& f, const Value& value, CommonOptions& o,
+                         void (*usage_error)(const std::string&)) {
+  if (f == "--sample-hz") o.sample_hz = cli::parse_number(f, value(), 1, 1000, usage_error);
+  else if (f == "--hz") warn_deprecated_hz(tool), o.sample_hz = cli::parse_number(f, value(), 1, 1000, usage_error);
+  else if (f == "--tick-hz") o.tick_hz = cli::parse_number(f, value(), 1, 2000, usage_error);
+  else if (f == "--json") o.json = value();
+  else if (f == "--profile") o.profile = cli::parse_profile(f, value(), usage_error);
+  else if (f == "--profiles") o.profiles_file = value();
+  else if (f == "--domain") o.domain = cli::parse_domain(f, value(), usage_error);
+  else if (f == "--server") o.server = value();
+  else if (f == "--server-arg") o.server_args.push_back(value());
+  else if (f == "--server-log") o.server_log = value();
+  else if (f == "--no-late-latch") o.late_latch = false;
+  else return false;
+  return true;
+}
 
 // ---------------------------------------------------------------------------------------------
 // Signals and child processes.

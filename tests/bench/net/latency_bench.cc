@@ -74,20 +74,10 @@ Exit status: 0 done, 1 a runtime failure (the server or the echo could not be st
 answered, an output could not be written), 2 a usage error (a bad or missing option or value).
 )";
 
-struct Options {
+struct Options : CommonOptions {
   int clients = 16;
-  double sample_hz = 90;
-  double tick_hz = 0;  // 0: the server's default
   double seconds = 10;
   double warmup = 1;
-  std::string json;
-  std::string profile = "loopback";
-  std::string profiles_file;
-  int domain = -1;  // -1: lease one
-  std::string server;
-  std::vector<std::string> server_args;
-  std::string server_log;
-  bool late_latch = true;
   bool spread = true;
 };
 
@@ -98,20 +88,10 @@ constexpr const char* kTool = "telegrasp-bench-latency";
 Options parse(int argc, char** argv) {
   Options o;
   cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& f, const auto& value) {
+    if (parse_common_option(kTool, f, value, o, usage_error)) return true;
     if (f == "--clients") o.clients = static_cast<int>(cli::parse_whole(f, value(), 1, 1024, usage_error));
-    else if (f == "--sample-hz") o.sample_hz = cli::parse_number(f, value(), 1, 1000, usage_error);
-    else if (f == "--hz") warn_deprecated_hz(kTool), o.sample_hz = cli::parse_number(f, value(), 1, 1000, usage_error);
-    else if (f == "--tick-hz") o.tick_hz = cli::parse_number(f, value(), 1, 2000, usage_error);
     else if (f == "--seconds") o.seconds = cli::parse_number(f, value(), 0.1, 86400, usage_error);
     else if (f == "--warmup") o.warmup = cli::parse_number(f, value(), 0, 3600, usage_error);
-    else if (f == "--json") o.json = value();
-    else if (f == "--profile") o.profile = cli::parse_profile(f, value(), usage_error);
-    else if (f == "--profiles") o.profiles_file = value();
-    else if (f == "--domain") o.domain = cli::parse_domain(f, value(), usage_error);
-    else if (f == "--server") o.server = value();
-    else if (f == "--server-arg") o.server_args.push_back(value());
-    else if (f == "--server-log") o.server_log = value();
-    else if (f == "--no-late-latch") o.late_latch = false;
     else if (f == "--phase") {
       const std::string p = value();
       if (p == "spread") o.spread = true;

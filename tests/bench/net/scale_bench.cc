@@ -77,21 +77,11 @@ Exit status: 0 done, 1 a runtime failure (the server could not be started or nev
 output could not be written), 2 a usage error (a bad or missing option or value).
 )";
 
-struct Options {
-  double sample_hz = 90;
-  double tick_hz = 0;  // 0: the server's default
+struct Options : CommonOptions {
   int step = 8;
   int max = 512;
   double seconds_per_step = 3;
   int publishers = 2;
-  std::string json;
-  std::string profile = "loopback";
-  std::string profiles_file;
-  int domain = -1;  // -1: lease one
-  std::string server;
-  std::vector<std::string> server_args;
-  std::string server_log;
-  bool late_latch = true;
 };
 
 constexpr const char* kTool = "telegrasp-bench-scale";
@@ -101,21 +91,11 @@ constexpr const char* kTool = "telegrasp-bench-scale";
 Options parse(int argc, char** argv) {
   Options o;
   cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& f, const auto& value) {
-    if (f == "--sample-hz") o.sample_hz = cli::parse_number(f, value(), 1, 1000, usage_error);
-    else if (f == "--hz") warn_deprecated_hz(kTool), o.sample_hz = cli::parse_number(f, value(), 1, 1000, usage_error);
-    else if (f == "--tick-hz") o.tick_hz = cli::parse_number(f, value(), 1, 2000, usage_error);
-    else if (f == "--step") o.step = static_cast<int>(cli::parse_whole(f, value(), 2, 4096, usage_error));
+    if (parse_common_option(kTool, f, value, o, usage_error)) return true;
+    if (f == "--step") o.step = static_cast<int>(cli::parse_whole(f, value(), 2, 4096, usage_error));
     else if (f == "--max") o.max = static_cast<int>(cli::parse_whole(f, value(), 2, 4096, usage_error));
     else if (f == "--seconds-per-step") o.seconds_per_step = cli::parse_number(f, value(), 1, 600, usage_error);
     else if (f == "--publishers") o.publishers = static_cast<int>(cli::parse_whole(f, value(), 1, 64, usage_error));
-    else if (f == "--json") o.json = value();
-    else if (f == "--profile") o.profile = cli::parse_profile(f, value(), usage_error);
-    else if (f == "--profiles") o.profiles_file = value();
-    else if (f == "--domain") o.domain = cli::parse_domain(f, value(), usage_error);
-    else if (f == "--server") o.server = value();
-    else if (f == "--server-arg") o.server_args.push_back(value());
-    else if (f == "--server-log") o.server_log = value();
-    else if (f == "--no-late-latch") o.late_latch = false;
     else return false;
     return true;
   });
