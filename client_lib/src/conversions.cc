@@ -173,7 +173,7 @@ client::ContactSet from_msg(const msg::ContactSet& m) {
   return s;
 }
 
-msg::CapsuleReport to_msg(const client::CapsuleReport& r) {
+msg::CapsuleReport to_msg(const client::CapsuleMetric& r) {
   msg::CapsuleReport m;
   m.phalanx(static_cast<std::int16_t>(r.phalanx));
   m.phalanx_name(r.phalanx_name);
@@ -184,8 +184,8 @@ msg::CapsuleReport to_msg(const client::CapsuleReport& r) {
   return m;
 }
 
-client::CapsuleReport from_msg(const msg::CapsuleReport& m) {
-  client::CapsuleReport r;
+client::CapsuleMetric from_msg(const msg::CapsuleReport& m) {
+  client::CapsuleMetric r;
   r.phalanx = m.phalanx();
   r.phalanx_name = m.phalanx_name().to_string();
   r.hit = m.hit();
@@ -247,7 +247,7 @@ client::GraspEvent from_msg(const msg::GraspEvent& m) {
   e.input_sequence = m.input_sequence();
   e.hand_error_mm = m.hand_error_mm();
   e.capsules_without_hit = m.capsules_without_hit();
-  e.capsules = from_msgs<client::CapsuleReport>(m.capsules());
+  e.capsules = from_msgs<client::CapsuleMetric>(m.capsules());
   e.contacts = from_msgs<client::ContactPoint>(m.contacts());
   e.v_WorldObject = from_msg(m.release_velocity());
   e.w_WorldObject = from_msg(m.release_angular_velocity());

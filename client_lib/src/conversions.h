@@ -57,9 +57,9 @@ msg::ContactSet to_msg(const client::ContactSet& contacts);
 client::ContactSet from_msg(const msg::ContactSet& contacts);
 
 /// A capsule report as the IDL message.
-msg::CapsuleReport to_msg(const client::CapsuleReport& report);
+msg::CapsuleReport to_msg(const client::CapsuleMetric& report);
 /// An IDL capsule report as the client type.
-client::CapsuleReport from_msg(const msg::CapsuleReport& report);
+client::CapsuleMetric from_msg(const msg::CapsuleReport& report);
 
 /// A grasp event kind as the IDL enum.
 msg::GraspEventKind to_msg(client::GraspEvent::Kind kind);

@@ -45,7 +45,7 @@ void expect_same(const client::ContactPoint& a, const client::ContactPoint& b) {
   EXPECT_EQ(a.nd_hit, b.nd_hit);
 }
 
-void expect_same(const client::CapsuleReport& a, const client::CapsuleReport& b) {
+void expect_same(const client::CapsuleMetric& a, const client::CapsuleMetric& b) {
   EXPECT_EQ(a.phalanx, b.phalanx);
   EXPECT_EQ(a.phalanx_name, b.phalanx_name);
   EXPECT_EQ(a.hit, b.hit);

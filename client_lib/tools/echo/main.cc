@@ -113,7 +113,7 @@ Json to_json(const tc::ContactPoint& c) {
               {"nd_hit", c.nd_hit}};
 }
 
-Json to_json(const tc::CapsuleReport& r) {
+Json to_json(const tc::CapsuleMetric& r) {
   return Json{{"phalanx", r.phalanx},
               {"phalanx_name", r.phalanx_name},
               {"hit", r.hit},

@@ -64,7 +64,7 @@ Json grasp_event_schema() {
                    {"input_sequence", integer()},
                    {"hand_error_mm", number()},
                    {"capsules_without_hit", integer()},
-                   {"capsules", array_of(object("telegrasp.CapsuleReport",
+                   {"capsules", array_of(object("telegrasp.CapsuleMetric",
                                                 {{"phalanx", integer()},
                                                  {"phalanx_name", string()},
                                                  {"hit", boolean()},

@@ -171,7 +171,7 @@ Json grasp_event_message(const client::GraspEvent& e) {
     j["hand_error_mm"] = e.hand_error_mm;
     j["capsules_without_hit"] = e.capsules_without_hit;
     Json capsules = Json::array();
-    for (const client::CapsuleReport& c : e.capsules)
+    for (const client::CapsuleMetric& c : e.capsules)
       capsules.push_back(Json{{"phalanx", c.phalanx},
                               {"phalanx_name", c.phalanx_name},
                               {"hit", c.hit},

@@ -56,7 +56,7 @@ Stat stat(const std::vector<double>& v) {
 double grasp_nd_abs_mean(const Record& r, int* hits) {
   double sum = 0;
   int n = 0;
-  for (const CapsuleRecord& c : r.grasp_tick_capsules)
+  for (const CapsuleMetricRecord& c : r.grasp_tick_capsules)
     if (c.hit) {
       sum += std::abs(c.nd_mm);
       ++n;
@@ -67,7 +67,7 @@ double grasp_nd_abs_mean(const Record& r, int* hits) {
 
 double grasp_min_signed_distance(const Record& r) {
   double m = INFINITY;
-  for (const CapsuleRecord& c : r.grasp_tick_capsules)
+  for (const CapsuleMetricRecord& c : r.grasp_tick_capsules)
     if (c.blocked) m = std::min(m, c.signed_distance_mm);
   return std::isfinite(m) ? m : NAN;
 }

@@ -463,7 +463,7 @@ std::optional<sim::GraspSnapshot> record_snapshot(const Record& r, const sim::Ha
     if (it == frames.end()) return std::nullopt;
     X_WorldPhalanx.push_back(X_WorldObject * *it->second);
     bool b = false;
-    for (const CapsuleRecord& c : r.grasp_tick_capsules) b = b || (c.phalanx == p.name && c.blocked);
+    for (const CapsuleMetricRecord& c : r.grasp_tick_capsules) b = b || (c.phalanx == p.name && c.blocked);
     blocked.push_back(b);
   }
   sim::GraspSnapshot snap;
@@ -471,8 +471,8 @@ std::optional<sim::GraspSnapshot> record_snapshot(const Record& r, const sim::Ha
   snap.model = &model;
   snap.X_WorldObject = X_WorldObject;
   sim::add_hand(snap, rig, X_WorldObject * *frames.at("palm"), X_WorldPhalanx, blocked);
-  for (const ContactRecord& c : r.contacts)
-    snap.contacts.push_back({X_WorldObject * c.p_object, X_WorldObject.linear() * c.n_object});
+  for (const ContactPointRecord& c : r.contacts)
+    snap.contacts.push_back({X_WorldObject * c.p_ObjectContact, X_WorldObject.linear() * c.n_Object});
   return snap;
 }
 

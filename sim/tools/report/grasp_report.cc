@@ -8,7 +8,7 @@ namespace telegrasp::report {
 
 using nlohmann::json;
 
-json capsule_json(const std::vector<CapsuleRecord>& capsules) {
+json capsule_json(const std::vector<CapsuleMetricRecord>& capsules) {
   json out = json::array();
   for (const auto& c : capsules)
     out.push_back({{"phalanx", c.phalanx}, {"hit", c.hit}, {"blocked", c.blocked},
@@ -26,8 +26,8 @@ double percentile(std::vector<double> v, double p) {
 }
 
 
-std::vector<CapsuleRecord> capsule_records(const sim::GraspMetrics& metrics, const sim::HandRig& rig) {
-  std::vector<CapsuleRecord> out;
+std::vector<CapsuleMetricRecord> capsule_records(const sim::GraspMetrics& metrics, const sim::HandRig& rig) {
+  std::vector<CapsuleMetricRecord> out;
   for (const sim::CapsuleMetric& m : metrics.capsules)
     out.push_back({rig.phalanges()[m.phalanx.value].name, m.hit, m.blocked, 1000 * m.nd, 1000 * m.signed_distance});
   return out;
@@ -107,9 +107,9 @@ json record_json(const Record& r) {
   if (!r.group.empty()) {
     auto vec = [](const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); };
     json contacts = json::array();
-    for (const ContactRecord& c : r.contacts)
-      contacts.push_back({{"phalanx", c.phalanx}, {"p_world", vec(c.p_world)}, {"n_world", vec(c.n_world)},
-                          {"p_object", vec(c.p_object)}, {"n_object", vec(c.n_object)}});
+    for (const ContactPointRecord& c : r.contacts)
+      contacts.push_back({{"phalanx", c.phalanx}, {"p_WorldContact_m", vec(c.p_WorldContact)}, {"n_World", vec(c.n_World)},
+                          {"p_ObjectContact_m", vec(c.p_ObjectContact)}, {"n_Object", vec(c.n_Object)}});
     out["group"] = r.group;
     out["participant"] = r.participant;
     out["contacts"] = std::move(contacts);
@@ -148,7 +148,7 @@ Record record_from_json(const json& j) {
     r.grasp_tick_hand_error_mm = j.at("grasp_tick").at("hand_error_mm").get<double>();
   }
   auto capsules = [](const json& arr) {
-    std::vector<CapsuleRecord> out;
+    std::vector<CapsuleMetricRecord> out;
     for (const json& c : arr)
       out.push_back({c.at("phalanx").get<std::string>(), c.at("hit").get<bool>(), c.at("blocked").get<bool>(),
                      c.at("nd_mm").is_null() ? 0.0 : c.at("nd_mm").get<double>(), c.at("signed_distance_mm").get<double>()});
@@ -161,8 +161,8 @@ Record record_from_json(const json& j) {
   r.participant = j.at("participant").get<int>();
   auto vec = [](const json& v) { return Eigen::Vector3d(v.at(0).get<double>(), v.at(1).get<double>(), v.at(2).get<double>()); };
   for (const json& c : j.at("contacts"))
-    r.contacts.push_back({c.at("phalanx").get<std::string>(), vec(c.at("p_world")), vec(c.at("n_world")), vec(c.at("p_object")),
-                          vec(c.at("n_object"))});
+    r.contacts.push_back({c.at("phalanx").get<std::string>(), vec(c.at("p_WorldContact_m")), vec(c.at("n_World")), vec(c.at("p_ObjectContact_m")),
+                          vec(c.at("n_Object"))});
   if (!j.contains("grasp_tick_hand")) return r;
   auto pose = [&](const json& p) {
     const json& q = p.at("q_wxyz");

@@ -526,7 +526,7 @@ TEST(GraspRecordJsonTest, RoundTrips) {
   const Record back = record_from_json(record_json(r));
   EXPECT_EQ(record_json(back), record_json(r));
   EXPECT_EQ(back.participant, 4);
-  EXPECT_EQ(back.contacts.at(0).p_object, Eigen::Vector3d(-0.01, 0.02, 0.03));
+  EXPECT_EQ(back.contacts.at(0).p_ObjectContact, Eigen::Vector3d(-0.01, 0.02, 0.03));
   ASSERT_EQ(back.grasp_tick_hand.size(), 2u);
   EXPECT_EQ(back.grasp_tick_hand[0].frame, "palm");
   constexpr double kRounding = 2e-6;  // 1e-6 per written number

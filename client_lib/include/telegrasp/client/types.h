@@ -81,7 +81,9 @@ struct ContactSet {
   std::vector<ContactPoint> contacts;
 };
 
-struct CapsuleReport {
+/// One capsule's metrics on the grasp tick: sim::CapsuleMetric as the server publishes it, with the
+/// phalanx's rig name (lengths in metres).
+struct CapsuleMetric {
   int phalanx = -1;
   std::string phalanx_name;
   bool hit = false;                    ///< False: "no hit", kept apart from nd = 0.
@@ -89,6 +91,9 @@ struct CapsuleReport {
   double signed_distance = 0;          ///< m
   bool blocked = false;
 };
+
+/// The name of the previous release; goes in the next.
+using CapsuleReport [[deprecated("use CapsuleMetric")]] = CapsuleMetric;
 
 struct GraspEvent {
   enum class Kind { kGrasp, kRelease };
@@ -104,7 +109,7 @@ struct GraspEvent {
   std::uint64_t input_sequence = 0;
   double hand_error_mm = 0;            ///< Grasp events.
   int capsules_without_hit = 0;        ///< Grasp events.
-  std::vector<CapsuleReport> capsules; ///< Grasp events.
+  std::vector<CapsuleMetric> capsules; ///< Grasp events.
   std::vector<ContactPoint> contacts;  ///< Grasp events.
   Eigen::Vector3d v_WorldObject{0, 0, 0};  ///< Release events: velocity handed to physics.
   Eigen::Vector3d w_WorldObject{0, 0, 0};
