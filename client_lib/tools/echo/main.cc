@@ -11,6 +11,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <map>
@@ -37,6 +38,7 @@ const std::map<std::string, unsigned, std::less<>>& topic_bits() {
   static const std::map<std::string, unsigned, std::less<>> bits = {
       {"HandSkeleton", tc::kHandSkeletons}, {"GraspState", tc::kGraspStates}, {"ContactSet", tc::kContactSets},
       {"GraspEvent", tc::kGraspEvents},     {"SceneState", tc::kSceneStates}, {"ServerStatus", tc::kServerStatuses},
+      {"ObjectGeometry", tc::kObjectGeometries},
   };
   return bits;
 }
@@ -44,7 +46,8 @@ const std::map<std::string, unsigned, std::less<>>& topic_bits() {
 constexpr const char* kUsage = R"(usage: telegrasp-echo [options]
 Prints every sample a telegrasp server publishes as one JSON object per line on stdout.
   --topics LIST    comma separated, from HandSkeleton,GraspState,ContactSet,GraspEvent,
-                   SceneState,ServerStatus (default: all)
+                   SceneState,ServerStatus,ObjectGeometry (default: all; ObjectGeometry prints
+                   a summary of each model's mesh, not the mesh)
   --domain N       DDS domain, 0..232 (default 0)
   --profile NAME   participant profile: loopback, lan, wan (default loopback)
   --profiles FILE  Fast DDS XML profiles (default $TELEGRASP_PROFILES, else the shipped file)
@@ -182,6 +185,18 @@ Json to_json(const tc::ServerStatus& s) {
               {"models", s.models}};
 }
 
+// A summary: the mesh itself is too large for a line.
+Json to_json(const tc::ObjectGeometry& g) {
+  char hash[19];
+  std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(g.content_hash));
+  return Json{{"topic", "ObjectGeometry"},     {"model", g.model},
+              {"content_hash", hash},          {"vertex_count", g.vertex_count},
+              {"triangle_count", g.triangle_count}, {"mesh_omitted", g.mesh_omitted},
+              {"p_ObjectMin", to_json(g.p_ObjectMin)}, {"p_ObjectMax", to_json(g.p_ObjectMax)},
+              {"mass_kg", g.mass_kg},          {"volume_m3", g.volume_m3},
+              {"inertia_diagonal", to_json(g.inertia_diagonal)}};
+}
+
 // ---------------------------------------------------------------------------------------------
 // Command line.
 
@@ -212,7 +227,7 @@ unsigned parse_topics(const std::string& list) {
   for (std::string name; std::getline(stream, name, ',');) {
     const auto it = topic_bits().find(name);
     if (it == topic_bits().end())
-      usage_error("unknown topic '" + name + "' in --topics (known: HandSkeleton,GraspState,ContactSet,GraspEvent,SceneState,ServerStatus)");
+      usage_error("unknown topic '" + name + "' in --topics (known: HandSkeleton,GraspState,ContactSet,GraspEvent,SceneState,ServerStatus,ObjectGeometry)");
     bits |= it->second;
   }
   if (bits == 0) usage_error("--topics names no topic");
@@ -302,6 +317,7 @@ int main(int argc, char** argv) {
   client->on_grasp_event([&](const tc::GraspEvent& e) { printer.print(e); });
   client->on_scene_state([&](const tc::SceneState& s) { printer.print(s); });
   client->on_server_status([&](const tc::ServerStatus& s) { printer.print(s); });
+  client->on_object_geometry([&](const std::shared_ptr<const tc::ObjectGeometry>& g) { printer.print(*g); });
 
   const auto start = std::chrono::steady_clock::now();
   const auto deadline = args.seconds ? start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
