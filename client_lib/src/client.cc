@@ -101,7 +101,7 @@ struct Client::Impl {
   void received(const msg::ServerStatus& m, const dds::InstanceHandle_t& instance);
   void received(const msg::ObjectGeometry& m, const dds::InstanceHandle_t& instance);
   // The (checked) geometry `m` describes, built from a cached one with the same content hash: the
-  // very same object if nothing differs, else a new one sharing its mesh; null if none is cached.
+  // very same object if nothing differs, else a new one with a copy of its mesh; null if none is cached.
   std::shared_ptr<const ObjectGeometry> cached_geometry(const msg::ObjectGeometry& m);
   // Called when the server disposes a hand's instance (the hand left): it leaves latest_*.
   void disposed(const msg::HandSkeleton*, const dds::InstanceHandle_t& instance) { forget(skeletons, instance); }

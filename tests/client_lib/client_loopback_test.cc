@@ -491,7 +491,7 @@ msg::ObjectGeometry tetrahedron_geometry(const std::string& model) {
 }
 
 // Geometries arrive checked and cached by content hash: a damaged one is dropped, the same one
-// arriving again is the same object, and the same mesh under another name shares the vertices.
+// arriving again is the same object, and the same mesh under another name is taken from the cache.
 TEST(ClientLoopbackTest, ObjectGeometriesAreCheckedAndCachedByHash) {
   const int domain = 205;
   idl::DdsParticipant server(domain, "loopback");
