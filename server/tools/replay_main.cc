@@ -3,11 +3,11 @@
 #include "replay.h"
 #include "replay_export.h"
 
+#include "cli.h"
+#include "progress_line.h"
+
 #include <nlohmann/json.hpp>
 
-#include <unistd.h>
-
-#include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -33,36 +33,34 @@ Options:
   --json FILE              also write the result as JSON
   -h, --help               this text
 
-Exit status:
+Exit status (1 is a divergence here, not a runtime failure as for the other tools):
   0  identical (or contacts exported)
   1  the replay diverges from the recording
-  2  bad usage, or the recording's header cannot be read or the scene rebuilt
+  2  a usage error (a bad or missing option or value), or the recording's header cannot be
+     read, the scene rebuilt or an output file written
   3  the recording is truncated or corrupt: everything before the damage was replayed
      (exported) and reported
 )";
 
-[[noreturn]] void usage_error(const std::string& what) {
-  std::cerr << "telegrasp-replay: " << what << "\n(see telegrasp-replay --help)\n";
-  std::exit(2);
-}
+[[noreturn]] void usage_error(const std::string& what) { telegrasp::cli::usage_exit("telegrasp-replay", what); }
 
-// Progress on stderr for files big enough to take a while; at most once a second.
+// Progress on stderr for files big enough to take a while.
 class Progress {
  public:
   void operator()(const RecordingReader& r) {
     if (r.file_size() < (8u << 20)) return;
-    const auto now = std::chrono::steady_clock::now();
     const bool last = r.offset() >= r.file_size() || r.damage() || r.complete();
-    if (!last && now - last_ < std::chrono::seconds(1)) return;
-    last_ = now;
-    std::fprintf(stderr, "%stelegrasp-replay: %3.0f%% (%llu records)%s", tty_ ? "\r" : "",
-                 100.0 * static_cast<double>(r.offset()) / static_cast<double>(r.file_size()),
-                 static_cast<unsigned long long>(r.records()), tty_ && !last ? "" : "\n");
+    if (!last && !line_.due()) return;
+    char text[96];
+    std::snprintf(text, sizeof text, "telegrasp-replay: %3.0f%% (%llu records)",
+                  100.0 * static_cast<double>(r.offset()) / static_cast<double>(r.file_size()),
+                  static_cast<unsigned long long>(r.records()));
+    if (last) line_.finish(text);
+    else line_.show(text);
   }
 
  private:
-  bool tty_ = isatty(fileno(stderr));
-  std::chrono::steady_clock::time_point last_{};
+  telegrasp::tools::ProgressLine line_;
 };
 
 nlohmann::json damage_json(const std::optional<RecordingDamage>& d) {
@@ -83,29 +81,15 @@ void write_json(const std::string& path, const nlohmann::json& j) {
 
 int main(int argc, char** argv) {
   std::string recording, objects_dir, csv_path, json_path;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) usage_error(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "-h" || a == "--help") {
-      std::cout << kUsage;
-      return 0;
-    } else if (a == "--objects") {
-      objects_dir = value();
-    } else if (a == "--export-contacts") {
-      csv_path = value();
-    } else if (a == "--json") {
-      json_path = value();
-    } else if (!a.empty() && a[0] == '-') {
-      usage_error("unknown option '" + a + "'");
-    } else if (recording.empty()) {
-      recording = a;
-    } else {
-      usage_error("one recording at a time (got '" + recording + "' and '" + a + "')");
-    }
-  }
+  telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
+    if (a == "--objects") objects_dir = value();
+    else if (a == "--export-contacts") csv_path = value();
+    else if (a == "--json") json_path = value();
+    else if (telegrasp::cli::is_option(a)) return false;
+    else if (recording.empty()) recording = a;
+    else usage_error("one recording at a time (got '" + recording + "' and '" + a + "')");
+    return true;
+  });
   if (recording.empty()) usage_error("no recording given");
 
   Progress progress;

@@ -1,4 +1,4 @@
-// Building object models from meshes, files and the built-in stand-ins.
+// Building object models from meshes and mesh files.
 #include "telegrasp/sim/object_model.h"
 
 #include "telegrasp/sim/mesh_loading.h"
@@ -59,13 +59,12 @@ ObjectModelPtr make_object_model_in_model_frame(const std::string& name, Triangl
   return model;
 }
 
-ObjectModelPtr load_object_model(const std::string& path) {
+ObjectModelPtr load_object_model(const std::string& path, double mass_kg) {
   const std::string stem = std::filesystem::path(path).stem().string();
-  const auto known = find_protocol_object(stem);
-  return make_object_model(stem, load_mesh_file(path), known ? known->mass_kg : 0.0, path);
+  return make_object_model(stem, load_mesh_file(path), mass_kg, path);
 }
 
-std::vector<ObjectModelPtr> load_object_dir(const std::string& dir) {
+std::vector<ObjectModelPtr> load_object_dir(const std::string& dir, const MassLookup& mass_kg_of) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw MeshLoadError(dir + ": not a folder");
@@ -75,12 +74,11 @@ std::vector<ObjectModelPtr> load_object_dir(const std::string& dir) {
   if (files.empty()) throw MeshLoadError(dir + ": no mesh file (PLY, OBJ, STL, glTF, ...) in this folder");
   std::sort(files.begin(), files.end());
   std::vector<ObjectModelPtr> models;
-  for (const auto& f : files) models.push_back(load_object_model(f));
+  for (const auto& f : files) {
+    const double mass_kg = mass_kg_of ? mass_kg_of(std::filesystem::path(f).stem().string()) : 0.0;
+    models.push_back(load_object_model(f, mass_kg));
+  }
   return models;
-}
-
-ObjectModelPtr make_standin_model(const ProtocolObject& object) {
-  return make_object_model(object.name, make_standin_mesh(object), object.mass_kg, "built-in stand-in");
 }
 
 }  // namespace telegrasp::sim

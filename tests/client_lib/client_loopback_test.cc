@@ -1,11 +1,13 @@
-// Tests telegrasp::client::Client against raw Fast DDS readers and writers on a private DDS
-// domain (loopback profile): what it publishes arrives with the right key, fields and sequence
-// numbers; what a server would publish reaches its callbacks and polling functions.
+// Tests telegrasp::client::Client against raw Fast DDS readers and writers, each test on a DDS
+// domain of its own (DomainLease, loopback profile): what it publishes arrives with the right
+// key, fields and sequence numbers; what a server would publish reaches its callbacks and polling
+// functions.
 #include "telegrasp/client/client.h"
 #include "telegrasp/idl/dds_participant.h"
 #include "telegrasp/idl/geometry_hash.h"
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
+#include "test_domain.h"
 
 #include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
 #include <fastdds/dds/core/status/SubscriptionMatchedStatus.hpp>
@@ -26,6 +28,7 @@ namespace {
 
 namespace dds = eprosima::fastdds::dds;
 using namespace std::chrono_literals;
+using telegrasp::testing::DomainLease;
 
 // Generous: discovery on a loaded machine can take seconds; passing tests return at once.
 constexpr auto kTimeout = 20s;
@@ -82,7 +85,8 @@ ClientOptions options(const std::string& id, int domain, unsigned topics) {
 // ---------------------------------------------------------------------------------------------
 
 TEST(ClientLoopbackTest, PublishedControllerStatesArriveNumberedWithTheirFields) {
-  const int domain = 201;
+  const DomainLease lease;  // a domain no concurrent test uses
+  const int domain = lease.domain();
   idl::DdsParticipant server(domain, "loopback");
   dds::DataReader* reader = server.reader<msg::ControllerStatePubSubType>(idl::kControllerStateTopic);
   server.reader<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic);
@@ -186,7 +190,8 @@ TEST(ClientLoopbackTest, PublishedControllerStatesArriveNumberedWithTheirFields)
 }
 
 TEST(ClientLoopbackTest, SceneCommandsArriveNumbered) {
-  const int domain = 202;
+  const DomainLease lease;
+  const int domain = lease.domain();
   idl::DdsParticipant server(domain, "loopback");
   dds::DataReader* reader = server.reader<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic);
   server.reader<msg::ControllerStatePubSubType>(idl::kControllerStateTopic);
@@ -247,7 +252,8 @@ msg::HandSkeleton make_skeleton(const std::string& id, std::uint8_t side, std::u
 }
 
 TEST(ClientLoopbackTest, ServerOutputsReachCallbacksAndPolling) {
-  const int domain = 203;
+  const DomainLease lease;
+  const int domain = lease.domain();
   idl::DdsParticipant server(domain, "loopback");
   dds::DataWriter* skeleton_writer = server.writer<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic);
   dds::DataWriter* event_writer = server.writer<msg::GraspEventPubSubType>(idl::kGraspEventTopic);
@@ -346,7 +352,8 @@ TEST(ClientLoopbackTest, ServerOutputsReachCallbacksAndPolling) {
 }
 
 TEST(ClientLoopbackTest, WaitForServerNeedsAMatchedReaderAndAStatus) {
-  const int domain = 204;
+  const DomainLease lease;
+  const int domain = lease.domain();
   Client client(options("waiter", domain, kAllTopics));
   EXPECT_FALSE(client.wait_for_server(100ms));  // nobody there
   idl::DdsParticipant server(domain, "loopback");
@@ -381,7 +388,8 @@ TEST(ClientLoopbackTest, WaitForServerNeedsAMatchedReaderAndAStatus) {
 
 // Samples that arrive before a callback is set are not lost to it: setting it catches it up.
 TEST(ClientLoopbackTest, ANewCallbackIsCaughtUpWithWhatArrivedBefore) {
-  const int domain = 209;
+  const DomainLease lease;
+  const int domain = lease.domain();
   idl::DdsParticipant server(domain, "loopback");
   dds::DataWriter* status_writer = server.writer<msg::ServerStatusPubSubType>(idl::kServerStatusTopic);
   dds::DataWriter* event_writer = server.writer<msg::GraspEventPubSubType>(idl::kGraspEventTopic);
@@ -424,7 +432,8 @@ TEST(ClientLoopbackTest, ANewCallbackIsCaughtUpWithWhatArrivedBefore) {
 }
 
 TEST(ClientLoopbackTest, NoCallbackRunsAfterTheDestructorReturns) {
-  const int domain = 206;
+  const DomainLease lease;
+  const int domain = lease.domain();
   idl::DdsParticipant server(domain, "loopback");
   dds::DataWriter* skeleton_writer = server.writer<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic);
   std::atomic<bool> destroyed{false}, called_after_destroy{false};
@@ -437,10 +446,10 @@ TEST(ClientLoopbackTest, NoCallbackRunsAfterTheDestructorReturns) {
   });
   // A writer keeps publishing while the client goes away.
   std::atomic<bool> stop{false};
+  std::atomic<std::uint64_t> written{0};
   std::thread spammer([&] {
-    std::uint64_t tick = 0;
     while (!stop) {
-      msg::HandSkeleton s = make_skeleton("bob", msg::HAND_RIGHT, ++tick);
+      msg::HandSkeleton s = make_skeleton("bob", msg::HAND_RIGHT, ++written);
       skeleton_writer->write(&s);
       std::this_thread::sleep_for(1ms);
     }
@@ -449,7 +458,9 @@ TEST(ClientLoopbackTest, NoCallbackRunsAfterTheDestructorReturns) {
   client.reset();
   destroyed = true;
   const int calls_at_destruction = calls;
-  std::this_thread::sleep_for(50ms);  // let the writer keep going (not an assertion on timing)
+  // The writer goes on for 50 more samples: a callback after the destructor would show.
+  const std::uint64_t written_at_destruction = written;
+  EXPECT_TRUE(eventually([&] { return written >= written_at_destruction + 50; }));
   stop = true;
   spammer.join();
   EXPECT_TRUE(delivered);
@@ -458,7 +469,8 @@ TEST(ClientLoopbackTest, NoCallbackRunsAfterTheDestructorReturns) {
 }
 
 TEST(ClientLoopbackTest, AThrowingCallbackDoesNotStopDelivery) {
-  const int domain = 207;
+  const DomainLease lease;
+  const int domain = lease.domain();
   idl::DdsParticipant server(domain, "loopback");
   dds::DataWriter* skeleton_writer = server.writer<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic);
   Client client(options("thrower", domain, kHandSkeletons));
@@ -493,7 +505,8 @@ msg::ObjectGeometry tetrahedron_geometry(const std::string& model) {
 // Geometries arrive checked and cached by content hash: a damaged one is dropped, the same one
 // arriving again is the same object, and the same mesh under another name is taken from the cache.
 TEST(ClientLoopbackTest, ObjectGeometriesAreCheckedAndCachedByHash) {
-  const int domain = 205;
+  const DomainLease lease;
+  const int domain = lease.domain();
   idl::DdsParticipant server(domain, "loopback");
   dds::DataWriter* writer = server.writer<msg::ObjectGeometryPubSubType>(idl::kObjectGeometryTopic);
   Client client(options("viewer", domain, kObjectGeometries));

@@ -1,6 +1,7 @@
 // Tests the start-up checks of telegrasp::client::Client: bad options throw std::runtime_error
 // naming the field (or file, or profile) at fault; good options make a working client.
 #include "telegrasp/client/client.h"
+#include "test_domain.h"
 
 #include <gtest/gtest.h>
 
@@ -10,13 +11,13 @@
 namespace telegrasp::client {
 namespace {
 
-// The first DDS domain of this file; each test that joins one uses its own.
-constexpr int kDomain = 205;
-
+// Options that make a working client, on a DDS domain no concurrent test uses. The lease lives
+// as long as the test process (each test runs in a process of its own under ctest).
 ClientOptions good_options() {
+  static const telegrasp::testing::DomainLease lease;
   ClientOptions o;
   o.client_id = "options-test";
-  o.domain = kDomain;
+  o.domain = lease.domain();
   o.topics = 0;
   return o;
 }
@@ -92,10 +93,9 @@ TEST(ClientOptionsTest, RejectsUnknownTopicBits) {
 TEST(ClientOptionsTest, AcceptsTheLimits) {
   ClientOptions o = good_options();
   o.client_id = std::string(64, 'x');
-  o.domain = kDomain + 1;
   Client client(o);
   EXPECT_EQ(client.client_id(), o.client_id);
-  // Nobody else is on this domain: no server.
+  // Nobody else is on this (leased) domain: no server.
   EXPECT_FALSE(client.wait_for_server(std::chrono::milliseconds(50)));
 }
 

@@ -1,8 +1,9 @@
-// Tests client_lib/tools/echo_main.cc: telegrasp-echo, run as a process, prints what raw Fast DDS
+// Tests client_lib/tools/echo/main.cc: telegrasp-echo, run as a process, prints what raw Fast DDS
 // writers publish as one JSON object per line, and exits after --count lines.
 #include "telegrasp/idl/dds_participant.h"
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
+#include "test_domain.h"
 
 #include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
 #include <gtest/gtest.h>
@@ -21,6 +22,7 @@ namespace {
 
 namespace dds = eprosima::fastdds::dds;
 using namespace std::chrono_literals;
+using telegrasp::testing::DomainLease;
 
 bool matched(dds::DataWriter* writer) {
   dds::PublicationMatchedStatus status;
@@ -28,7 +30,8 @@ bool matched(dds::DataWriter* writer) {
 }
 
 TEST(EchoToolTest, PrintsOneJsonObjectPerSampleAndStopsAtTheCount) {
-  const int domain = 208;
+  const DomainLease lease;  // held by the echo process too while it runs
+  const int domain = lease.domain();
   // Owns every DDS entity of the test, so a failed assertion below frees them too.
   idl::DdsParticipant participant(domain, "loopback");
   dds::DataWriter* status_writer = participant.writer<msg::ServerStatusPubSubType>(idl::kServerStatusTopic);
@@ -80,8 +83,8 @@ TEST(EchoToolTest, PrintsOneJsonObjectPerSampleAndStopsAtTheCount) {
   EXPECT_EQ(event_line->at("kind"), "release");
   EXPECT_EQ(event_line->at("hand").at("client_id"), "bot-a");
   EXPECT_EQ(event_line->at("hand").at("side"), "left");
-  EXPECT_EQ(event_line->at("v_WorldObject").at(2), -0.5);
-  EXPECT_EQ(event_line->at("X_WorldObject").at("q").at(0), 1.0);  // w first
+  EXPECT_EQ(event_line->at("v_WorldObject_m_per_s").at(2), -0.5);
+  EXPECT_EQ(event_line->at("X_WorldObject").at("q_wxyz").at(0), 1.0);  // w first
 }
 
 }  // namespace

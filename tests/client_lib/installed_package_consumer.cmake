@@ -1,13 +1,22 @@
 # ctest script (cmake -P): installs the telegrasp_client component of BUILD_DIR into a scratch
 # prefix, checks the exported targets, then configures, builds and runs tests/consumer against
-# that prefix only. Inputs: BUILD_DIR, WORK_DIR, CONSUMER_SOURCE_DIR, CXX_COMPILER.
+# that prefix only. Inputs: BUILD_DIR, WORK_DIR, CONSUMER_SOURCE_DIR, CXX_COMPILER, and the DDS
+# domain for the consumer in the environment (TELEGRASP_TEST_DOMAIN: run under
+# telegrasp-test-domains, which holds it for this script and the consumer).
 cmake_minimum_required(VERSION 3.22)
 foreach(var BUILD_DIR WORK_DIR CONSUMER_SOURCE_DIR CXX_COMPILER)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "installed_package_consumer.cmake: -D${var}=... is required")
   endif()
 endforeach()
+if(NOT "$ENV{TELEGRASP_TEST_DOMAIN}" MATCHES "^[0-9]+$")
+  message(FATAL_ERROR "installed_package_consumer.cmake: TELEGRASP_TEST_DOMAIN is not set; run it under telegrasp-test-domains")
+endif()
 
+# A folder of this run's own, so that two ctest runs on one build tree do not share it; removed
+# when the test passes.
+string(RANDOM LENGTH 8 ALPHABET abcdefghijklmnopqrstuvwxyz0123456789 run)
+set(WORK_DIR ${WORK_DIR}/run-${run})
 set(prefix ${WORK_DIR}/prefix)
 file(REMOVE_RECURSE ${WORK_DIR})
 
@@ -49,7 +58,7 @@ execute_process(COMMAND ${CMAKE_COMMAND} -S ${CONSUMER_SOURCE_DIR} -B ${WORK_DIR
 execute_process(COMMAND ${CMAKE_COMMAND} --build ${WORK_DIR}/build COMMAND_ERROR_IS_FATAL ANY)
 
 message(STATUS "4. run it")
-execute_process(COMMAND ${WORK_DIR}/build/telegrasp-consumer
+execute_process(COMMAND ${WORK_DIR}/build/telegrasp-consumer $ENV{TELEGRASP_TEST_DOMAIN}
   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 message(STATUS "consumer output:\n${out}${err}")
 if(NOT rc EQUAL 0)
@@ -58,3 +67,4 @@ endif()
 if(NOT out MATCHES "published sample 1")
   message(FATAL_ERROR "telegrasp-consumer did not publish")
 endif()
+file(REMOVE_RECURSE ${WORK_DIR})

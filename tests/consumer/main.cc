@@ -1,13 +1,19 @@
 // A minimal program built against the installed telegrasp package: a bad option is rejected,
-// then a client on a private domain publishes one sample. The library finds its Fast DDS
-// profiles in the installed prefix by itself.
+// then a client on the DDS domain given as the argument publishes one sample. The library finds
+// its Fast DDS profiles in the installed prefix by itself.
+//   telegrasp-consumer DOMAIN      (a domain nobody else uses; the test leases one)
 #include <telegrasp/client/client.h>
 
 #include <iostream>
 #include <stdexcept>
+#include <string>
 
-int main() {
+int main(int argc, char** argv) {
   using namespace telegrasp::client;
+  if (argc != 2) {
+    std::cerr << "usage: telegrasp-consumer DOMAIN\n";
+    return 2;
+  }
 
   ClientOptions bad;
   bad.client_id = "";
@@ -21,7 +27,7 @@ int main() {
 
   ClientOptions options;
   options.client_id = "consumer";
-  options.domain = 209;  // private: nobody else is here
+  options.domain = std::stoi(argv[1]);  // private: nobody else is here
   options.topics = kServerStatuses;
   Client client(options);
   ControllerSample sample;

@@ -3,6 +3,7 @@
 #include "telegrasp/idl/dds_participant.h"
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
+#include "test_domain.h"
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
@@ -19,8 +20,12 @@ namespace {
 namespace dds = eprosima::fastdds::dds;
 using namespace std::chrono_literals;
 
-// Private: no other test joins it. One participant at a time (one per process).
-constexpr int kDomain = 210;
+// A domain no concurrent test uses, leased for the life of the test process. One participant at
+// a time (one per process).
+int test_domain() {
+  static const testing::DomainLease lease;
+  return lease.domain();
+}
 // Generous: a loaded machine can be slow to match; a passing test returns at once.
 constexpr auto kTimeout = 20s;
 
@@ -36,12 +41,12 @@ std::string error_of(F&& f) {
 }
 
 TEST(DdsParticipantTest, NamesAParticipantProfileNotInTheFile) {
-  const std::string error = error_of([] { DdsParticipant p(kDomain, "no_such_profile"); });
+  const std::string error = error_of([] { DdsParticipant p(test_domain(), "no_such_profile"); });
   EXPECT_NE(error.find("'no_such_profile'"), std::string::npos) << error;
 }
 
 TEST(DdsParticipantTest, NamesTheTopicAndWriterOrReaderProfileNotInTheFile) {
-  DdsParticipant p(kDomain, kDefaultParticipantProfile);
+  DdsParticipant p(test_domain(), kDefaultParticipantProfile);
   const std::string writer_error = error_of([&] { p.writer<msg::ServerStatusPubSubType>("test/Status", "test/NoQos"); });
   EXPECT_NE(writer_error.find("test/Status"), std::string::npos) << writer_error;
   EXPECT_NE(writer_error.find("'test/NoQos.writer'"), std::string::npos) << writer_error;
@@ -51,7 +56,7 @@ TEST(DdsParticipantTest, NamesTheTopicAndWriterOrReaderProfileNotInTheFile) {
 }
 
 TEST(DdsParticipantTest, MakesOneTopicPerNameAndRejectsASecondTypeOnIt) {
-  DdsParticipant p(kDomain, kDefaultParticipantProfile);
+  DdsParticipant p(test_domain(), kDefaultParticipantProfile);
   // A second writer and a reader on the same topic reuse it (a second create_topic would fail).
   EXPECT_NE(p.writer<msg::ServerStatusPubSubType>(kServerStatusTopic), nullptr);
   EXPECT_NE(p.writer<msg::ServerStatusPubSubType>(kServerStatusTopic), nullptr);
@@ -64,7 +69,7 @@ TEST(DdsParticipantTest, MakesOneTopicPerNameAndRejectsASecondTypeOnIt) {
 }
 
 TEST(DdsParticipantTest, ItsOwnReaderTakesWhatItsWriterWrites) {
-  DdsParticipant p(kDomain, kDefaultParticipantProfile);
+  DdsParticipant p(test_domain(), kDefaultParticipantProfile);
   // ServerStatus: reliable and transient local, so the sample waits for the reader.
   dds::DataWriter* writer = p.writer<msg::ServerStatusPubSubType>(kServerStatusTopic);
   msg::ServerStatus sent;
@@ -87,12 +92,12 @@ TEST(DdsParticipantTest, ItsOwnReaderTakesWhatItsWriterWrites) {
 TEST(DdsParticipantTest, DestructionLeavesNoParticipantOnTheDomain) {
   auto* factory = dds::DomainParticipantFactory::get_instance();
   {
-    DdsParticipant p(kDomain, kDefaultParticipantProfile);
+    DdsParticipant p(test_domain(), kDefaultParticipantProfile);
     p.writer<msg::GraspEventPubSubType>(kGraspEventTopic);
     p.reader<msg::ControllerStatePubSubType>(kControllerStateTopic);
-    EXPECT_EQ(factory->lookup_participant(kDomain), p.get());
+    EXPECT_EQ(factory->lookup_participant(test_domain()), p.get());
   }
-  EXPECT_EQ(factory->lookup_participant(kDomain), nullptr);
+  EXPECT_EQ(factory->lookup_participant(test_domain()), nullptr);
 }
 
 }  // namespace

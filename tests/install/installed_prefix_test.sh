@@ -4,11 +4,15 @@
 # empty mounts (unshare -m), the installed server serves two objects and the installed bot grasps
 # them over loopback DDS; telegrasp-eval finds its rig and report data. Also checks that no
 # installed file names the source or build tree.
-# Usage: installed_prefix_test.sh BUILD_DIR SOURCE_DIR [DOMAIN]   (default domain: from the pid)
+# Usage: telegrasp-test-domains installed_prefix_test.sh BUILD_DIR SOURCE_DIR
+#    or: installed_prefix_test.sh BUILD_DIR SOURCE_DIR DOMAIN
+# The DDS domain is the one telegrasp-test-domains leased (TELEGRASP_TEST_DOMAIN), held by this
+# script and every process it starts, so no concurrent test run uses it.
 set -euo pipefail
 build_dir=$(realpath "$1")
 source_dir=$(realpath "$2")
-domain=${3:-$((10 + $$ % 200))}
+domain=${3:-${TELEGRASP_TEST_DOMAIN:-}}
+[ -n "$domain" ] || { echo "installed_prefix_test.sh: no DDS domain: run it under telegrasp-test-domains or pass DOMAIN" >&2; exit 2; }
 work=$(mktemp -d /tmp/telegrasp-installed.XXXXXX)
 trap 'rm -rf "$work"' EXIT
 prefix=$work/prefix

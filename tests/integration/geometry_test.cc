@@ -1,11 +1,12 @@
-// Integration tests of the ObjectGeometry topic on loopback with real processes: a client that
-// joins after the server has started receives every model's mesh, intact and equal to the
-// server's model; a bot given no mesh files plans on the meshes it receives and grasps objects it
-// has no other model of.
+// Integration tests of the ObjectGeometry topic on loopback with real processes, each on a DDS
+// domain leased for it: a client that joins after the server has started receives every model's
+// mesh, intact and equal to the server's model; a bot given no mesh files plans on the meshes it
+// receives and grasps objects it has no other model of. Times are printed, not asserted.
 #include "process.h"
 #include "telegrasp/client/client.h"
 #include "telegrasp/sim/object_model.h"
 #include "telegrasp/sim/standin_objects.h"
+#include "test_domain.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -25,12 +26,6 @@ namespace {
 
 using namespace std::chrono_literals;
 namespace fs = std::filesystem;
-
-fs::path temp_dir() {
-  const fs::path dir = fs::temp_directory_path() / "telegrasp_integration";
-  fs::create_directories(dir);
-  return dir;
-}
 
 std::string read_file(const std::string& path) {
   std::ifstream in(path);
@@ -53,7 +48,7 @@ bool eventually(F done, std::chrono::milliseconds timeout) {
 std::unique_ptr<ChildProcess> start_server(int domain, const std::vector<std::string>& extra, const std::string& name) {
   std::vector<std::string> args{bin("telegrasp-server"), "--domain", std::to_string(domain), "--profile", "loopback"};
   args.insert(args.end(), extra.begin(), extra.end());
-  return std::make_unique<ChildProcess>(args, (temp_dir() / (name + "_server.log")).string());
+  return std::make_unique<ChildProcess>(args, work_path(name + "_server.log"));
 }
 
 // Waits until the server has printed its start-up line (its geometry is published before it).
@@ -104,7 +99,8 @@ double receive_all_geometries(int domain, std::map<std::string, std::shared_ptr<
 // A late joiner gets the 30 stand-ins: each intact (its hash recomputed from what arrived), with
 // the triangles and (within float32 rounding) the vertices, bounds and mass of the server's model.
 TEST(ObjectGeometryTest, ALateJoinerReceivesEveryStandInIntact) {
-  const int domain = 171;
+  const DomainLease lease;
+  const int domain = lease.domain();
   auto server = start_server(domain, {}, "geometry_standins");
   ASSERT_TRUE(server_started(*server)) << server->log_tail();
   std::this_thread::sleep_for(500ms);  // well after the geometry was written
@@ -142,7 +138,8 @@ TEST(ObjectGeometryTest, ALateJoinerReceivesEveryYcbMeshIntact) {
   const char* env = std::getenv("TELEGRASP_YCB_DIR");
   const std::string dir = env ? env : "";
   if (dir.empty() || !fs::is_directory(dir)) GTEST_SKIP() << "no YCB meshes (TELEGRASP_YCB_DIR)";
-  const int domain = 172;
+  const DomainLease lease;
+  const int domain = lease.domain();
   auto server = start_server(domain, {"--objects", dir}, "geometry_ycb");
   ASSERT_TRUE(server_started(*server)) << server->log_tail();
   std::this_thread::sleep_for(500ms);
@@ -176,8 +173,9 @@ void write_obj(const fs::path& path, const sim::TriangleMesh& mesh) {
 // meshes under names that are no protocol object, so the bot has no stand-in to fall back on, and
 // every trial still ends with a record, most of them held.
 TEST(ObjectGeometryTest, ABotWithoutMeshFilesPlansOnReceivedGeometry) {
-  const int domain = 173;
-  const fs::path meshes = temp_dir() / "geometry_meshes";
+  const DomainLease lease;
+  const int domain = lease.domain();
+  const fs::path meshes = work_path("geometry_meshes");
   fs::remove_all(meshes);
   fs::create_directories(meshes);
   for (const char* name : {"005_tomato_soup_can", "009_gelatin_box", "055_baseball"})
@@ -186,7 +184,7 @@ TEST(ObjectGeometryTest, ABotWithoutMeshFilesPlansOnReceivedGeometry) {
   ASSERT_TRUE(server_started(*server)) << server->log_tail();
 
   const int trials = 2;
-  const std::string json = (temp_dir() / "geometry_bot.json").string(), log = (temp_dir() / "geometry_bot.log").string();
+  const std::string json = work_path("geometry_bot.json"), log = work_path("geometry_bot.log");
   ChildProcess bot({bin("telegrasp-bot"), "--client-id", "wire-bot", "--trials", std::to_string(trials), "--seed", "3", "--domain",
                     std::to_string(domain), "--profile", "loopback", "--json", json, "--timeout", "30"},
                    log);

@@ -1,5 +1,5 @@
-// What the integration tests share about the programs they start: where they are, and
-// ChildProcess (sim/tools/common) to run them.
+// What the integration tests share about the programs they start: where they are, where their
+// files go, and ChildProcess (sim/tools/common) to run them.
 #pragma once
 
 #include "child_process.h"
@@ -12,5 +12,11 @@ using tools::ChildProcess;
 
 /// The path of the tool `name`, built next to the test program (build/bin).
 std::string bin(const std::string& name);
+
+/// The path of `name` in this test process's own scratch folder, made on first use
+/// ($TMPDIR/telegrasp_integration.XXXXXX, so concurrent runs never share one): configurations,
+/// logs and results of the programs a test starts. The folder is removed at exit when every test
+/// passed and kept, its path printed, when one failed.
+std::string work_path(const std::string& name);
 
 }  // namespace telegrasp::testing

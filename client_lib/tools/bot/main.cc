@@ -60,14 +60,13 @@ Options:
                       (default 20)
   -h, --help          this text
 
-Exit status: 0 when every trial is done, 1 if no server was found or it went silent,
-2 for a bad option, 130 when stopped by SIGINT or SIGTERM (the table shows the trials done).
+Exit status: 0 every trial done, 1 a runtime failure (the --objects folder or a mesh in it
+missing or unreadable, the --json file not writable, DDS could not start, no server found or it
+went silent), 2 a usage error (a bad or missing option or value), 130 stopped by SIGINT or
+SIGTERM (the table shows the trials done).
 )";
 
-[[noreturn]] void usage_error(const std::string& what) {
-  std::cerr << "telegrasp-bot: " << what << "\n(see telegrasp-bot --help)\n";
-  std::exit(2);
-}
+[[noreturn]] void usage_error(const std::string& what) { telegrasp::cli::usage_exit("telegrasp-bot", what); }
 
 Options parse(int argc, char** argv) {
   Options o;
@@ -94,16 +93,11 @@ Options parse(int argc, char** argv) {
     else if (a == "--seed") o.seed = static_cast<std::uint64_t>(telegrasp::cli::parse_whole(a, value(), 0, 1L << 62, usage_error));
     else if (a == "--objects") o.objects_dir = value();
     else if (a == "--json") o.json_path = value();
-    else if (a == "--domain") o.domain = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 0, 232, usage_error));
-    else if (a == "--profile") o.profile = value();
+    else if (a == "--domain") o.domain = telegrasp::cli::parse_domain(a, value(), usage_error);
+    else if (a == "--profile") o.profile = telegrasp::cli::parse_profile(a, value(), usage_error);
     else if (a == "--profiles") o.profiles_file = value();
-    else if (a == "--timeout") {
-      const std::string v = value();
-      char* end = nullptr;
-      o.timeout_s = std::strtod(v.c_str(), &end);
-      if (v.empty() || *end != '\0' || !(o.timeout_s > 0) || o.timeout_s > 86400)
-        usage_error("--timeout expects seconds in (0, 86400], got '" + v + "'");
-    } else {
+    else if (a == "--timeout") o.timeout_s = telegrasp::cli::parse_number(a, value(), 0.1, 86400, usage_error);
+    else {
       return false;
     }
     return true;
@@ -134,14 +128,14 @@ int main(int argc, char** argv) {
   try {
     // Without --objects every model comes from the server's published geometry (resolve_models).
     if (!opt.objects_dir.empty())
-      for (auto& m : sim::load_object_dir(opt.objects_dir)) models.emplace(m->name, std::move(m));
-  } catch (const std::exception& e) {
-    std::cerr << "telegrasp-bot: --objects " << opt.objects_dir << ": " << e.what() << "\n";
-    return 2;
+      for (auto& m : sim::load_protocol_object_dir(opt.objects_dir)) models.emplace(m->name, std::move(m));
+  } catch (const std::exception& e) {  // MeshLoadError, naming the folder or the file in it
+    std::cerr << "telegrasp-bot: --objects " << e.what() << "\n";
+    return telegrasp::cli::kExitFailure;
   }
   if (!opt.json_path.empty() && !std::ofstream(opt.json_path, std::ios::app)) {
-    std::cerr << "telegrasp-bot: cannot write --json file " << opt.json_path << "\n";
-    return 2;
+    std::cerr << "telegrasp-bot: --json " << opt.json_path << ": cannot write\n";
+    return telegrasp::cli::kExitFailure;
   }
 
   std::signal(SIGINT, on_signal);
@@ -159,7 +153,7 @@ int main(int argc, char** argv) {
     c = std::make_unique<client::Client>(copt);
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-bot: " << e.what() << "\n";
-    return 2;
+    return telegrasp::cli::kExitFailure;
   }
 
   std::cerr << "telegrasp-bot " << opt.client_id << ": waiting for a server on domain " << opt.domain << " (profile "

@@ -113,6 +113,22 @@ json record_json(const Record& r) {
     out["group"] = r.group;
     out["participant"] = r.participant;
     out["contacts"] = std::move(contacts);
+    if (!r.grasp_tick_hand.empty()) {
+      // Rounded to 1 um and 1e-6: a picture needs no more, and 600 records stay small.
+      auto round6 = [](double v) { return std::round(v * 1e6) / 1e6 + 0.0; };  // + 0.0: no "-0.0"
+      auto pose = [&](const Eigen::Isometry3d& X) {
+        const Eigen::Quaterniond q(X.linear());
+        return json{{"p", json::array({round6(X.translation().x()), round6(X.translation().y()), round6(X.translation().z())})},
+                    {"q_wxyz", json::array({round6(q.w()), round6(q.x()), round6(q.y()), round6(q.z())})}};
+      };
+      json frames = json::array();
+      for (const HandFrameRecord& f : r.grasp_tick_hand) {
+        json frame = pose(f.X_ObjectFrame);
+        frame["frame"] = f.frame;
+        frames.push_back(std::move(frame));
+      }
+      out["grasp_tick_hand"] = {{"X_WorldObject", pose(r.grasp_tick_X_WorldObject)}, {"frames", std::move(frames)}};
+    }
   }
   return out;
 }
@@ -147,6 +163,19 @@ Record record_from_json(const json& j) {
   for (const json& c : j.at("contacts"))
     r.contacts.push_back({c.at("phalanx").get<std::string>(), vec(c.at("p_world")), vec(c.at("n_world")), vec(c.at("p_object")),
                           vec(c.at("n_object"))});
+  if (!j.contains("grasp_tick_hand")) return r;
+  auto pose = [&](const json& p) {
+    const json& q = p.at("q_wxyz");
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.linear() = Eigen::Quaterniond(q.at(0).get<double>(), q.at(1).get<double>(), q.at(2).get<double>(), q.at(3).get<double>())
+                     .normalized()
+                     .toRotationMatrix();
+    X.translation() = vec(p.at("p"));
+    return X;
+  };
+  const json& hand = j.at("grasp_tick_hand");
+  r.grasp_tick_X_WorldObject = pose(hand.at("X_WorldObject"));
+  for (const json& f : hand.at("frames")) r.grasp_tick_hand.push_back({f.at("frame").get<std::string>(), pose(f)});
   return r;
 }
 

@@ -26,6 +26,12 @@ struct ContactRecord {
   Eigen::Vector3d p_world{0, 0, 0}, n_world{0, 0, 0}, p_object{0, 0, 0}, n_object{0, 0, 0};
 };
 
+/// A frame of the hand ("palm" or a rig phalanx) in the grasped object's frame.
+struct HandFrameRecord {
+  std::string frame;  ///< "palm" or the phalanx's rig name.
+  Eigen::Isometry3d X_ObjectFrame = Eigen::Isometry3d::Identity();
+};
+
 /// One grasp trial.
 struct Record {
   std::string object;
@@ -42,6 +48,10 @@ struct Record {
   std::string group;                      ///< Operator group, e.g. "experienced".
   int participant = 0;                    ///< 1-based, unique in a run.
   std::vector<ContactRecord> contacts;    ///< At the grasp tick.
+  /// The hand at the grasp tick (palm, then every phalanx in rig order) in the object's frame,
+  /// from the server's HandSkeleton of that tick; empty when unknown. Written when not empty.
+  std::vector<HandFrameRecord> grasp_tick_hand;
+  Eigen::Isometry3d grasp_tick_X_WorldObject = Eigen::Isometry3d::Identity();  ///< With grasp_tick_hand.
 };
 
 /// The capsule metrics of a grasp, named by the rig's phalanges, in mm.
@@ -73,7 +83,8 @@ void print_object_table(const std::vector<ObjectRows>& objects);
 /// One grasp record as JSON: {"object","trial","mode","speed_scale","grasped","held_after_lift",
 /// "attempts","time_to_grasp_s","hand_error_mm","capsules":[...],"grasp_tick":{...}}, plus
 /// "group","participant","contacts":[{"phalanx","p_world","n_world","p_object","n_object"}] for
-/// protocol runs.
+/// protocol runs, and "grasp_tick_hand":{"X_WorldObject":{"p","q_wxyz"},"frames":[{"frame","p","q_wxyz"}]}
+/// (X_ObjectFrame; m, unit quaternion w,x,y,z; rounded to 1e-6) when a protocol record has it.
 nlohmann::json record_json(const Record& record);
 
 /// The inverse of record_json (protocol runs read their participants' records back with it).

@@ -2,6 +2,8 @@
 // published -> first HandSkeleton reflecting it), and, in the same run, the raw Fast DDS round
 // trip of an echo process with the same transport and QoS.
 #include "bench_common.h"
+#include "cli.h"
+#include "test_domain.h"
 
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
@@ -19,6 +21,7 @@
 #include <iomanip>
 #include <iostream>
 #include <numbers>
+#include <optional>
 #include <thread>
 #include <unistd.h>
 
@@ -26,6 +29,7 @@ namespace {
 
 namespace msg = telegrasp::msg;
 namespace idl = telegrasp::idl;
+namespace cli = telegrasp::cli;
 using namespace telegrasp::bench;
 namespace dds = eprosima::fastdds::dds;  // also a global namespace dds in the Fast DDS headers
 
@@ -36,7 +40,7 @@ Starts telegrasp-server (--empty-scene, private domain) as a child process and m
                   --echo-role) on topic bench/Ping and back on bench/Pong, with the ControllerState
                   writer/reader and HandSkeleton writer/reader QoS profiles: the transport alone;
   end to end      N client participants ("lat-<i>", 2 hands each, smooth motion in the air above
-                  the table, oscillating trigger) publish ControllerState at --hz; one observer
+                  the table, oscillating trigger) publish ControllerState at --sample-hz; one observer
                   participant takes HandSkeleton. Latency of sample s = first skeleton of that hand
                   with input_sequence >= s minus the publication of s (each sample counted once);
                   e2e_tick_us counts only tick skeletons (late_latched false).
@@ -48,13 +52,16 @@ The first --warmup seconds of each phase are excluded. A table goes to stdout, p
 
 Options:
   --clients N         client participants, 2 hands each (default 16)
-  --hz HZ             controller sample rate per hand (default 90)
+  --sample-hz HZ      controller sample rate per hand (default 90; --hz, its old name, still works
+                      for one release)
+  --tick-hz HZ        the server's tick rate (default: the server's, 90)
   --seconds S         measured seconds per phase, after the warm-up (default 10)
   --warmup S          warm-up seconds per phase, not measured (default 1)
   --json FILE         also write the results as JSON
   --profile NAME      Fast DDS participant profile for everyone (default loopback)
   --profiles FILE     Fast DDS XML profiles file (default: the telegrasp one)
-  --domain D          DDS domain of this run, 0..232 (default 120)
+  --domain D          DDS domain of this run, 0..232 (default: a free one, leased as the
+                      tests lease theirs: tests/common/test_domain.h)
   --server PATH       telegrasp-server executable (default: the one next to this program)
   --server-arg ARG    one more argument for the server (repeatable)
   --server-log FILE   server output (default: a temporary file, removed after a clean run)
@@ -63,52 +70,38 @@ Options:
                       independent clients; burst: all clients at the same instant
   -h, --help          this text
 
-Exit status: 0 done, 1 the server or the echo could not be started or never answered, 2 bad usage.
+Exit status: 0 done, 1 a runtime failure (the server or the echo could not be started or never
+answered, an output could not be written), 2 a usage error (a bad or missing option or value).
 )";
 
-struct Options {
+struct Options : CommonOptions {
   int clients = 16;
-  double hz = 90;
   double seconds = 10;
   double warmup = 1;
-  std::string json;
-  std::string profile = "loopback";
-  std::string profiles_file;
-  int domain = 120;
-  std::string server;
-  std::vector<std::string> server_args;
-  std::string server_log;
-  bool late_latch = true;
   bool spread = true;
 };
 
+constexpr const char* kTool = "telegrasp-bench-latency";
+
+[[noreturn]] void usage_error(const std::string& what) { cli::usage_exit(kTool, what); }
+
 Options parse(int argc, char** argv) {
   Options o;
-  ArgReader a(argc, argv);
-  while (a.next()) {
-    const std::string& f = a.flag();
-    if (f == "-h" || f == "--help") {
-      std::cout << kUsage;
-      std::exit(0);
-    } else if (f == "--clients") o.clients = static_cast<int>(a.integer(1, 1024));
-    else if (f == "--hz") o.hz = a.number(1, 1000);
-    else if (f == "--seconds") o.seconds = a.number(0.1, 86400);
-    else if (f == "--warmup") o.warmup = a.number(0, 3600);
-    else if (f == "--json") o.json = a.value();
-    else if (f == "--profile") o.profile = a.value();
-    else if (f == "--profiles") o.profiles_file = a.value();
-    else if (f == "--domain") o.domain = static_cast<int>(a.integer(0, 232));
-    else if (f == "--server") o.server = a.value();
-    else if (f == "--server-arg") o.server_args.push_back(a.value());
-    else if (f == "--server-log") o.server_log = a.value();
-    else if (f == "--no-late-latch") o.late_latch = false;
+  cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& f, const auto& value) {
+    if (parse_common_option(kTool, f, value, o, usage_error)) return true;
+    if (f == "--clients") o.clients = static_cast<int>(cli::parse_whole(f, value(), 1, 1024, usage_error));
+    else if (f == "--seconds") o.seconds = cli::parse_number(f, value(), 0.1, 86400, usage_error);
+    else if (f == "--warmup") o.warmup = cli::parse_number(f, value(), 0, 3600, usage_error);
     else if (f == "--phase") {
-      const std::string p = a.value();
+      const std::string p = value();
       if (p == "spread") o.spread = true;
       else if (p == "burst") o.spread = false;
-      else throw UsageError("--phase expects spread or burst, got '" + p + "'");
-    } else throw UsageError("unknown option '" + f + "'");
-  }
+      else usage_error("--phase expects spread or burst, got '" + p + "'");
+    } else {
+      return false;
+    }
+    return true;
+  });
   if (o.server.empty()) o.server = default_server_path();
   return o;
 }
@@ -129,15 +122,18 @@ class EchoListener : public dds::DataReaderListener {
   msg::ControllerState sample_;
 };
 
+// The echo role's command line: `self_exe() --echo-role --domain D --profile P [--profiles F]`.
 int echo_main(int argc, char** argv) {
   int domain = 120;
   std::string profile = "loopback", profiles_file;
-  ArgReader a(argc, argv);
-  while (a.next()) {
-    if (a.flag() == "--domain") domain = static_cast<int>(a.integer(0, 232));
-    else if (a.flag() == "--profile") profile = a.value();
-    else if (a.flag() == "--profiles") profiles_file = a.value();
-  }
+  cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& f, const auto& value) {
+    if (f == "--echo-role") return true;
+    if (f == "--domain") domain = cli::parse_domain(f, value(), usage_error);
+    else if (f == "--profile") profile = cli::parse_profile(f, value(), usage_error);
+    else if (f == "--profiles") profiles_file = value();
+    else return false;
+    return true;
+  });
   install_signal_handlers();
   load_profiles(profiles_file, profile);
   EchoListener listener;
@@ -407,12 +403,13 @@ int run(const Options& o) {
   so.profile = o.profile;
   so.profiles_file = o.profiles_file;
   so.late_latch = o.late_latch;
+  so.tick_hz = o.tick_hz;
   so.extra = o.server_args;
   so.log_path = own_server_log ? tmp + "-server.log" : o.server_log;
   const std::string echo_log = tmp + "-echo.log";
 
   // Listeners and tables outlive the participants that call them (declared first).
-  const auto samples_per_stream = static_cast<std::size_t>(std::ceil((o.warmup + o.seconds) * o.hz)) + 4;
+  const auto samples_per_stream = static_cast<std::size_t>(std::ceil((o.warmup + o.seconds) * o.sample_hz)) + 4;
   SendTable raw_table(streams, samples_per_stream), e2e_table(streams, samples_per_stream);
   Resolver raw(raw_table, streams), e2e_any(e2e_table, streams), e2e_tick(e2e_table, streams);
   StatusCollector status;
@@ -454,14 +451,14 @@ int run(const Options& o) {
       throw std::runtime_error("the echo process (" + join_command(echo_argv) + ") did not match bench/Ping and bench/Pong within 15 s" +
                                (echo.running() ? std::string() : " (it exited: " + echo.exit_description() + ")") + "\n  log " +
                                echo_log + ":\n" + echo.log_tail());
-    std::cerr << "telegrasp-bench-latency: raw round trip: " << streams << " streams at " << o.hz << " Hz for " << o.warmup << " + "
+    std::cerr << "telegrasp-bench-latency: raw round trip: " << streams << " streams at " << o.sample_hz << " Hz for " << o.warmup << " + "
               << o.seconds << " s\n";
     const auto t0 = Clock::now() + std::chrono::milliseconds(100);
     const auto [from, until] = window(t0);
     raw.set_window(from, until);
     const std::int64_t cpu0 = self_cpu_us(), busy0 = machine_busy_us(), server0 = process_cpu_us(server.pid()),
                        echo0 = process_cpu_us(echo.pid());
-    const PublishStats ps = publish(std::vector<dds::DataWriter*>(o.clients, ping), "ping-", raw_table, o.hz, o.spread, t0, o.warmup + o.seconds);
+    const PublishStats ps = publish(std::vector<dds::DataWriter*>(o.clients, ping), "ping-", raw_table, o.sample_hz, o.spread, t0, o.warmup + o.seconds);
     sleep_unless_stopped(0.5);  // stragglers
     const double wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
     raw_result = finish(raw, ps, cpu0, wall_s);
@@ -501,7 +498,7 @@ int run(const Options& o) {
     if (!matched)
       throw std::runtime_error("the " + std::to_string(o.clients) +
                                " client participants and the observer did not all match the server within 15 s");
-    std::cerr << "telegrasp-bench-latency: end to end: " << o.clients << " clients x 2 hands at " << o.hz << " Hz for " << o.warmup
+    std::cerr << "telegrasp-bench-latency: end to end: " << o.clients << " clients x 2 hands at " << o.sample_hz << " Hz for " << o.warmup
               << " + " << o.seconds << " s, late latching " << (o.late_latch ? "on" : "off") << "\n";
     const auto t0 = Clock::now() + std::chrono::milliseconds(100);
     const auto [from, until] = window(t0);
@@ -509,7 +506,7 @@ int run(const Options& o) {
     e2e_tick.set_window(from, until);
     const auto before = status.latest();
     const std::int64_t cpu0 = self_cpu_us();
-    const PublishStats ps = publish(writers, "lat-", e2e_table, o.hz, o.spread, t0, o.warmup + o.seconds);
+    const PublishStats ps = publish(writers, "lat-", e2e_table, o.sample_hz, o.spread, t0, o.warmup + o.seconds);
     const std::int64_t end_ns = now_ns();
     sleep_unless_stopped(0.5);
     const double wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
@@ -525,7 +522,7 @@ int run(const Options& o) {
   server.stop();
   const std::string server_exit = server.exit_description();
 
-  std::cout << "telegrasp-bench-latency: " << o.clients << " clients x 2 hands at " << o.hz << " Hz, " << o.seconds << " s (+" << o.warmup
+  std::cout << "telegrasp-bench-latency: " << o.clients << " clients x 2 hands at " << o.sample_hz << " Hz, " << o.seconds << " s (+" << o.warmup
             << " s warm-up), profile " << o.profile << ", late latching " << (o.late_latch ? "on" : "off") << ", "
             << (o.spread ? "spread" : "burst") << " phases\n";
   std::cout << std::left << std::setw(28) << "latency (us)" << std::right << std::setw(8) << "samples" << std::setw(7) << "lost"
@@ -547,7 +544,9 @@ int run(const Options& o) {
   if (!o.json.empty()) {
     nlohmann::ordered_json j;
     j["clients"] = o.clients;
-    j["hz"] = o.hz;
+    j["sample_hz"] = o.sample_hz;
+    // null: the server's default
+    j["tick_hz"] = o.tick_hz > 0 ? nlohmann::ordered_json(o.tick_hz) : nlohmann::ordered_json();
     j["e2e_us"] = to_json(e2e_result.latency);
     j["raw_rtt_us"] = to_json(raw_result.latency);
     j["e2e_tick_us"] = to_json(tick_result.latency);
@@ -592,17 +591,18 @@ int main(int argc, char** argv) {
         return 1;
       }
     }
-  Options o;
+  Options o = parse(argc, argv);
   try {
-    o = parse(argc, argv);
-  } catch (const UsageError& e) {
-    std::cerr << "telegrasp-bench-latency: " << e.what() << "\n(see telegrasp-bench-latency --help)\n";
-    return 2;
-  }
-  try {
+    // Unless told otherwise, a domain that no test run or other benchmark uses meanwhile (the
+    // server and the children started hold it too).
+    std::optional<telegrasp::testing::DomainLease> lease;
+    if (o.domain < 0) {
+      lease.emplace();
+      o.domain = lease->domain();
+    }
     return run(o);
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-bench-latency: " << e.what() << "\n";
-    return 1;
+    return cli::kExitFailure;
   }
 }

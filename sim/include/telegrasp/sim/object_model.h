@@ -3,9 +3,9 @@
 
 #include "telegrasp/sim/mass_properties.h"
 #include "telegrasp/sim/mesh_distance.h"
-#include "telegrasp/sim/standin_objects.h"
 #include "telegrasp/sim/triangle_mesh.h"
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -46,15 +46,16 @@ ObjectModelPtr make_object_model_in_model_frame(const std::string& name, Triangl
                                                 const std::string& source,
                                                 const Eigen::Vector3d& p_OriginalCenterOfMass = Eigen::Vector3d::Zero());
 
-/// Loads a mesh file as an object named after the file stem; a protocol object's name gives
-/// its real mass. Throws MeshLoadError naming the file.
-ObjectModelPtr load_object_model(const std::string& path);
+/// Loads a mesh file as an object named after the file stem, of mass `mass_kg` (<= 0: volume x
+/// 500 kg/m^3, as make_object_model). Throws MeshLoadError naming the file.
+ObjectModelPtr load_object_model(const std::string& path, double mass_kg);
 
-/// Every mesh file in `dir` (sorted by name); throws MeshLoadError if `dir` is not a folder,
-/// holds no mesh file, or a file fails to load.
-std::vector<ObjectModelPtr> load_object_dir(const std::string& dir);
+/// The mass in kg of the object a file stem names (<= 0: unknown, taken from its volume).
+using MassLookup = std::function<double(const std::string& stem)>;
 
-/// The built-in procedural stand-in of a protocol object.
-ObjectModelPtr make_standin_model(const ProtocolObject& object);
+/// Every mesh file in `dir` (sorted by name), each of the mass `mass_kg_of` gives its stem (null:
+/// all from their volumes); throws MeshLoadError if `dir` is not a folder, holds no mesh file, or
+/// a file fails to load.
+std::vector<ObjectModelPtr> load_object_dir(const std::string& dir, const MassLookup& mass_kg_of);
 
 }  // namespace telegrasp::sim
