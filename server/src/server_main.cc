@@ -176,6 +176,7 @@ int main(int argc, char** argv) {
   const sigset_t stop_signals = block_stop_signals();  // before the DDS threads start
   try {
     DdsNode node(settings.domain, settings.profile, settings.profiles_file, mailbox);
+    node.publish_geometries(assets.models);
     // Declared before the scene, so the scene goes first and the recorder then closes the file.
     std::optional<Recorder> recorder;
     if (!settings.record_path.empty()) recorder.emplace(settings.record_path, settings, assets, node);

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <string>
 
 namespace telegrasp::sim {
 
@@ -28,6 +29,32 @@ ObjectModelPtr make_object_model(const std::string& name, const TriangleMesh& me
   model->mass_kg = mass_kg > 0 ? mass_kg : model->mass_properties.volume * 500.0;
   model->p_ObjectMin = model->mesh.min_corner();
   model->p_ObjectMax = model->mesh.max_corner();
+  model->distance = MeshDistance(model->mesh);
+  return model;
+}
+
+ObjectModelPtr make_object_model_in_model_frame(const std::string& name, TriangleMesh mesh, double mass_kg,
+                                                const std::string& source, const Eigen::Vector3d& p_OriginalCenterOfMass) {
+  if (mesh.triangles.empty()) throw MeshLoadError(source + ": the mesh has no triangle");
+  for (const Eigen::Vector3d& v : mesh.vertices)
+    if (!v.allFinite()) throw MeshLoadError(source + ": the mesh has a non-finite vertex coordinate");
+  for (const auto& t : mesh.triangles)
+    for (std::uint32_t i : t)
+      if (i >= mesh.vertices.size())
+        throw MeshLoadError(source + ": triangle index " + std::to_string(i) + " is past the " +
+                            std::to_string(mesh.vertices.size()) + " vertices");
+  auto model = std::make_shared<ObjectModel>();
+  model->name = name;
+  model->source = source;
+  model->mass_properties = compute_mass_properties(mesh);
+  if (!(model->mass_properties.volume > 1e-12))
+    throw MeshLoadError(source + ": the mesh encloses no volume (" + std::to_string(model->mass_properties.volume) +
+                        " m^3): it must be closed and outward-facing");
+  model->mesh = std::move(mesh);
+  model->mass_kg = mass_kg > 0 ? mass_kg : model->mass_properties.volume * 500.0;
+  model->p_ObjectMin = model->mesh.min_corner();
+  model->p_ObjectMax = model->mesh.max_corner();
+  model->p_OriginalCenterOfMass = p_OriginalCenterOfMass;
   model->distance = MeshDistance(model->mesh);
   return model;
 }

@@ -5,6 +5,7 @@
 #include "cli.h"
 #include "telegrasp/sim/standin_objects.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -47,8 +48,8 @@ Options:
   --skill NAME        perfect | experienced | inexperienced (default experienced)
   --trials N          grasps per object in the scene (default 1)
   --seed S            random seed: object order and operator noise (default 1)
-  --objects DIR       the server's mesh folder, to know each object's geometry (default: the
-                      30 built-in stand-ins)
+  --objects DIR       meshes of the server's models (default: none); an object with no mesh
+                      here is planned on the geometry the server publishes (ObjectGeometry)
   --json FILE         write every grasp record as telegrasp-eval does, plus "client_id",
                       "hand", "object_id" and "reason" ("mode" and "speed_scale" are null: they
                       are the server's settings)
@@ -125,13 +126,11 @@ int main(int argc, char** argv) {
   const Options opt = parse(argc, argv);
   std::map<std::string, sim::ObjectModelPtr> models;
   try {
-    if (opt.objects_dir.empty()) {
-      for (const auto& o : sim::protocol_objects()) models.emplace(o.name, sim::make_standin_model(o));
-    } else {
+    // Without --objects every model comes from the server's published geometry (resolve_models).
+    if (!opt.objects_dir.empty())
       for (auto& m : sim::load_protocol_object_dir(opt.objects_dir)) models.emplace(m->name, std::move(m));
-    }
   } catch (const std::exception& e) {  // MeshLoadError, naming the folder or the file in it
-    std::cerr << "telegrasp-bot: " << (opt.objects_dir.empty() ? "" : "--objects ") << e.what() << "\n";
+    std::cerr << "telegrasp-bot: --objects " << e.what() << "\n";
     return telegrasp::cli::kExitFailure;
   }
   if (!opt.json_path.empty() && !std::ofstream(opt.json_path, std::ios::app)) {
@@ -147,7 +146,8 @@ int main(int argc, char** argv) {
   copt.domain = opt.domain;
   copt.profile = opt.profile;
   copt.profiles_file = opt.profiles_file;
-  copt.topics = client::kHandSkeletons | client::kGraspStates | client::kGraspEvents | client::kSceneStates | client::kServerStatuses;
+  copt.topics = client::kHandSkeletons | client::kGraspStates | client::kGraspEvents | client::kSceneStates | client::kServerStatuses |
+               client::kObjectGeometries;
   std::unique_ptr<client::Client> c;
   try {
     c = std::make_unique<client::Client>(copt);
@@ -168,7 +168,11 @@ int main(int argc, char** argv) {
     return 1;
   }
 
-  Bot bot(opt, *c, std::move(models));
+  // Objects with no local mesh are planned on the geometry the server publishes: wait for it (a
+  // server that publishes none leaves the built-in stand-ins).
+  wait_until([&] { return telegrasp::bot::geometry_complete(*c, *scene, models); }, std::min(opt.timeout_s, 10.0));
+  if (g_stop) return 130;
+  Bot bot(opt, *c, telegrasp::bot::resolve_models(*c, *scene, std::move(models)));
   if (!bot.set_scene(*scene)) {
     std::cerr << "telegrasp-bot: the server's scene has no objects\n";
     bot.report_results();

@@ -14,6 +14,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <map>
@@ -38,6 +39,7 @@ const std::map<std::string, unsigned, std::less<>>& topic_bits() {
   static const std::map<std::string, unsigned, std::less<>> bits = {
       {"HandSkeleton", tc::kHandSkeletons}, {"GraspState", tc::kGraspStates}, {"ContactSet", tc::kContactSets},
       {"GraspEvent", tc::kGraspEvents},     {"SceneState", tc::kSceneStates}, {"ServerStatus", tc::kServerStatuses},
+      {"ObjectGeometry", tc::kObjectGeometries},
   };
   return bits;
 }
@@ -48,7 +50,8 @@ Prints every sample a telegrasp server publishes as one JSON object per line on 
 
 Options:
   --topics LIST    comma separated, from HandSkeleton,GraspState,ContactSet,GraspEvent,
-                   SceneState,ServerStatus (default: all)
+                   SceneState,ServerStatus,ObjectGeometry (default: all; ObjectGeometry prints
+                   a summary of each model's mesh, not the mesh)
   --domain N       DDS domain, 0..232 (default 0)
   --profile NAME   participant profile: loopback, lan, wan (default loopback)
   --profiles FILE  Fast DDS XML profiles (default $TELEGRASP_PROFILES, else the shipped file)
@@ -61,7 +64,7 @@ with the unit appended to every quantity that has one. Frames as everywhere in t
 X_WorldObject is the object's pose in the world frame.
   pose            {"p_m":[x,y,z],"q_wxyz":[w,x,y,z]}: position in metres, unit quaternion
   hand            {"client_id":"...","side":"left"|"right"}
-  every topic     "tick", "time_s" (server time)
+  every topic     "tick", "time_s" (server time), but ObjectGeometry
   HandSkeleton    "hand", "rig", "input_sequence", "input_client_time_ns", "late_latched",
                   "frozen", "X_WorldPalm" (pose), "X_WorldPhalanx" (poses, rig order),
                   "joint_angles_rad"
@@ -77,6 +80,10 @@ X_WorldObject is the object's pose in the world frame.
   ServerStatus    "tick_rate_hz", "clients", "hands", "objects", "tick_us_p50", "tick_us_max",
                   "missed_ticks", "inputs_accepted", "inputs_rejected", "rejected" (per reason),
                   "commands_accepted", "commands_rejected", "models"
+  ObjectGeometry  a summary, never the mesh: "model", "content_hash" (16 hex digits),
+                  "vertex_count", "triangle_count", "mesh_omitted", "p_ObjectMin_m",
+                  "p_ObjectMax_m" (bounds, model frame), "mass_kg", "volume_m3",
+                  "inertia_diagonal_kg_m2"
   capsule         {"phalanx","phalanx_name","hit","nd_mm","signed_distance_mm","blocked"}:
                   the paper's ND (null when "hit" is false) and the exact signed distance
   contact         {"phalanx" (-1: palm),"p_WorldContact_m","n_World","p_ObjectContact_m",
@@ -227,6 +234,18 @@ Json to_json(const tc::ServerStatus& s) {
               {"models", s.models}};
 }
 
+// A summary: the mesh itself is too large for a line.
+Json to_json(const tc::ObjectGeometry& g) {
+  char hash[19];
+  std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(g.content_hash));
+  return Json{{"topic", "ObjectGeometry"},     {"model", g.model},
+              {"content_hash", hash},          {"vertex_count", g.vertex_count},
+              {"triangle_count", g.triangle_count}, {"mesh_omitted", g.mesh_omitted},
+              {"p_ObjectMin_m", to_json(g.p_ObjectMin)}, {"p_ObjectMax_m", to_json(g.p_ObjectMax)},
+              {"mass_kg", g.mass_kg},          {"volume_m3", g.volume_m3},
+              {"inertia_diagonal_kg_m2", to_json(g.inertia_diagonal)}};
+}
+
 // ---------------------------------------------------------------------------------------------
 // Command line.
 
@@ -245,7 +264,7 @@ unsigned parse_topics(const std::string& list) {
     const auto it = topic_bits().find(name);
     if (it == topic_bits().end())
       usage_error("--topics: unknown topic '" + name +
-                  "' (known: HandSkeleton,GraspState,ContactSet,GraspEvent,SceneState,ServerStatus)");
+                  "' (known: HandSkeleton,GraspState,ContactSet,GraspEvent,SceneState,ServerStatus,ObjectGeometry)");
     bits |= it->second;
   }
   if (bits == 0) usage_error("--topics names no topic");
@@ -317,6 +336,7 @@ int main(int argc, char** argv) {
   client->on_grasp_event([&](const tc::GraspEvent& e) { printer.print(e); });
   client->on_scene_state([&](const tc::SceneState& s) { printer.print(s); });
   client->on_server_status([&](const tc::ServerStatus& s) { printer.print(s); });
+  client->on_object_geometry([&](const std::shared_ptr<const tc::ObjectGeometry>& g) { printer.print(*g); });
 
   const auto start = std::chrono::steady_clock::now();
   const auto deadline = args.seconds ? start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(

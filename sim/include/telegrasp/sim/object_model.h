@@ -36,6 +36,16 @@ using ObjectModelPtr = std::shared_ptr<const ObjectModel>;
 ObjectModelPtr make_object_model(const std::string& name, const TriangleMesh& mesh, double mass_kg,
                                  const std::string& source);
 
+/// Builds a model from a mesh that is already in its model frame (origin at its centre of mass),
+/// such as the geometry a telegrasp server publishes: it is not recentred, so poses and contact
+/// points given in that frame apply unchanged. Computes the mass properties, bounds and distance
+/// structure; `mass_kg` is kept as given (if > 0, else volume x 500 kg/m^3) and
+/// `p_OriginalCenterOfMass` is stored as is. Throws MeshLoadError naming `source` if the mesh has
+/// no triangle, an index past its vertices, a non-finite coordinate, or encloses no volume.
+ObjectModelPtr make_object_model_in_model_frame(const std::string& name, TriangleMesh mesh, double mass_kg,
+                                                const std::string& source,
+                                                const Eigen::Vector3d& p_OriginalCenterOfMass = Eigen::Vector3d::Zero());
+
 /// Loads a mesh file as an object named after the file stem, of mass `mass_kg` (<= 0: volume x
 /// 500 kg/m^3, as make_object_model). Throws MeshLoadError naming the file.
 ObjectModelPtr load_object_model(const std::string& path, double mass_kg);
