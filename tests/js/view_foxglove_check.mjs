@@ -44,14 +44,15 @@ const echo = start(path.join(bin, "telegrasp-echo"), ["--domain", String(domain)
     if (m.topic === "HandSkeleton") {
       const key = `${m.hand.client_id}/${m.hand.side}`;
       if (!echoSkeletons.has(key)) echoSkeletons.set(key, []);
-      echoSkeletons.get(key).push(m.X_WorldPalm);
+      echoSkeletons.get(key).push(echoPose(m.X_WorldPalm));
     } else if (m.topic === "SceneState") {
       echoScene = m;
       for (const o of m.objects) {
         if (!echoObjects.has(o.id)) echoObjects.set(o.id, []);
         const poses = echoObjects.get(o.id);
         const last = poses[poses.length - 1];
-        if (!last || !samePose(last, o.X_WorldObject)) poses.push(o.X_WorldObject);  // objects at rest: once
+        const pose = echoPose(o.X_WorldObject);
+        if (!last || !samePose(last, pose)) poses.push(pose);  // objects at rest: once
       }
     } else if (m.topic === "GraspEvent") {
       echoEvents.set(m.event_id, m);
@@ -67,6 +68,11 @@ const world = new Map();           // every frame as the /tf messages so far lea
 const viewEvents = [];
 let statusCount = 0;
 let graspStateCount = 0;
+
+// telegrasp-echo's pose {p_m, q_wxyz} in the form the checks compare: {p: [x, y, z], q: [w, x, y, z]}.
+function echoPose(x) {
+  return { p: x.p_m, q: x.q_wxyz };
+}
 
 function samePose(a, b) {
   // a, b: {p: [x, y, z], q: [w, x, y, z]}; q and -q are the same rotation.
