@@ -51,8 +51,8 @@ const echo = start(path.join(bin, "telegrasp-echo"), ["--domain", String(domain)
         if (!echoObjects.has(o.id)) echoObjects.set(o.id, []);
         const poses = echoObjects.get(o.id);
         const last = poses[poses.length - 1];
-        const X = echoPose(o.X_WorldObject);
-        if (!last || !samePose(last, X)) poses.push(X);  // objects at rest: once
+        const pose = echoPose(o.X_WorldObject);
+        if (!last || !samePose(last, pose)) poses.push(pose);  // objects at rest: once
       }
     } else if (m.topic === "GraspEvent") {
       echoEvents.set(m.event_id, m);
@@ -69,9 +69,9 @@ const viewEvents = [];
 let statusCount = 0;
 let graspStateCount = 0;
 
-// telegrasp-echo writes a pose as {p_m: [x, y, z], q_wxyz: [w, x, y, z]}.
-function echoPose(X) {
-  return { p: X.p_m, q: X.q_wxyz };
+// telegrasp-echo's pose {p_m, q_wxyz} in the form the checks compare: {p: [x, y, z], q: [w, x, y, z]}.
+function echoPose(x) {
+  return { p: x.p_m, q: x.q_wxyz };
 }
 
 function samePose(a, b) {

@@ -33,14 +33,15 @@ Json object(const std::string& title, Json properties) {
 }
 Json hand() { return object("telegrasp.HandKey", {{"client_id", string()}, {"side", string()}}); }
 Json vec3() { return array_of(number()); }
-Json echo_pose() { return object("telegrasp.Pose", {{"p", vec3()}, {"q", array_of(number())}}); }
+Json echo_pose() { return object("telegrasp.Pose", {{"p_m", vec3()}, {"q_wxyz", array_of(number())}}); }
 
-// Field names and meanings as in client_lib/include/telegrasp/client/types.h.
+// Field names and meanings as in client_lib/include/telegrasp/client/types.h, with the unit of
+// every quantity appended as telegrasp-echo writes them.
 Json grasp_state_schema() {
   Json s = object("telegrasp.GraspState",
                   {{"hand", hand()},
                    {"tick", integer()},
-                   {"time", number()},
+                   {"time_s", number()},
                    {"selected_object", integer()},
                    {"grasped_object", integer()},
                    {"trigger", number()},
@@ -58,8 +59,8 @@ Json grasp_event_schema() {
                    {"object_id", integer()},
                    {"object_name", string()},
                    {"tick", integer()},
-                   {"time", number()},
-                   {"object_spawn_time", number()},
+                   {"time_s", number()},
+                   {"object_spawn_time_s", number()},
                    {"X_WorldObject", echo_pose()},
                    {"input_sequence", integer()},
                    {"hand_error_mm", number()},
@@ -72,8 +73,8 @@ Json grasp_event_schema() {
                                                  {"signed_distance_mm", number()},
                                                  {"blocked", boolean()}}))},
                    {"contacts", integer()},
-                   {"v_WorldObject", vec3()},
-                   {"w_WorldObject", vec3()}});
+                   {"v_WorldObject_m_per_s", vec3()},
+                   {"w_WorldObject_rad_per_s", vec3()}});
   s["description"] = "A grasp or release (GraspEvent topic); grasps carry the paper's metrics (nd_mm null: no hit)";
   return s;
 }
@@ -81,7 +82,7 @@ Json grasp_event_schema() {
 Json server_status_schema() {
   Json s = object("telegrasp.ServerStatus",
                   {{"tick", integer()},
-                   {"time", number()},
+                   {"time_s", number()},
                    {"tick_rate_hz", number()},
                    {"clients", integer()},
                    {"hands", integer()},

@@ -10,11 +10,12 @@ Json vec3(const Eigen::Vector3d& v) { return Json{{"x", v.x()}, {"y", v.y()}, {"
 
 Json colour(const Rgba& c) { return Json{{"r", c.r}, {"g", c.g}, {"b", c.b}, {"a", c.a}}; }
 
-// telegrasp-echo's pose and vector forms, for the telegrasp.* messages.
+// telegrasp-echo's pose and vector forms and field names (the unit of every quantity in its
+// name), for the telegrasp.* messages.
 Json echo_vec(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); }
 Json echo_pose(const Eigen::Isometry3d& X) {
   const Eigen::Quaterniond q(X.linear());
-  return Json{{"p", echo_vec(X.translation())}, {"q", Json::array({q.w(), q.x(), q.y(), q.z()})}};
+  return Json{{"p_m", echo_vec(X.translation())}, {"q_wxyz", Json::array({q.w(), q.x(), q.y(), q.z()})}};
 }
 Json echo_hand(const client::HandKey& hand) {
   return Json{{"client_id", hand.client_id}, {"side", client::to_string(hand.side)}};
@@ -150,7 +151,7 @@ Json grasp_state_message(const client::GraspState& s, const std::vector<std::str
     phalanges.push_back(Json{{"name", i < phalanx_names.size() ? phalanx_names[i] : "phalanx " + std::to_string(i)},
                              {"blocked", static_cast<bool>(s.blocked[i])}});
   return Json{{"hand", echo_hand(s.hand)},       {"tick", s.tick},
-              {"time", s.time},                  {"selected_object", s.selected_object},
+              {"time_s", s.time},                {"selected_object", s.selected_object},
               {"grasped_object", s.grasped_object}, {"trigger", s.trigger},
               {"palm_contact", s.palm_contact},  {"phalanges", std::move(phalanges)}};
 }
@@ -163,8 +164,8 @@ Json grasp_event_message(const client::GraspEvent& e) {
          {"object_id", e.object_id},
          {"object_name", e.object_name},
          {"tick", e.tick},
-         {"time", e.time},
-         {"object_spawn_time", e.object_spawn_time},
+         {"time_s", e.time},
+         {"object_spawn_time_s", e.object_spawn_time},
          {"X_WorldObject", echo_pose(e.X_WorldObject)},
          {"input_sequence", e.input_sequence}};
   if (grasp) {
@@ -181,8 +182,8 @@ Json grasp_event_message(const client::GraspEvent& e) {
     j["capsules"] = std::move(capsules);
     j["contacts"] = e.contacts.size();
   } else {
-    j["v_WorldObject"] = echo_vec(e.v_WorldObject);
-    j["w_WorldObject"] = echo_vec(e.w_WorldObject);
+    j["v_WorldObject_m_per_s"] = echo_vec(e.v_WorldObject);
+    j["w_WorldObject_rad_per_s"] = echo_vec(e.w_WorldObject);
   }
   return j;
 }
@@ -191,7 +192,7 @@ Json server_status_message(const client::ServerStatus& s) {
   Json rejected = Json::object();
   for (const auto& [reason, count] : s.rejected) rejected[reason] = count;
   return Json{{"tick", s.tick},
-              {"time", s.time},
+              {"time_s", s.time},
               {"tick_rate_hz", s.tick_rate_hz},
               {"clients", s.clients},
               {"hands", s.hands},

@@ -57,14 +57,12 @@ Options:
                      and bytes sent to stderr
   -h, --help         this text
 
-Exit status: 0 when stopped by SIGINT or SIGTERM, 1 when it cannot start (DDS, port in use,
-missing page or schema files), 2 for a bad option.
+Exit status: 0 stopped by SIGINT or SIGTERM, 1 a runtime failure (DDS could not start, the port
+is in use, the page or schema files are missing), 2 a usage error (a bad or missing option or
+value).
 )";
 
-[[noreturn]] void usage_error(const std::string& what) {
-  std::cerr << "telegrasp-view: " << what << "\n(see telegrasp-view --help)\n";
-  std::exit(2);
-}
+[[noreturn]] void usage_error(const std::string& what) { telegrasp::cli::usage_exit("telegrasp-view", what); }
 
 struct Args {
   tc::ClientOptions client;
@@ -75,26 +73,20 @@ struct Args {
   double stats_s = 0;
 };
 
-double parse_seconds(const std::string& flag, const std::string& v, double lo, double hi) {
-  char* end = nullptr;
-  const double x = std::strtod(v.c_str(), &end);
-  if (v.empty() || *end != '\0' || !(x >= lo) || x > hi)
-    usage_error(flag + " expects a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
-  return x;
-}
-
+// Every flag is checked here, so the client library never sees a bad option.
 Args parse(int argc, char** argv) {
+  namespace cli = telegrasp::cli;
   Args a;
   a.client.client_id = "view-" + std::to_string(::getpid());
-  telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& flag, const auto& value) {
-    if (flag == "--port") a.port = static_cast<std::uint16_t>(telegrasp::cli::parse_whole(flag, value(), 0, 65535, usage_error));
+  cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& flag, const auto& value) {
+    if (flag == "--port") a.port = static_cast<std::uint16_t>(cli::parse_whole(flag, value(), 0, 65535, usage_error));
     else if (flag == "--address") a.address = value();
-    else if (flag == "--rate") a.rate_hz = parse_seconds(flag, value(), 1, 240);
-    else if (flag == "--domain") a.client.domain = static_cast<int>(telegrasp::cli::parse_whole(flag, value(), 0, 232, usage_error));
-    else if (flag == "--profile") a.client.profile = value();
+    else if (flag == "--rate") a.rate_hz = cli::parse_number(flag, value(), 1, 240, usage_error);
+    else if (flag == "--domain") a.client.domain = cli::parse_domain(flag, value(), usage_error);
+    else if (flag == "--profile") a.client.profile = cli::parse_profile(flag, value(), usage_error);
     else if (flag == "--profiles") a.client.profiles_file = value();
     else if (flag == "--web") a.web_dir = value();
-    else if (flag == "--stats") a.stats_s = parse_seconds(flag, value(), 0.1, 86400);
+    else if (flag == "--stats") a.stats_s = cli::parse_number(flag, value(), 0.1, 86400, usage_error);
     else return false;
     return true;
   });
@@ -154,7 +146,7 @@ int main(int argc, char** argv) {
     if (!std::filesystem::is_regular_file(web_root / needed)) {
       std::cerr << "telegrasp-view: " << (web_root / needed).string() << " not found (the build stages the page and "
                 << "three.js from client_lib/tools/view/web/node_modules: run deploy/install-deps.sh, then build again)\n";
-      return 1;
+      return telegrasp::cli::kExitFailure;
     }
   }
   std::vector<view::Channel> channels;
@@ -162,7 +154,7 @@ int main(int argc, char** argv) {
     channels = view::view_channels(web_root / "schemas");
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-view: " << e.what() << "\n";
-    return 1;
+    return telegrasp::cli::kExitFailure;
   }
 
   std::optional<tc::Client> client;
@@ -170,7 +162,7 @@ int main(int argc, char** argv) {
     client.emplace(args.client);
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-view: " << e.what() << "\n";
-    return 1;
+    return telegrasp::cli::kExitFailure;
   }
 
   RigCache rigs;
@@ -206,7 +198,7 @@ int main(int argc, char** argv) {
     });
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-view: " << e.what() << "\n";
-    return 1;
+    return telegrasp::cli::kExitFailure;
   }
   const std::string host = args.address == "0.0.0.0" ? "localhost" : args.address;
   std::cout << "telegrasp-view: http://" << host << ":" << server->port() << "/ (page), ws://" << host << ":"

@@ -630,7 +630,7 @@ int main(int argc, char** argv) {
         return 1;
       }
     }
-  Options o = parse(argc, argv);
+  Options o = parse(argc, argv);  // the domain may still be leased below
   try {
     // Unless told otherwise, a domain that no test run or other benchmark uses meanwhile (the
     // server and the children started hold it too).

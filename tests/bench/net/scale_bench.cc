@@ -500,7 +500,7 @@ int run(const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  Options o = parse(argc, argv);
+  Options o = parse(argc, argv);  // the domain may still be leased below
   try {
     // Unless told otherwise, a domain that no test run or other benchmark uses meanwhile (the
     // server and the children started hold it too).

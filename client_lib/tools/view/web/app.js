@@ -140,7 +140,7 @@ function drawDetail() {
     <tr><th>grasped</th><td>${s ? escape(objectName(s.grasped_object)) : "-"}</td></tr>
     <tr><th>trigger</th><td>${s ? s.trigger.toFixed(2) : "-"}</td></tr>
     <tr><th>palm contact</th><td>${s ? (s.palm_contact ? "yes" : "no") : "-"}</td></tr>
-    <tr><th>last grasp</th><td>${g ? `${escape(g.object_name)} at ${g.time.toFixed(2)} s` : "none yet"}</td></tr>
+    <tr><th>last grasp</th><td>${g ? `${escape(g.object_name)} at ${g.time_s.toFixed(2)} s` : "none yet"}</td></tr>
     <tr><th>HandError</th><td>${g ? `${mm(g.hand_error_mm)} mm` : "n/a"}</td></tr>
     <tr><th>epsilon</th><td>${g && g.epsilon !== undefined && g.epsilon !== null ? g.epsilon.toFixed(4) : "n/a"}</td></tr>
   </table>`;
@@ -158,7 +158,7 @@ function drawDetail() {
 
 function drawStatus() {
   $("status").innerHTML = status
-    ? `tick ${status.tick} · ${status.time.toFixed(1)} s · ${status.hands} hands · ${status.objects} objects<br>` +
+    ? `tick ${status.tick} · ${status.time_s.toFixed(1)} s · ${status.hands} hands · ${status.objects} objects<br>` +
       `tick ${status.tick_us_p50.toFixed(0)} µs p50, ${status.tick_us_max.toFixed(0)} µs max · missed ${status.missed_ticks}`
     : `<span class="muted">no status yet</span>`;
 }
@@ -166,24 +166,24 @@ function drawStatus() {
 function drawTimeline() {
   const strip = $("strip");
   const width = strip.clientWidth || 800;
-  const now = Math.max(status?.time ?? 0, events.length ? events[events.length - 1].time : 0);
+  const now = Math.max(status?.time_s ?? 0, events.length ? events[events.length - 1].time_s : 0);
   const span = 120;  // seconds shown
   const x = (t) => width - ((now - t) / span) * (width - 20) - 10;
   let svg = `<line x1="0" y1="18" x2="${width}" y2="18" stroke="#474d57"/>`;
   for (let t = Math.ceil((now - span) / 10) * 10; t <= now; t += 10)
     svg += `<line x1="${x(t)}" y1="13" x2="${x(t)}" y2="23" stroke="#474d57"/><text x="${x(t) + 2}" y="33" fill="#7c8595" font-size="9">${t}s</text>`;
   for (const e of events) {
-    if (e.time < now - span) continue;
+    if (e.time_s < now - span) continue;
     const colour = css(hands.get(handKey(e.hand))?.colour ?? [0.8, 0.8, 0.8]);
     const fill = e.kind === "grasp" ? colour : "none";
-    svg += `<circle cx="${x(e.time)}" cy="18" r="5" fill="${fill}" stroke="${colour}" stroke-width="2"><title>${escape(`${e.kind} ${handKey(e.hand)} ${e.object_name} at ${e.time.toFixed(2)} s`)}</title></circle>`;
+    svg += `<circle cx="${x(e.time_s)}" cy="18" r="5" fill="${fill}" stroke="${colour}" stroke-width="2"><title>${escape(`${e.kind} ${handKey(e.hand)} ${e.object_name} at ${e.time_s.toFixed(2)} s`)}</title></circle>`;
   }
   strip.setAttribute("viewBox", `0 0 ${width} 36`);
   strip.innerHTML = svg;
   $("events").innerHTML = events
     .slice(-60)
     .reverse()
-    .map((e) => `<li>${e.time.toFixed(2).padStart(8)} s · <b>${e.kind}</b> · ${escape(handKey(e.hand))} · ${escape(e.object_name)}` +
+    .map((e) => `<li>${e.time_s.toFixed(2).padStart(8)} s · <b>${e.kind}</b> · ${escape(handKey(e.hand))} · ${escape(e.object_name)}` +
       (e.kind === "grasp" ? ` · HandError ${mm(e.hand_error_mm)} mm · ${e.capsules_without_hit} capsules without hit` : "") + `</li>`)
     .join("");
 }
