@@ -4,6 +4,8 @@
 // (http://host:8765/) speaking the same protocol. See client_lib/tools/view/README.md.
 #include "channels.h"
 #include "cli.h"
+#include "mcap_recorder.h"
+#include "step_messages.h"
 #include "telegrasp/client/client.h"
 #include "telegrasp/sim/data_paths.h"
 #include "telegrasp/sim/hand_rig.h"
@@ -18,6 +20,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <iostream>
 #include <map>
@@ -53,13 +56,18 @@ Options:
   --profiles FILE    Fast DDS XML profiles (default: $TELEGRASP_PROFILES, else the shipped file)
   --web DIR          the page's files and schemas (default: share/telegrasp/view of this
                      installation or build)
-  --stats S          every S seconds print a JSON line of the bridge's CPU, hand ticks, viewers
-                     and bytes sent to stderr
+  --record FILE      also write every channel into the MCAP file FILE (Foxglove and Lichtblick
+                     open it with a time line; log time: the wall clock when the view built the
+                     message); a chunk goes to disk at least every second, so a killed view
+                     leaves FILE readable up to then; closed cleanly on SIGINT/SIGTERM
+  --stats S          every S seconds print a JSON line of the bridge's CPU, hand ticks, viewers,
+                     bytes sent (and recorded, with the time spent recording) to stderr
   -h, --help         this text
 
 Exit status: 0 stopped by SIGINT or SIGTERM, 1 a runtime failure (DDS could not start, the port
-is in use, the page or schema files are missing), 2 a usage error (a bad or missing option or
-value).
+is in use, the page or schema files are missing, the --record file is not writable), 2 a usage
+error (a bad or missing option or value). A recording that fails later (disk full) stops with a
+message; the view keeps serving.
 )";
 
 [[noreturn]] void usage_error(const std::string& what) { telegrasp::cli::usage_exit("telegrasp-view", what); }
@@ -71,9 +79,13 @@ struct Args {
   double rate_hz = 30;
   std::string web_dir;
   double stats_s = 0;
+  std::string record_path;
 };
 
 // Every flag is checked here, so the client library never sees a bad option.
+
+// A chunk of the --record file reaches the disk at least this often.
+constexpr std::uint64_t kRecordFlushNs = 1'000'000'000;
 Args parse(int argc, char** argv) {
   namespace cli = telegrasp::cli;
   Args a;
@@ -87,6 +99,10 @@ Args parse(int argc, char** argv) {
     else if (flag == "--profiles") a.client.profiles_file = value();
     else if (flag == "--web") a.web_dir = value();
     else if (flag == "--stats") a.stats_s = cli::parse_number(flag, value(), 0.1, 86400, usage_error);
+    else if (flag == "--record") {
+      a.record_path = value();
+      if (a.record_path.empty()) usage_error("--record expects a file name, got ''");
+    }
     else return false;
     return true;
   });
@@ -105,9 +121,12 @@ double cpu_seconds() {
          1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
 }
 
-std::shared_ptr<const std::string> payload(const view::Json& message) {
-  return std::make_shared<const std::string>(message.dump());
+std::uint64_t steady_ns() {
+  return static_cast<std::uint64_t>(
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count());
 }
+
+using view::payload;
 
 // The rigs HandSkeleton names, loaded once each from the shipped files; unknown ones are null.
 class RigCache {
@@ -134,6 +153,9 @@ struct Meter {
   std::chrono::steady_clock::time_point wall = std::chrono::steady_clock::now();
   std::uint64_t hand_ticks = 0;
   std::uint64_t bytes_sent = 0;
+  std::uint64_t bytes_recorded = 0;
+  std::uint64_t steps = 0;
+  std::uint64_t record_ns = 0;  ///< Steady-clock time spent in the recorder.
 };
 
 }  // namespace
@@ -155,6 +177,16 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-view: " << e.what() << "\n";
     return telegrasp::cli::kExitFailure;
+  }
+
+  std::optional<view::McapRecorder> recorder;
+  if (!args.record_path.empty()) {
+    try {
+      recorder.emplace(args.record_path, channels, view::McapRecorder::Options{.flush_interval_ns = kRecordFlushNs});
+    } catch (const std::exception& e) {
+      std::cerr << "telegrasp-view: --record: " << e.what() << "\n";
+      return 1;
+    }
   }
 
   std::optional<tc::Client> client;
@@ -226,23 +258,34 @@ int main(int argc, char** argv) {
       last_scene_tick = snap.scene->tick;
     }
 
+    // One time for the step: the messages' stamps and, when recording, their log time.
     const std::uint64_t now = wall_ns();
     const view::ViewUpdate update = model.update(snap, now);
-    // Scene changes first, so a viewer knows an entity before the frames that move it.
-    if (update.scene) server->publish(view::kSceneChannel, payload(*update.scene), now);
-    if (update.transforms) {
-      const auto delta = payload(*update.transforms);
-      if (update.transforms_complete) server->publish(view::kTransformsChannel, delta, now);
-      else server->publish(view::kTransformsChannel, delta, now, [&] { return payload(*model.transforms_full(now)); });
+    const std::vector<view::StepMessage> messages = view::step_messages(update);
+    for (const view::StepMessage& m : messages) {
+      if (m.channel == view::kTransformsChannel && !update.transforms_complete)
+        server->publish(m.channel, m.payload, now, [&] { return payload(*model.transforms_full(now)); });
+      else
+        server->publish(m.channel, m.payload, now);
     }
-    for (const view::Json& s : update.grasp_states) server->publish(view::kGraspStateChannel, payload(s), now);
-    for (const view::Json& e : update.grasp_events) server->publish(view::kGraspEventsChannel, payload(e), now);
-    if (update.server_status) server->publish(view::kServerStatusChannel, payload(*update.server_status), now);
+    ++meter.steps;
+    if (recorder) {
+      const std::uint64_t t0 = steady_ns();
+      try {
+        recorder->record(messages, model, now);
+        recorder->flush_if_due(t0);
+      } catch (const std::exception& e) {
+        std::cerr << "telegrasp-view: recording stopped: " << e.what() << "\n";
+        recorder.reset();
+      }
+      meter.record_ns += steady_ns() - t0;
+    }
 
     if (args.stats_s > 0 && std::chrono::steady_clock::now() >= next_stats) {
       const view::WebServerStats s = server->stats();
       const double cpu = cpu_seconds(), wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - meter.wall).count();
       const std::uint64_t ticks = meter.hand_ticks;
+      const std::uint64_t recorded = recorder ? recorder->writer().bytes_written() : meter.bytes_recorded;
       std::cerr << view::Json{{"viewers", s.viewers},
                               {"hands", snap.skeletons.size()},
                               {"objects", model.object_count()},
@@ -253,11 +296,15 @@ int main(int argc, char** argv) {
                               {"sent_kb_per_s", static_cast<double>(s.bytes_sent - meter.bytes_sent) / 1024.0 / wall},
                               {"messages_sent", s.messages_sent},
                               {"messages_replaced", s.messages_replaced},
-                              {"viewers_dropped", s.viewers_dropped}}
+                              {"viewers_dropped", s.viewers_dropped},
+                              {"recording", recorder.has_value()},
+                              {"recorded_kb_per_s", static_cast<double>(recorded - meter.bytes_recorded) / 1024.0 / wall},
+                              {"record_us_per_step", meter.steps ? 1e-3 * static_cast<double>(meter.record_ns) / static_cast<double>(meter.steps) : 0.0}}
                        .dump()
                 << std::endl;
       meter = Meter{};
       meter.bytes_sent = s.bytes_sent;
+      meter.bytes_recorded = recorded;
       next_stats += std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(args.stats_s));
     }
     timer.expires_at(std::max(timer.expiry() + period, std::chrono::steady_clock::now()));
@@ -279,5 +326,15 @@ int main(int argc, char** argv) {
   io.run();
   server.reset();
   client.reset();
+  if (recorder) {
+    try {
+      recorder->close();
+      std::cerr << "telegrasp-view: recorded " << recorder->writer().message_count() << " messages ("
+                << telegrasp::cli::format_number(std::round(static_cast<double>(recorder->writer().bytes_written()) / 1024.0))
+                << " KiB) to " << args.record_path << "\n";
+    } catch (const std::exception& e) {
+      std::cerr << "telegrasp-view: closing the recording: " << e.what() << "\n";
+    }
+  }
   return 0;
 }
