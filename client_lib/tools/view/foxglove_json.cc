@@ -87,6 +87,19 @@ void add_box(Json& entity, const Eigen::Isometry3d& X_FrameBox, const Eigen::Vec
   entity["cubes"].push_back(Json{{"pose", pose(X_FrameBox)}, {"size", vec3(size)}, {"color", colour(c)}});
 }
 
+void add_triangles(Json& entity, const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint32_t>& indices,
+                   const Rgba& c) {
+  // Points to 0.01 mm: a mesh's JSON is most of what a viewer receives when it connects.
+  auto r = [](double v) { return std::round(v * 1e5) / 1e5; };
+  Json ps = Json::array();
+  for (const Eigen::Vector3d& p : points) ps.push_back(Json{{"x", r(p.x())}, {"y", r(p.y())}, {"z", r(p.z())}});
+  entity["triangles"].push_back(Json{{"pose", pose(Eigen::Isometry3d::Identity())},
+                                     {"points", std::move(ps)},
+                                     {"color", colour(c)},
+                                     {"colors", Json::array()},
+                                     {"indices", indices}});
+}
+
 void add_capsule(Json& entity, const Eigen::Vector3d& p_FrameA, const Eigen::Vector3d& p_FrameB, double radius,
                  const Rgba& c) {
   const Eigen::Vector3d ab = p_FrameB - p_FrameA;

@@ -56,6 +56,10 @@ Json scene_entity(const std::string& id, const std::string& frame_id, std::uint6
 void add_metadata(Json& entity, const std::string& key, const std::string& value);
 void add_sphere(Json& entity, const Eigen::Vector3d& p_FrameCenter, double radius, const Rgba& colour);
 void add_box(Json& entity, const Eigen::Isometry3d& X_FrameBox, const Eigen::Vector3d& size, const Rgba& colour);
+/// A triangle list (foxglove TriangleListPrimitive): `points` in the entity's frame, three
+/// `indices` per triangle.
+void add_triangles(Json& entity, const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint32_t>& indices,
+                   const Rgba& colour);
 /// A capsule from A to B of `radius`: a cylinder along A-B and a sphere at each end.
 void add_capsule(Json& entity, const Eigen::Vector3d& p_FrameA, const Eigen::Vector3d& p_FrameB, double radius,
                  const Rgba& colour);

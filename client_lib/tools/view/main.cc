@@ -252,6 +252,7 @@ int main(int argc, char** argv) {
     snap.scene = client->latest_scene_state();
     snap.status = client->latest_server_status();
     snap.events = client->take_grasp_events();
+    snap.geometries = client->object_geometries();
     if (snap.scene) {
       if (last_scene_tick && snap.scene->tick > *last_scene_tick)
         meter.hand_ticks += (snap.scene->tick - *last_scene_tick) * snap.skeletons.size();

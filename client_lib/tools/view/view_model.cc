@@ -1,5 +1,7 @@
 #include "view_model.h"
 
+#include "grasp_svg.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -9,6 +11,7 @@ namespace telegrasp::view {
 namespace {
 
 constexpr double kMinHalfExtent = 0.02;        // m, the smallest placeholder box
+constexpr int kMeshTriangles = 2000;           // an object's mesh is decimated to this for the wire
 constexpr double kJointSphereRadius = 0.006;   // m, a phalanx of an unknown rig
 constexpr double kContactArrowLength = 0.025;  // m
 constexpr double kContactDotRadius = 0.0025;   // m
@@ -27,12 +30,32 @@ std::string phalanx_name(const sim::HandRig* rig, std::size_t i) {
 
 }  // namespace
 
+ObjectMesh view_mesh(const client::ObjectGeometry& geometry, int max_triangles) {
+  ObjectMesh out;
+  out.content_hash = geometry.content_hash;
+  if (geometry.mesh_omitted || geometry.triangles.empty()) return out;
+  sim::TriangleMesh mesh;
+  mesh.vertices.reserve(geometry.vertices.size());
+  for (const Eigen::Vector3f& v : geometry.vertices) mesh.vertices.push_back(v.cast<double>());
+  mesh.triangles = geometry.triangles;
+  const sim::DrawingMesh drawn = sim::decimate_for_drawing(mesh, max_triangles);
+  out.points = drawn.mesh.vertices;
+  for (const auto& t : drawn.mesh.triangles) out.indices.insert(out.indices.end(), t.begin(), t.end());
+  return out;
+}
+
 void add_object_geometry(Json& entity, const client::ObjectState& object, const Eigen::Vector3d& half_extent,
-                         const Rgba& colour) {
-  // Placeholder until the ObjectGeometry topic (issue 11 §0): see the declaration.
-  add_box(entity, Eigen::Isometry3d::Identity(), 2 * half_extent, colour);
-  add_text(entity, Eigen::Vector3d(0, 0, half_extent.z() + 0.03), object.name, Rgba{1, 1, 1, 1});
-  add_metadata(entity, "geometry", "placeholder");
+                         const Rgba& colour, const ObjectMesh* mesh) {
+  double top = half_extent.z();
+  if (mesh != nullptr && !mesh->indices.empty()) {
+    add_triangles(entity, mesh->points, mesh->indices, colour);
+    for (const Eigen::Vector3d& p : mesh->points) top = std::max(top, p.z());
+    add_metadata(entity, "geometry", "mesh");
+  } else {
+    add_box(entity, Eigen::Isometry3d::Identity(), 2 * half_extent, colour);
+    add_metadata(entity, "geometry", "placeholder");
+  }
+  add_text(entity, Eigen::Vector3d(0, 0, top + 0.03), object.name, Rgba{1, 1, 1, 1});
 }
 
 ViewModel::ViewModel(RigLookup rigs) : rig_lookup_(std::move(rigs)) {}
@@ -82,6 +105,13 @@ ViewUpdate ViewModel::update(const ClientSnapshot& snap, std::uint64_t stamp_ns)
     hand.skeleton = s;
   }
   std::erase_if(hands_, [&](const auto& entry) { return !present.contains(entry.first); });
+
+  // Object meshes: decimated once per model and content.
+  for (const auto& [model, geometry] : snap.geometries) {
+    const auto it = meshes_.find(model);
+    if (geometry && (it == meshes_.end() || it->second.content_hash != geometry->content_hash))
+      meshes_[model] = view_mesh(*geometry, kMeshTriangles);
+  }
 
   // Objects: those of the newest scene state.
   if (snap.scene && (objects_.empty() || snap.scene->tick != last_scene_tick_)) {
@@ -179,7 +209,8 @@ std::map<std::string, ViewModel::Look> ViewModel::appearance() const {
       const auto holder = hands_.find(o.holder);
       look += "held|" + std::to_string(holder == hands_.end() ? 0 : holder->second.colour) + "|";
     }
-    for (int k = 0; k < 3; ++k) look += rounded(object.half_extent[k], 1e-3);
+    if (const auto mesh = meshes_.find(o.name); mesh != meshes_.end()) look += "mesh|" + std::to_string(mesh->second.content_hash);
+    else for (int k = 0; k < 3; ++k) look += rounded(object.half_extent[k], 1e-3);
     looks[object_entity_id(id)] = Look{Kind::kObject, nullptr, 0, id, std::move(look)};
   }
   return looks;
@@ -238,8 +269,9 @@ Json ViewModel::object_entity(const Object& object, std::uint64_t stamp_ns) cons
   add_metadata(e, "name", o.name);
   add_metadata(e, "held", o.held ? "true" : "false");
   if (o.held) add_metadata(e, "holder", o.holder.client_id + "/" + client::to_string(o.holder.side));
+  const auto mesh = meshes_.find(o.name);
   add_object_geometry(e, o, object.half_extent.cwiseMax(Eigen::Vector3d::Constant(kMinHalfExtent)),
-                      o.held ? holder_colour(o) : colours::kFreeObject);
+                      o.held ? holder_colour(o) : colours::kFreeObject, mesh == meshes_.end() ? nullptr : &mesh->second);
   return e;
 }
 

@@ -28,7 +28,21 @@ struct ClientSnapshot {
   std::optional<client::SceneState> scene;
   std::optional<client::ServerStatus> status;
   std::vector<client::GraspEvent> events;
+  /// Object meshes by model name, as the server publishes them (client::Client::object_geometries()).
+  std::map<std::string, std::shared_ptr<const client::ObjectGeometry>> geometries;
 };
+
+/// An object's mesh as the view draws it: decimated for the wire (a 10k-triangle YCB scan would be
+/// about 1.4 MB of JSON per viewer), in the object's frame.
+struct ObjectMesh {
+  std::uint64_t content_hash = 0;  ///< Of the ObjectGeometry it came from.
+  std::vector<Eigen::Vector3d> points;
+  std::vector<std::uint32_t> indices;  ///< Three per triangle, counter-clockwise seen from outside.
+};
+
+/// The triangles of `geometry`, decimated to at most `max_triangles` (vertex clustering, as the
+/// report's pictures do); empty when the server omitted the mesh.
+ObjectMesh view_mesh(const client::ObjectGeometry& geometry, int max_triangles);
 
 /// What one update produced, each ready to send on its channel.
 struct ViewUpdate {
@@ -115,6 +129,7 @@ class ViewModel {
   std::map<std::string, const sim::HandRig*> rigs_;
   std::map<client::HandKey, Hand> hands_;
   std::map<int, Object> objects_;
+  std::map<std::string, ObjectMesh> meshes_;  ///< By model name, once its geometry arrived.
   std::size_t next_colour_ = 0;
   std::map<std::string, std::string> sent_;      ///< Entity id -> appearance key last sent.
   std::uint64_t last_scene_tick_ = 0;
@@ -124,13 +139,12 @@ class ViewModel {
   std::optional<Json> server_status_;
 };
 
-/// THE place where object meshes plug in. Adds to `entity` (in the object's own frame) the
-/// primitives that draw an object. Today no subscriber knows an object's shape, so this draws a
-/// placeholder box of `half_extent` (grown to enclose every contact point seen on the object,
-/// at least 2 cm) and the object's name. When the ObjectGeometry topic arrives (issue 11 §0),
-/// a known mesh goes here as a foxglove TriangleListPrimitive (`points` and `indices` in the
-/// object frame), sent once per object and to each viewer that subscribes later.
+/// Adds to `entity` (in the object's own frame) the primitives that draw an object: its mesh as a
+/// foxglove TriangleListPrimitive when the server published it (`mesh` not null; sent once per
+/// object and to each viewer that subscribes later, and again only when its colour changes), else
+/// a placeholder box of `half_extent` (grown to enclose every contact point seen on the object, at
+/// least 2 cm); and the object's name.
 void add_object_geometry(Json& entity, const client::ObjectState& object, const Eigen::Vector3d& half_extent,
-                         const Rgba& colour);
+                         const Rgba& colour, const ObjectMesh* mesh);
 
 }  // namespace telegrasp::view
