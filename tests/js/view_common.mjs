@@ -120,9 +120,11 @@ export function options() {
 }
 
 // Starts telegrasp-server and telegrasp-view (any free port, 127.0.0.1) on their own domain;
-// resolves { domain, port, server, view } once the view listens.
+// resolves { domain, port, server, view } once the view listens. $TELEGRASP_VIEW_TEST_OBJECTS
+// names a mesh folder for the server (e.g. ../shared/data/ycb for the README's screenshot).
 export async function startServerAndView(bin, out, domain) {
-  const server = start(path.join(bin, "telegrasp-server"), ["--domain", String(domain), "--profile", "loopback"], {
+  const objects = process.env.TELEGRASP_VIEW_TEST_OBJECTS ? ["--objects", process.env.TELEGRASP_VIEW_TEST_OBJECTS] : [];
+  const server = start(path.join(bin, "telegrasp-server"), ["--domain", String(domain), "--profile", "loopback", ...objects], {
     log: path.join(out, "server.log"),
   });
   let port = null;
