@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs every Debian package telegrasp needs to build, test and run, then the npm packages of
-# tests/js (the reference MCAP reader the tests check telegrasp's recordings with). Idempotent and
+# tests/js (the reference MCAP reader the tests check telegrasp's recordings with, the Foxglove
+# client and playwright-core for telegrasp-view's tests) and of client_lib/tools/view/web (three.js
+# and @foxglove/schemas, which telegrasp-view's page and schemas are built from). Idempotent and
 # quiet when everything is present. Run as root (or with sudo available) on Debian 12.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -12,6 +14,7 @@ packages=(
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
   libgtest-dev libgmock-dev libbenchmark-dev
   libzstd-dev
+  libboost-dev chromium
 )
 # Node.js runs tests/js; a machine with its own node on PATH keeps it.
 command -v node >/dev/null || packages+=(nodejs npm)
@@ -33,9 +36,11 @@ if [ ${#missing[@]} -gt 0 ]; then
   $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
-# tests/js: exactly the versions in package-lock.json, reinstalled when the lock is newer.
-js="$root/tests/js"
-if [ ! -d "$js/node_modules" ] || [ "$js/node_modules" -ot "$js/package-lock.json" ]; then
-  echo "install-deps: npm ci in tests/js" >&2
-  (cd "$js" && npm ci --no-audit --no-fund --loglevel=error >/dev/null)
-fi
+# npm packages: exactly the versions in each package-lock.json, reinstalled when the lock is newer.
+for dir in tests/js client_lib/tools/view/web; do
+  js="$root/$dir"
+  if [ ! -d "$js/node_modules" ] || [ "$js/node_modules" -ot "$js/package-lock.json" ]; then
+    echo "install-deps: npm ci in $dir" >&2
+    (cd "$js" && npm ci --no-audit --no-fund --loglevel=error >/dev/null)
+  fi
+done

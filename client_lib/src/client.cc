@@ -17,6 +17,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <thread>
 #include <utility>
@@ -98,6 +99,10 @@ struct Client::Impl {
   void received(const msg::GraspEvent& m, const dds::InstanceHandle_t& instance);
   void received(const msg::SceneState& m, const dds::InstanceHandle_t& instance);
   void received(const msg::ServerStatus& m, const dds::InstanceHandle_t& instance);
+  void received(const msg::ObjectGeometry& m, const dds::InstanceHandle_t& instance);
+  // The (checked) geometry `m` describes, built from a cached one with the same content hash: the
+  // very same object if nothing differs, else a new one with a copy of its mesh; null if none is cached.
+  std::shared_ptr<const ObjectGeometry> cached_geometry(const msg::ObjectGeometry& m);
   // Called when the server disposes a hand's instance (the hand left): it leaves latest_*.
   void disposed(const msg::HandSkeleton*, const dds::InstanceHandle_t& instance) { forget(skeletons, instance); }
   void disposed(const msg::GraspState*, const dds::InstanceHandle_t& instance) { forget(grasp_states, instance); }
@@ -133,6 +138,9 @@ struct Client::Impl {
   std::optional<SceneState> scene;
   std::optional<ServerStatus> status;
   std::vector<GraspEvent> events;  // for take_grasp_events
+  std::map<std::string, std::shared_ptr<const ObjectGeometry>> geometries;         // newest per model
+  std::multimap<std::uint64_t, std::weak_ptr<const ObjectGeometry>> geometry_by_hash;  // cache of those in use
+  std::set<std::string> geometry_rejections_logged;                               // model and reason
 
   // User callbacks, one channel per output.
   Channel<HandSkeleton> skeleton_channel;
@@ -141,6 +149,7 @@ struct Client::Impl {
   Channel<GraspEvent> grasp_event_channel;
   Channel<SceneState> scene_state_channel;
   Channel<ServerStatus> server_status_channel;
+  Channel<std::shared_ptr<const ObjectGeometry>> geometry_channel;
   std::vector<GraspEvent> unseen_events;  // arrived while no event callback was set; under its channel's mutex
   std::atomic<bool> callback_threw{false};
 
@@ -193,6 +202,7 @@ Client::Impl::Impl(ClientOptions options_in) : options(std::move(options_in)) {
     if (options.topics & kGraspEvents) reader<msg::GraspEventPubSubType>(idl::kGraspEventTopic);
     if (options.topics & kSceneStates) reader<msg::SceneStatePubSubType>(idl::kSceneStateTopic);
     if (options.topics & kServerStatuses) reader<msg::ServerStatusPubSubType>(idl::kServerStatusTopic);
+    if (options.topics & kObjectGeometries) reader<msg::ObjectGeometryPubSubType>(idl::kObjectGeometryTopic);
   } catch (...) {
     close();
     throw;
@@ -321,6 +331,61 @@ void Client::Impl::received(const msg::ServerStatus& m, const dds::InstanceHandl
   call(server_status_channel, s, "ServerStatus");
 }
 
+std::shared_ptr<const ObjectGeometry> Client::Impl::cached_geometry(const msg::ObjectGeometry& m) {
+  const ObjectGeometry header = client_lib::from_msg_without_mesh(m);
+  auto same_mesh = [&](const ObjectGeometry& c) {
+    return c.vertex_count == header.vertex_count && c.triangle_count == header.triangle_count && c.mesh_omitted == header.mesh_omitted;
+  };
+  auto same_rest = [&](const ObjectGeometry& c) {
+    return c.model == header.model && c.p_ObjectMin == header.p_ObjectMin && c.p_ObjectMax == header.p_ObjectMax &&
+           c.mass_kg == header.mass_kg && c.volume_m3 == header.volume_m3 && c.inertia_diagonal == header.inertia_diagonal &&
+           c.p_ObjectSourceOrigin == header.p_ObjectSourceOrigin;
+  };
+  std::shared_ptr<const ObjectGeometry> mesh_donor;
+  {
+    std::lock_guard lock(data_mutex);
+    const auto [begin, end] = geometry_by_hash.equal_range(m.content_hash());
+    for (auto it = begin; it != end; ++it) {
+      std::shared_ptr<const ObjectGeometry> c = it->second.lock();
+      if (!c || !same_mesh(*c)) continue;
+      if (same_rest(*c)) return c;  // nothing differs: the very same object
+      mesh_donor = std::move(c);
+    }
+  }
+  if (!mesh_donor) return nullptr;
+  ObjectGeometry g = header;  // the same mesh under another name or with other properties
+  g.vertices = mesh_donor->vertices;
+  g.triangles = mesh_donor->triangles;
+  return std::make_shared<const ObjectGeometry>(std::move(g));
+}
+
+void Client::Impl::received(const msg::ObjectGeometry& m, const dds::InstanceHandle_t&) {
+  // Checked every time (the hash over ~200 KB costs well under a millisecond), so a sample that
+  // claims a cached hash but carries other bytes is dropped, not mistaken for the cached mesh.
+  if (const std::string why = client_lib::check_object_geometry(m); !why.empty()) {
+    const std::string model = m.model().to_string();
+    bool first = false;
+    {
+      std::lock_guard lock(data_mutex);
+      first = geometry_rejections_logged.insert(model + '\n' + why).second;
+    }
+    if (first) std::cerr << "telegrasp client: dropped the ObjectGeometry of model '" << model << "': " << why << "\n";
+    return;
+  }
+  std::shared_ptr<const ObjectGeometry> g = cached_geometry(m);
+  if (!g) g = std::make_shared<const ObjectGeometry>(from_msg(m));
+  std::lock_guard delivery(geometry_channel.mutex);
+  {
+    std::lock_guard lock(data_mutex);
+    geometries[g->model] = g;
+    std::erase_if(geometry_by_hash, [](const auto& entry) { return entry.second.expired(); });
+    const auto [begin, end] = geometry_by_hash.equal_range(g->content_hash);
+    if (std::none_of(begin, end, [&](const auto& entry) { return entry.second.lock() == g; }))
+      geometry_by_hash.emplace(g->content_hash, g);
+  }
+  call(geometry_channel, g, "ObjectGeometry");
+}
+
 Client::Client(ClientOptions options) : impl_(std::make_unique<Impl>(std::move(options))) {}
 
 Client::~Client() = default;
@@ -409,6 +474,25 @@ void Client::on_scene_state(std::function<void(const SceneState&)> callback) {
 void Client::on_server_status(std::function<void(const ServerStatus&)> callback) {
   impl_->set_callback(impl_->server_status_channel, std::move(callback),
                       [&] { return optional_as_vector(latest_server_status()); }, "ServerStatus");
+}
+
+void Client::on_object_geometry(std::function<void(const std::shared_ptr<const ObjectGeometry>&)> callback) {
+  impl_->set_callback(impl_->geometry_channel, std::move(callback), [&] {
+    std::vector<std::shared_ptr<const ObjectGeometry>> all;
+    for (auto& [model, g] : object_geometries()) all.push_back(std::move(g));
+    return all;
+  }, "ObjectGeometry");
+}
+
+std::shared_ptr<const ObjectGeometry> Client::object_geometry(const std::string& model) const {
+  std::lock_guard lock(impl_->data_mutex);
+  const auto it = impl_->geometries.find(model);
+  return it == impl_->geometries.end() ? nullptr : it->second;
+}
+
+std::map<std::string, std::shared_ptr<const ObjectGeometry>> Client::object_geometries() const {
+  std::lock_guard lock(impl_->data_mutex);
+  return impl_->geometries;
 }
 
 std::optional<SceneState> Client::latest_scene_state() const {

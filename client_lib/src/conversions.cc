@@ -1,6 +1,9 @@
 #include "conversions.h"
 
 #include "telegrasp/idl/eigen_conversions.h"
+#include "telegrasp/idl/geometry_hash.h"
+
+#include <cmath>
 
 namespace telegrasp::client_lib {
 
@@ -173,7 +176,7 @@ client::ContactSet from_msg(const msg::ContactSet& m) {
   return s;
 }
 
-msg::CapsuleReport to_msg(const client::CapsuleReport& r) {
+msg::CapsuleReport to_msg(const client::CapsuleMetric& r) {
   msg::CapsuleReport m;
   m.phalanx(static_cast<std::int16_t>(r.phalanx));
   m.phalanx_name(r.phalanx_name);
@@ -184,8 +187,8 @@ msg::CapsuleReport to_msg(const client::CapsuleReport& r) {
   return m;
 }
 
-client::CapsuleReport from_msg(const msg::CapsuleReport& m) {
-  client::CapsuleReport r;
+client::CapsuleMetric from_msg(const msg::CapsuleReport& m) {
+  client::CapsuleMetric r;
   r.phalanx = m.phalanx();
   r.phalanx_name = m.phalanx_name().to_string();
   r.hit = m.hit();
@@ -247,7 +250,7 @@ client::GraspEvent from_msg(const msg::GraspEvent& m) {
   e.input_sequence = m.input_sequence();
   e.hand_error_mm = m.hand_error_mm();
   e.capsules_without_hit = m.capsules_without_hit();
-  e.capsules = from_msgs<client::CapsuleReport>(m.capsules());
+  e.capsules = from_msgs<client::CapsuleMetric>(m.capsules());
   e.contacts = from_msgs<client::ContactPoint>(m.contacts());
   e.v_WorldObject = from_msg(m.release_velocity());
   e.w_WorldObject = from_msg(m.release_angular_velocity());
@@ -386,6 +389,70 @@ client::ServerStatus from_msg(const msg::ServerStatus& m) {
   s.models.reserve(m.models().size());
   for (const auto& model : m.models()) s.models.push_back(model.to_string());
   return s;
+}
+
+msg::ObjectGeometry to_msg(const client::ObjectGeometry& g) {
+  msg::ObjectGeometry m;
+  m.model(g.model);
+  m.content_hash(g.content_hash);
+  m.vertex_count(g.vertex_count);
+  m.triangle_count(g.triangle_count);
+  m.mesh_omitted(g.mesh_omitted);
+  m.vertices().reserve(3 * g.vertices.size());
+  for (const Eigen::Vector3f& v : g.vertices) m.vertices().insert(m.vertices().end(), {v.x(), v.y(), v.z()});
+  m.triangles().reserve(3 * g.triangles.size());
+  for (const auto& t : g.triangles) m.triangles().insert(m.triangles().end(), t.begin(), t.end());
+  m.p_min(to_msg(g.p_ObjectMin));
+  m.p_max(to_msg(g.p_ObjectMax));
+  m.mass(g.mass_kg);
+  m.volume(g.volume_m3);
+  m.inertia_diagonal(to_msg(g.inertia_diagonal));
+  m.p_source_origin(to_msg(g.p_ObjectSourceOrigin));
+  return m;
+}
+
+client::ObjectGeometry from_msg_without_mesh(const msg::ObjectGeometry& m) {
+  client::ObjectGeometry g;
+  g.model = m.model().to_string();
+  g.content_hash = m.content_hash();
+  g.vertex_count = m.vertex_count();
+  g.triangle_count = m.triangle_count();
+  g.mesh_omitted = m.mesh_omitted();
+  g.p_ObjectMin = from_msg(m.p_min());
+  g.p_ObjectMax = from_msg(m.p_max());
+  g.mass_kg = m.mass();
+  g.volume_m3 = m.volume();
+  g.inertia_diagonal = from_msg(m.inertia_diagonal());
+  g.p_ObjectSourceOrigin = from_msg(m.p_source_origin());
+  return g;
+}
+
+client::ObjectGeometry from_msg(const msg::ObjectGeometry& m) {
+  client::ObjectGeometry g = from_msg_without_mesh(m);
+  const std::vector<float>& xyz = m.vertices();
+  g.vertices.reserve(xyz.size() / 3);
+  for (std::size_t i = 0; i + 2 < xyz.size(); i += 3) g.vertices.emplace_back(xyz[i], xyz[i + 1], xyz[i + 2]);
+  const std::vector<std::uint32_t>& idx = m.triangles();
+  g.triangles.reserve(idx.size() / 3);
+  for (std::size_t i = 0; i + 2 < idx.size(); i += 3) g.triangles.push_back({idx[i], idx[i + 1], idx[i + 2]});
+  return g;
+}
+
+std::string check_object_geometry(const msg::ObjectGeometry& m) {
+  const std::vector<float>& xyz = m.vertices();
+  const std::vector<std::uint32_t>& idx = m.triangles();
+  if (m.mesh_omitted()) return xyz.empty() && idx.empty() ? "" : "mesh_omitted but vertices or triangles sent";
+  if (xyz.size() != 3ull * m.vertex_count())
+    return std::to_string(xyz.size()) + " vertex coordinates for vertex_count " + std::to_string(m.vertex_count());
+  if (idx.size() != 3ull * m.triangle_count())
+    return std::to_string(idx.size()) + " triangle indices for triangle_count " + std::to_string(m.triangle_count());
+  for (float c : xyz)
+    if (!std::isfinite(c)) return "a non-finite vertex coordinate";
+  for (std::uint32_t i : idx)
+    if (i >= m.vertex_count()) return "triangle index " + std::to_string(i) + " past the " + std::to_string(m.vertex_count()) + " vertices";
+  if (idl::geometry_content_hash(xyz.data(), m.vertex_count(), idx.data(), m.triangle_count()) != m.content_hash())
+    return "content_hash does not match the mesh";
+  return "";
 }
 
 }  // namespace telegrasp::client_lib

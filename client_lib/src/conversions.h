@@ -57,9 +57,9 @@ msg::ContactSet to_msg(const client::ContactSet& contacts);
 client::ContactSet from_msg(const msg::ContactSet& contacts);
 
 /// A capsule report as the IDL message.
-msg::CapsuleReport to_msg(const client::CapsuleReport& report);
+msg::CapsuleReport to_msg(const client::CapsuleMetric& report);
 /// An IDL capsule report as the client type.
-client::CapsuleReport from_msg(const msg::CapsuleReport& report);
+client::CapsuleMetric from_msg(const msg::CapsuleReport& report);
 
 /// A grasp event kind as the IDL enum.
 msg::GraspEventKind to_msg(client::GraspEvent::Kind kind);
@@ -96,5 +96,17 @@ client::SceneCommand from_msg(const msg::SceneCommand& command);
 msg::ServerStatus to_msg(const client::ServerStatus& status);
 /// An IDL server status as the client type.
 client::ServerStatus from_msg(const msg::ServerStatus& status);
+
+/// An object geometry as the IDL message (vertices and triangles flattened, every field as given).
+msg::ObjectGeometry to_msg(const client::ObjectGeometry& geometry);
+/// An IDL object geometry as the client type (trailing partial vertices or triangles dropped; see
+/// check_object_geometry).
+client::ObjectGeometry from_msg(const msg::ObjectGeometry& geometry);
+/// Everything of an IDL object geometry but its vertices and triangles (left empty).
+client::ObjectGeometry from_msg_without_mesh(const msg::ObjectGeometry& geometry);
+/// "" if a received geometry is whole and intact, else why not: sequence lengths that disagree with
+/// the counts (or a mesh both omitted and sent), a non-finite coordinate, a triangle index past the
+/// vertices, or a content hash that does not match the mesh.
+std::string check_object_geometry(const msg::ObjectGeometry& geometry);
 
 }  // namespace telegrasp::client_lib

@@ -1,5 +1,7 @@
 #include "conversions.h"
 
+#include "telegrasp/idl/geometry_hash.h"
+
 namespace telegrasp::server {
 
 sim::ControllerInput to_sim_input(const msg::ControllerState& state) {
@@ -116,6 +118,48 @@ msg::GraspEvent make_grasp_event(const sim::GraspEvent& e, const sim::HandRig& r
   m.release_velocity(to_msg(e.v_WorldObject));
   m.release_angular_velocity(to_msg(e.w_WorldObject));
   return m;
+}
+
+msg::ObjectGeometry make_object_geometry(const sim::ObjectModel& model, std::uint32_t max_triangles) {
+  const sim::TriangleMesh& mesh = model.mesh;
+  std::vector<float> xyz;
+  xyz.reserve(3 * mesh.vertices.size());
+  for (const Eigen::Vector3d& v : mesh.vertices)
+    for (int k = 0; k < 3; ++k) xyz.push_back(static_cast<float>(v[k]));
+  std::vector<std::uint32_t> indices;
+  indices.reserve(3 * mesh.triangles.size());
+  for (const auto& t : mesh.triangles) indices.insert(indices.end(), t.begin(), t.end());
+
+  msg::ObjectGeometry m;
+  m.model(model.name);
+  m.content_hash(idl::geometry_content_hash(xyz.data(), mesh.vertices.size(), indices.data(), mesh.triangles.size()));
+  m.vertex_count(static_cast<std::uint32_t>(mesh.vertices.size()));
+  m.triangle_count(static_cast<std::uint32_t>(mesh.triangles.size()));
+  m.mesh_omitted(mesh.triangles.size() > max_triangles);
+  if (!m.mesh_omitted()) {
+    m.vertices(std::move(xyz));
+    m.triangles(std::move(indices));
+  }
+  m.p_min(to_msg(model.p_ObjectMin));
+  m.p_max(to_msg(model.p_ObjectMax));
+  m.mass(model.mass_kg);
+  const sim::MassProperties& mp = model.mass_properties;
+  m.volume(mp.volume);
+  const double density = mp.volume > 0 ? model.mass_kg / mp.volume : 0.0;
+  m.inertia_diagonal(to_msg(Eigen::Vector3d(mp.inertia_per_density.diagonal() * density)));
+  m.p_source_origin(to_msg(Eigen::Vector3d(-model.p_OriginalCenterOfMass)));
+  return m;
+}
+
+sim::TriangleMesh to_sim_mesh(const msg::ObjectGeometry& m) {
+  sim::TriangleMesh mesh;
+  const std::vector<float>& xyz = m.vertices();
+  mesh.vertices.reserve(xyz.size() / 3);
+  for (std::size_t i = 0; i + 2 < xyz.size(); i += 3) mesh.vertices.emplace_back(xyz[i], xyz[i + 1], xyz[i + 2]);
+  const std::vector<std::uint32_t>& idx = m.triangles();
+  mesh.triangles.reserve(idx.size() / 3);
+  for (std::size_t i = 0; i + 2 < idx.size(); i += 3) mesh.triangles.push_back({idx[i], idx[i + 1], idx[i + 2]});
+  return mesh;
 }
 
 }  // namespace telegrasp::server

@@ -5,6 +5,7 @@
 #include "telegrasp/idl/eigen_conversions.h"
 #include "telegrasp/idl/telegrasp.h"
 #include "telegrasp/sim/hand_controller.h"
+#include "telegrasp/sim/object_model.h"
 #include "telegrasp/sim/world.h"
 
 #include <Eigen/Geometry>
@@ -57,5 +58,16 @@ struct EventContext {
   std::uint64_t input_sequence = 0;
 };
 msg::GraspEvent make_grasp_event(const sim::GraspEvent& event, const sim::HandRig& rig, const EventContext& context);
+
+/// A model's shape and mass as published on the ObjectGeometry topic: its mesh in the model frame
+/// (origin at the centre of mass) with vertices rounded to float32, the content hash of that
+/// (idl/geometry_hash.h), bounds, mass, volume, inertia diagonal (kg m^2, model axes) and where the
+/// source file's origin lies. A mesh of more than `max_triangles` triangles goes out without
+/// vertices and triangles, `mesh_omitted` set; everything else, the hash included, is still given.
+msg::ObjectGeometry make_object_geometry(const sim::ObjectModel& model,
+                                         std::uint32_t max_triangles = msg::OBJECT_GEOMETRY_MAX_TRIANGLES);
+/// The mesh a geometry message carries (vertices widened to double; empty if omitted). Expects a
+/// message whose sequences hold whole vertices and triangles with indices in range.
+sim::TriangleMesh to_sim_mesh(const msg::ObjectGeometry& geometry);
 
 }  // namespace telegrasp::server

@@ -74,7 +74,7 @@ struct DdsNode::Impl {
   SceneCommandListener command_listener;
   idl::DdsParticipant participant;
   dds::DataWriter *skeleton = nullptr, *grasp_state = nullptr, *contacts = nullptr, *events = nullptr,
-                  *scene = nullptr, *status = nullptr;
+                  *scene = nullptr, *status = nullptr, *geometry = nullptr;
 };
 
 DdsNode::DdsNode(int domain, const std::string& profile, const std::string& profiles_file, InputMailbox& mailbox)
@@ -87,11 +87,22 @@ DdsNode::DdsNode(int domain, const std::string& profile, const std::string& prof
   d.events = p.writer<msg::GraspEventPubSubType>(idl::kGraspEventTopic);
   d.scene = p.writer<msg::SceneStatePubSubType>(idl::kSceneStateTopic);
   d.status = p.writer<msg::ServerStatusPubSubType>(idl::kServerStatusTopic);
+  d.geometry = p.writer<msg::ObjectGeometryPubSubType>(idl::kObjectGeometryTopic);
   p.reader<msg::ControllerStatePubSubType>(idl::kControllerStateTopic, &d.input_listener);
   p.reader<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic, &d.command_listener);
 }
 
 DdsNode::~DdsNode() = default;
+
+void DdsNode::publish_geometries(const std::vector<sim::ObjectModelPtr>& models) {
+  for (const sim::ObjectModelPtr& model : models) {
+    msg::ObjectGeometry m = make_object_geometry(*model);
+    if (m.mesh_omitted())
+      std::cerr << "telegrasp-server: model " << model->name << " has " << m.triangle_count() << " triangles, over the "
+                << msg::OBJECT_GEOMETRY_MAX_TRIANGLES << " ObjectGeometry carries: published without its mesh\n";
+    if (!impl_->geometry->write(&m)) std::cerr << "telegrasp-server: could not publish the geometry of model " << model->name << "\n";
+  }
+}
 
 std::vector<msg::SceneCommand> DdsNode::take_commands() {
   std::lock_guard lock(impl_->command_listener.mutex);

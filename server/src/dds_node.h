@@ -20,6 +20,13 @@ class DdsNode final : public OutputSink {
   DdsNode(const DdsNode&) = delete;
   DdsNode& operator=(const DdsNode&) = delete;
 
+  /// Publishes the ObjectGeometry of every model (make_object_geometry), one instance per model
+  /// name; the writer keeps them for subscribers that join later. Models are fixed for a server's
+  /// life, so this is called once, at start-up. A model whose mesh is over
+  /// OBJECT_GEOMETRY_MAX_TRIANGLES, or whose sample cannot be written, is named on stderr; the
+  /// server goes on.
+  void publish_geometries(const std::vector<sim::ObjectModelPtr>& models);
+
   /// Scene commands received since the last call, in arrival order.
   std::vector<msg::SceneCommand> take_commands();
 

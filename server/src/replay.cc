@@ -67,7 +67,7 @@ void load_recorded_meshes(const proto::ModelSource& ms, const std::string& dir, 
     throw RecordingError(origin + ": the meshes it was recorded with are not in " + dir + ": " + join(problems, "; "));
   for (const std::string& path : paths) {
     try {
-      a.models.push_back(sim::load_object_model(path));
+      a.models.push_back(sim::load_protocol_object_model(path));
     } catch (const sim::MeshLoadError& e) {
       throw RecordingError(origin + ": " + e.what());
     }

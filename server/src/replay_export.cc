@@ -1,5 +1,6 @@
 #include "replay_export.h"
 
+#include "csv.h"
 #include "replay_diff.h"
 #include "telegrasp/idl/topics.h"
 #include "telegrasp/sim/hand_rig.h"
@@ -13,14 +14,6 @@
 
 namespace telegrasp::server {
 namespace {
-
-// A CSV field: quoted only when it must be (RFC 4180).
-std::string csv_field(const std::string& s) {
-  if (s.find_first_of(",\"\r\n") == std::string::npos) return s;
-  std::string out = "\"";
-  for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return out + "\"";
-}
 
 // The phalanx names of a recorded rig; none if this build cannot parse it.
 std::vector<std::string> phalanx_names(const proto::RigText& r) {
@@ -38,15 +31,15 @@ std::string csv_vec3(const msg::Vec3& p) { return shortest_number(p.x()) + "," +
 // Writes a row per contact of grasp event `ev`; `names`: the phalanx names by side. Returns the rows.
 std::uint64_t write_contact_rows(std::ostream& out, const msg::GraspEvent& ev, const std::vector<std::string> (&names)[2]) {
   const unsigned side = ev.hand_side();
-  const std::string prefix = std::to_string(ev.event_id()) + "," + csv_field(ev.client_id().to_string()) + "," +
+  const std::string prefix = std::to_string(ev.event_id()) + "," + csv::field(ev.client_id().to_string()) + "," +
                              (side == idl::kHandLeft ? "left" : side == idl::kHandRight ? "right" : std::to_string(side)) + "," +
-                             std::to_string(ev.object_id()) + "," + csv_field(ev.object_name().to_string()) + "," +
+                             std::to_string(ev.object_id()) + "," + csv::field(ev.object_name().to_string()) + "," +
                              std::to_string(ev.tick()) + "," + shortest_number(ev.time()) + ",";
   for (const msg::ContactPoint& c : ev.contacts()) {
     std::string name;
     if (c.phalanx() < 0) name = "palm";
     else if (side < 2 && static_cast<std::size_t>(c.phalanx()) < names[side].size()) name = names[side][c.phalanx()];
-    out << prefix << c.phalanx() << "," << csv_field(name) << "," << csv_vec3(c.p_world()) << "," << csv_vec3(c.n_world()) << ","
+    out << prefix << c.phalanx() << "," << csv::field(name) << "," << csv_vec3(c.p_world()) << "," << csv_vec3(c.n_world()) << ","
         << csv_vec3(c.p_object()) << "," << csv_vec3(c.n_object()) << "," << shortest_number(c.nd()) << "," << (c.nd_hit() ? 1 : 0) << "\n";
   }
   return ev.contacts().size();

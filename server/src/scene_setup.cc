@@ -47,8 +47,8 @@ SceneAssets load_scene_assets(const ServerSettings& settings) {
     for (const auto& o : sim::protocol_objects()) a.models.push_back(sim::make_standin_model(o));
   } else {
     a.model_source.objects_dir = settings.objects_dir;
-    a.models = sim::load_object_dir(settings.objects_dir);
-    // Each model's source is the file it was loaded from, in load_object_dir's order.
+    a.models = sim::load_protocol_object_dir(settings.objects_dir);
+    // Each model's source is the file it was loaded from, in load_protocol_object_dir's order.
     for (const auto& m : a.models) a.model_source.files.push_back(describe_file(m->source));
     if (settings.fill_standins) {
       // After the meshes, so a folder's mesh always wins over the stand-in of the same name.

@@ -2,11 +2,14 @@
 
 #include "server_config.pb.h"
 
+#include "cli.h"
+
 #include <google/protobuf/io/tokenizer.h>
 #include <google/protobuf/text_format.h>
 
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -42,9 +45,9 @@ void apply_config(const proto::ServerConfig& c, ServerSettings& s, const std::st
   if (has("right_rig")) s.right_rig = c.right_rig();
   if (has("left_rig")) s.left_rig = c.left_rig();
   if (has("closing_mode")) {
-    if (c.closing_mode() == "precise") s.closing_mode = sim::ClosingMode::kPrecise;
-    else if (c.closing_mode() == "discrete") s.closing_mode = sim::ClosingMode::kDiscrete;
-    else throw std::runtime_error(origin + ": closing_mode must be precise or discrete, got '" + c.closing_mode() + "'");
+    const std::optional<sim::ClosingMode> mode = sim::parse_closing_mode(c.closing_mode());
+    if (!mode) throw std::runtime_error(origin + ": closing_mode must be precise or discrete, got '" + c.closing_mode() + "'");
+    s.closing_mode = *mode;
   }
   if (has("freeze_after_s")) s.freeze_after_s = c.freeze_after_s();
   if (has("remove_after_s")) s.remove_after_s = c.remove_after_s();
@@ -75,7 +78,8 @@ void validate_settings(const ServerSettings& s, const std::string& origin) {
   auto fail = [&](const std::string& what) { throw std::runtime_error(origin + ": " + what); };
   if (s.domain < 0 || s.domain > 232) fail("domain must be in [0, 232], got " + std::to_string(s.domain));
   if (s.profile.empty()) fail("profile must not be empty");
-  if (!(s.tick_hz >= 1 && s.tick_hz <= 2000)) fail("tick_hz must be in [1, 2000], got " + std::to_string(s.tick_hz));
+  if (!(s.tick_hz >= 1 && s.tick_hz <= 2000))
+    fail("tick_hz must be in [1, 2000], got " + cli::format_number(s.tick_hz));
   if (!(s.freeze_after_s > 0)) fail("freeze_after_s must be > 0");
   if (!(s.remove_after_s >= s.freeze_after_s)) fail("remove_after_s must be >= freeze_after_s");
   if (!(s.remove_after_s <= 0.9)) fail("remove_after_s must be <= 0.9 (a silent client's object is released within 1 s)");
@@ -105,7 +109,7 @@ proto::ServerConfig to_proto(const ServerSettings& s) {
   c.set_empty_scene(s.empty_scene);
   c.set_right_rig(s.right_rig);
   c.set_left_rig(s.left_rig);
-  c.set_closing_mode(s.closing_mode == sim::ClosingMode::kDiscrete ? "discrete" : "precise");
+  c.set_closing_mode(sim::closing_mode_name(s.closing_mode));
   c.set_freeze_after_s(s.freeze_after_s);
   c.set_remove_after_s(s.remove_after_s);
   c.set_late_latch(s.late_latch);

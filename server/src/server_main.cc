@@ -8,6 +8,9 @@
 #include "server_config.h"
 #include "server_loop.h"
 
+#include "cli.h"
+#include "telegrasp/sim/mesh_loading.h"
+
 #include <pthread.h>
 #include <signal.h>
 
@@ -16,6 +19,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <vector>
 
 namespace {
 
@@ -50,52 +54,31 @@ Options (override the --config file):
   -h, --help          this text
 
 Stops cleanly on SIGINT or SIGTERM.
+Exit status: 0 stopped cleanly (or --list-models done), 1 a runtime failure (a configuration,
+rig or mesh file or the --objects folder missing or unreadable, DDS could not start), 2 a usage
+error (a bad or missing option or value).
 )";
 
-[[noreturn]] void usage_error(const std::string& what) {
-  std::cerr << "telegrasp-server: " << what << "\n(see telegrasp-server --help)\n";
-  std::exit(2);
-}
-
-double parse_number(const std::string& flag, const std::string& v) {
-  char* end = nullptr;
-  const double x = std::strtod(v.c_str(), &end);
-  if (v.empty() || *end != '\0') usage_error(flag + " expects a number, got '" + v + "'");
-  return x;
-}
+[[noreturn]] void usage_error(const std::string& what) { cli::usage_exit("telegrasp-server", what); }
 
 struct Flags {
   ServerSettings settings;
   bool list_models = false;
+  bool objects_flag = false;  // --objects given (else objects_dir, if any, is the config file's)
 };
 
-Flags parse(int argc, char** argv) {
-  Flags f;
-  // The file first, so flags override it whatever their order.
-  for (int i = 1; i + 1 < argc; ++i)
-    if (std::string(argv[i]) == "--config") {
-      try {
-        load_server_config(argv[i + 1], f.settings);
-      } catch (const std::exception& e) {
-        std::cerr << "telegrasp-server: " << e.what() << "\n";
-        std::exit(1);
-      }
-    }
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) usage_error(a + " needs a value");
-      return argv[++i];
-    };
-    ServerSettings& s = f.settings;
-    if (a == "-h" || a == "--help") { std::cout << kUsage; std::exit(0); }
-    else if (a == "--config") value();
-    else if (a == "--domain") s.domain = static_cast<int>(parse_number(a, value()));
-    else if (a == "--profile") s.profile = value();
+// Applies the flags onto `f` (after any --config file: flags override it whatever their order);
+// collects the --config files into `configs`.
+void apply_flags(int argc, char** argv, Flags& f, std::vector<std::string>& configs) {
+  ServerSettings& s = f.settings;
+  cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
+    if (a == "--config") configs.push_back(value());
+    else if (a == "--domain") s.domain = cli::parse_domain(a, value(), usage_error);
+    else if (a == "--profile") s.profile = cli::parse_profile(a, value(), usage_error);
     else if (a == "--profiles") s.profiles_file = value();
-    else if (a == "--objects") s.objects_dir = value();
-    else if (a == "--empty-scene") { s.empty_scene = true; s.objects.clear(); }
-    else if (a == "--tick-hz") s.tick_hz = parse_number(a, value());
+    else if (a == "--objects") s.objects_dir = value(), f.objects_flag = true;
+    else if (a == "--empty-scene") s.empty_scene = true, s.objects.clear();
+    else if (a == "--tick-hz") s.tick_hz = cli::parse_number(a, value(), 1, 2000, usage_error);
     else if (a == "--no-late-latch") s.late_latch = false;
     else if (a == "--lockstep") s.lockstep = true;
     else if (a == "--list-models") f.list_models = true;
@@ -103,11 +86,32 @@ Flags parse(int argc, char** argv) {
     else if (a == "--record") s.record_path = value();
     else if (a == "--mode") {
       const std::string m = value();
-      if (m == "precise") s.closing_mode = sim::ClosingMode::kPrecise;
-      else if (m == "discrete") s.closing_mode = sim::ClosingMode::kDiscrete;
-      else usage_error("--mode expects precise or discrete, got '" + m + "'");
-    } else usage_error("unknown option '" + a + "'");
+      const std::optional<sim::ClosingMode> mode = sim::parse_closing_mode(m);
+      if (!mode) usage_error("--mode expects precise or discrete, got '" + m + "'");
+      s.closing_mode = *mode;
+    } else {
+      return false;
+    }
+    return true;
+  });
+}
+
+Flags parse(int argc, char** argv) {
+  // Every flag is checked first, then the files are read, then the flags applied over them.
+  std::vector<std::string> configs;
+  Flags checked;
+  apply_flags(argc, argv, checked, configs);
+  Flags f;
+  for (const std::string& config : configs) {
+    try {
+      load_server_config(config, f.settings);
+    } catch (const std::exception& e) {
+      std::cerr << "telegrasp-server: " << e.what() << "\n";
+      std::exit(cli::kExitFailure);
+    }
   }
+  std::vector<std::string> again;
+  apply_flags(argc, argv, f, again);
   try {
     validate_settings(f.settings, "command line");
   } catch (const std::exception& e) {
@@ -159,15 +163,20 @@ int main(int argc, char** argv) {
       for (const auto& m : assets.models) std::cout << m->name << "\n";
       return 0;
     }
+  } catch (const sim::MeshLoadError& e) {  // names the folder or the file in it
+    const char* origin = settings.objects_dir.empty() ? "" : flags.objects_flag ? "--objects " : "objects_dir ";
+    std::cerr << "telegrasp-server: " << origin << e.what() << "\n";
+    return cli::kExitFailure;
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-server: " << e.what() << "\n";
-    return 1;
+    return cli::kExitFailure;
   }
 
   InputMailbox mailbox({assets.left_rig->fingers().size(), assets.right_rig->fingers().size()}, settings.max_hands);
   const sigset_t stop_signals = block_stop_signals();  // before the DDS threads start
   try {
     DdsNode node(settings.domain, settings.profile, settings.profiles_file, mailbox);
+    node.publish_geometries(assets.models);
     // Declared before the scene, so the scene goes first and the recorder then closes the file.
     std::optional<Recorder> recorder;
     if (!settings.record_path.empty()) recorder.emplace(settings.record_path, settings, assets, node);
@@ -184,7 +193,7 @@ int main(int argc, char** argv) {
               << " inputs accepted, " << loop.missed_ticks() << " ticks missed\n";
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-server: " << e.what() << "\n";
-    return 1;
+    return cli::kExitFailure;
   }
   return 0;
 }

@@ -1,13 +1,16 @@
 // telegrasp-replay: re-runs a telegrasp-server recording in-process and reports the first
-// divergence, or exports every grasp's contacts as CSV.
+// divergence, or exports every grasp's contacts as CSV, or the run as an MCAP file with
+// telegrasp-view's channels.
 #include "replay.h"
 #include "replay_export.h"
+#include "replay_export_mcap.h"
+
+#include "cli.h"
+#include "progress_line.h"
 
 #include <nlohmann/json.hpp>
 
-#include <unistd.h>
-
-#include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -30,39 +33,43 @@ Options:
                            checked against the recorded sizes and hashes)
   --export-contacts CSV    instead of replaying, write every grasp's contacts to CSV, one row
                            per contact (world and object frames, phalanx, ND); needs no meshes
+  --export-mcap FILE       instead of replaying, write the run as an MCAP file with the channels
+                           of telegrasp-view (/scene, /tf, /grasp_state, /grasp_events,
+                           /server_status), for Foxglove or Lichtblick; log time: the recording's
+                           start plus the server time of the samples; needs no meshes
+  --mcap-rate HZ           with --export-mcap: view updates per second of server time, 1..240
+                           (default 30, as telegrasp-view)
   --json FILE              also write the result as JSON
   -h, --help               this text
 
-Exit status:
-  0  identical (or contacts exported)
+Exit status (1 is a divergence here, not a runtime failure as for the other tools):
+  0  identical (or exported)
   1  the replay diverges from the recording
-  2  bad usage, or the recording's header cannot be read or the scene rebuilt
+  2  a usage error (a bad or missing option or value), or the recording's header cannot be
+     read, the scene rebuilt or an output file written
   3  the recording is truncated or corrupt: everything before the damage was replayed
      (exported) and reported
 )";
 
-[[noreturn]] void usage_error(const std::string& what) {
-  std::cerr << "telegrasp-replay: " << what << "\n(see telegrasp-replay --help)\n";
-  std::exit(2);
-}
+[[noreturn]] void usage_error(const std::string& what) { telegrasp::cli::usage_exit("telegrasp-replay", what); }
 
-// Progress on stderr for files big enough to take a while; at most once a second.
+// Progress on stderr for files big enough to take a while.
 class Progress {
  public:
   void operator()(const RecordingReader& r) {
     if (r.file_size() < (8u << 20)) return;
-    const auto now = std::chrono::steady_clock::now();
     const bool last = r.offset() >= r.file_size() || r.damage() || r.complete();
-    if (!last && now - last_ < std::chrono::seconds(1)) return;
-    last_ = now;
-    std::fprintf(stderr, "%stelegrasp-replay: %3.0f%% (%llu records)%s", tty_ ? "\r" : "",
-                 100.0 * static_cast<double>(r.offset()) / static_cast<double>(r.file_size()),
-                 static_cast<unsigned long long>(r.records()), tty_ && !last ? "" : "\n");
+    if (!last && !line_.due()) return;
+    char text[96];
+    std::snprintf(text, sizeof text, "telegrasp-replay: %3.0f%% (%llu records)",
+                  100.0 * static_cast<double>(r.offset()) / static_cast<double>(r.file_size()),
+                  static_cast<unsigned long long>(r.records()));
+    if (last) line_.finish(text);
+    else line_.show(text);
   }
 
  private:
-  bool tty_ = isatty(fileno(stderr));
-  std::chrono::steady_clock::time_point last_{};
+  telegrasp::tools::ProgressLine line_;
 };
 
 nlohmann::json damage_json(const std::optional<RecordingDamage>& d) {
@@ -82,31 +89,26 @@ void write_json(const std::string& path, const nlohmann::json& j) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string recording, objects_dir, csv_path, json_path;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) usage_error(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "-h" || a == "--help") {
-      std::cout << kUsage;
-      return 0;
-    } else if (a == "--objects") {
-      objects_dir = value();
-    } else if (a == "--export-contacts") {
-      csv_path = value();
-    } else if (a == "--json") {
-      json_path = value();
-    } else if (!a.empty() && a[0] == '-') {
-      usage_error("unknown option '" + a + "'");
-    } else if (recording.empty()) {
-      recording = a;
-    } else {
-      usage_error("one recording at a time (got '" + recording + "' and '" + a + "')");
+  std::string recording, objects_dir, csv_path, mcap_path, json_path;
+  McapExportOptions mcap_options;
+  bool mcap_rate_given = false;
+  telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
+    if (a == "--objects") objects_dir = value();
+    else if (a == "--export-contacts") csv_path = value();
+    else if (a == "--export-mcap") mcap_path = value();
+    else if (a == "--mcap-rate") {
+      mcap_options.rate_hz = telegrasp::cli::parse_number(a, value(), 1, 240, usage_error);
+      mcap_rate_given = true;
     }
-  }
+    else if (a == "--json") json_path = value();
+    else if (telegrasp::cli::is_option(a)) return false;
+    else if (recording.empty()) recording = a;
+    else usage_error("one recording at a time (got '" + recording + "' and '" + a + "')");
+    return true;
+  });
   if (recording.empty()) usage_error("no recording given");
+  if (!csv_path.empty() && !mcap_path.empty()) usage_error("--export-contacts and --export-mcap: one export at a time");
+  if (mcap_rate_given && mcap_path.empty()) usage_error("--mcap-rate goes with --export-mcap");
 
   Progress progress;
   try {
@@ -116,6 +118,21 @@ int main(int argc, char** argv) {
       if (e.damage) std::cout << e.damage->message << "\n";
       if (!json_path.empty())
         write_json(json_path, {{"recording", recording}, {"csv", csv_path}, {"grasps", e.events}, {"contacts", e.rows},
+                               {"damage", damage_json(e.damage)}, {"exit_code", e.damage ? 3 : 0}});
+      return e.damage ? 3 : 0;
+    }
+    if (!mcap_path.empty()) {
+      const McapExport e = export_mcap(recording, mcap_path, mcap_options);
+      const double seconds = static_cast<double>(e.end_time_ns - e.start_time_ns) * 1e-9;
+      std::cout << "exported " << e.outputs << " outputs as " << e.messages << " messages (" << e.steps
+                << " view updates, " << telegrasp::cli::format_number(std::round(seconds * 10) / 10) << " s, "
+                << telegrasp::cli::format_number(std::round(static_cast<double>(e.bytes) / 1024.0)) << " KiB) to "
+                << mcap_path << "\n";
+      if (e.damage) std::cout << e.damage->message << "\n";
+      if (!json_path.empty())
+        write_json(json_path, {{"recording", recording}, {"mcap", mcap_path}, {"outputs", e.outputs},
+                               {"view_updates", e.steps}, {"messages", e.messages}, {"bytes", e.bytes},
+                               {"start_time_ns", e.start_time_ns}, {"end_time_ns", e.end_time_ns},
                                {"damage", damage_json(e.damage)}, {"exit_code", e.damage ? 3 : 0}});
       return e.damage ? 3 : 0;
     }
@@ -135,7 +152,7 @@ int main(int argc, char** argv) {
                              {"exit_code", r.exit_code()}});
     }
     return r.exit_code();
-  } catch (const std::exception& e) {  // RecordingError: the header, the assets, the CSV file
+  } catch (const std::exception& e) {  // RecordingError: the header, the assets, the CSV or MCAP file
     std::cerr << "telegrasp-replay: " << e.what() << "\n";
     return 2;
   }

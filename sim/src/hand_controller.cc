@@ -20,6 +20,9 @@ constexpr int kMaxAdvancementSteps = 64;
 
 bool in_unit_interval(double v) { return std::isfinite(v) && v >= 0.0 && v <= 1.0; }
 
+// +1 when the joint closes towards larger angles, else -1.
+double closing_sign(const PhalanxSpec& spec) { return spec.closed >= spec.open ? 1.0 : -1.0; }
+
 // Distance from p (object frame) to the object's bounding box; 0 inside it.
 double distance_to_bounds(const ObjectModel& model, const Eigen::Vector3d& p) {
   return (p - p.cwiseMax(model.p_ObjectMin).cwiseMin(model.p_ObjectMax)).norm();
@@ -52,14 +55,51 @@ struct HandController::Capsule {
   double radius;
 };
 
-bool HandController::TouchCache::matches(ObjectId o, const Capsule& c, bool touch) const {
-  return object.valid() && object == o && touching == touch && a == c.a && b == c.b;
-}
+struct HandController::Scratch {
+  // Where a capsule was last checked (object frame) and whether it touched; an identical pose
+  // gives the same answer without a query.
+  struct TouchCache {
+    ObjectId object;
+    Eigen::Vector3d a{0, 0, 0}, b{0, 0, 0};
+    bool touching = false;
+    bool matches(ObjectId o, const Capsule& c, bool touch) const {
+      return object.valid() && object == o && touching == touch && a == c.a && b == c.b;
+    }
+  };
+  // The last exact closest pair found for a capsule and where the capsule was: the contact
+  // search, the grasp tick's signed distances and the contacts all ask about the same resting
+  // capsules, and a bit-identical pose has the identical answer (the one a new search would
+  // give: the contact search makes the pair's triangle the capsule's hint).
+  struct ClosestCache {
+    ObjectId object;
+    const MeshDistance* mesh = nullptr;
+    Eigen::Vector3d a{0, 0, 0}, b{0, 0, 0};
+    SegmentQuery pair;  // found
+    bool matches(ObjectId o, const MeshDistance& m, const Eigen::Vector3d& pa, const Eigen::Vector3d& pb) const {
+      return object.valid() && object == o && mesh == &m && a == pa && b == pb;
+    }
+  };
+  // step_finger's work space, kept between ticks so that a tick allocates nothing.
+  struct StepWork {
+    std::vector<double> q0, delta, rate;  // per position along the finger
+    std::vector<std::size_t> affected;
+  };
 
-bool HandController::ClosestCache::matches(ObjectId o, const MeshDistance& m, const Eigen::Vector3d& pa,
-                                           const Eigen::Vector3d& pb) const {
-  return object.valid() && object == o && mesh == &m && a == pa && b == pb;
+  std::vector<TouchCache> touch;      // per phalanx
+  std::vector<ClosestCache> closest;  // per phalanx
+  StepWork work;
+};
+
+HandController::ScratchHolder::ScratchHolder() : scratch(std::make_unique<Scratch>()) {}
+HandController::ScratchHolder::ScratchHolder(const ScratchHolder& other)
+    : scratch(std::make_unique<Scratch>(*other.scratch)) {}
+HandController::ScratchHolder& HandController::ScratchHolder::operator=(const ScratchHolder& other) {
+  if (this != &other) scratch = std::make_unique<Scratch>(*other.scratch);
+  return *this;
 }
+HandController::ScratchHolder::ScratchHolder(ScratchHolder&& other) noexcept = default;
+HandController::ScratchHolder& HandController::ScratchHolder::operator=(ScratchHolder&& other) noexcept = default;
+HandController::ScratchHolder::~ScratchHolder() = default;
 
 HandController::HandController(std::shared_ptr<const HandRig> rig, GraspSettings settings)
     : rig_(std::move(rig)), settings_(settings) {
@@ -72,8 +112,8 @@ HandController::HandController(std::shared_ptr<const HandRig> rig, GraspSettings
   for (std::size_t i = 0; i < n; ++i) state_.q[i] = rig_->phalanges()[i].open;
   state_.blocked.assign(n, 0);
   state_.blocked_angle.assign(n, 0.0);
-  touch_cache_.assign(n, {});
-  closest_.assign(n, {});
+  scratch_->touch.assign(n, {});
+  scratch_->closest.assign(n, {});
   hint_.assign(n, MeshDistance::kNoHint);
   gap_bound_.assign(n, -kInf);
   forward_kinematics(*rig_, state_.q, &state_.X_PalmPhalanx);
@@ -189,233 +229,293 @@ bool HandController::depenetrate(int finger, const Eigen::Isometry3d& X_ObjectPa
     const bool touching = mesh.capsule_overlaps(c.a, c.b, c.radius + tol, hint_[id.value]);
     state_.blocked[id.value] = touching;
     state_.blocked_angle[id.value] = state_.q[id.value];
-    touch_cache_[id.value] = {object.id, c.a, c.b, touching};
+    scratch_->touch[id.value] = {object.id, c.a, c.b, touching};
   }
   return true;
 }
 
-void HandController::step_finger(int finger, double u, double dt, const ObjectView* object,
-                                 const Eigen::Isometry3d& X_ObjectPalm) {
-  const auto& chain = rig_->fingers()[finger].phalanges;
+// What one finger's step works on: its chain, the object it may touch and the closing settings.
+struct HandController::FingerStep {
+  int finger;
+  const std::vector<PhalanxId>& chain;
+  double u;
+  const ObjectView* object;  // nullptr: the finger touches nothing this tick
+  const Eigen::Isometry3d& X_ObjectPalm;
+  double tol;
+  bool precise;
+
+  [[nodiscard]] std::size_t size() const { return chain.size(); }
+  [[nodiscard]] int id(std::size_t k) const { return chain[k].value; }
+};
+
+void HandController::forget_bounds(const FingerStep& step) {
+  for (PhalanxId id : step.chain) gap_bound_[id.value] = -kInf;
+}
+
+void HandController::set_fraction(const FingerStep& step, double s) {
+  const Scratch::StepWork& work = scratch_->work;
+  for (std::size_t k = 0; k < step.size(); ++k) state_.q[step.id(k)] = work.q0[k] + s * work.delta[k];
+  update_finger_poses(step.finger);
+}
+
+void HandController::block(int id) {
+  state_.blocked[id] = 1;
+  state_.blocked_angle[id] = state_.q[id];
+  scratch_->touch[id] = {};  // checked afresh next tick
+}
+
+// Interaction manager: unblock phalanges whose hand opened past them or whose contact ended.
+// A capsule whose pose in the object frame is bit-identical to its last check (e.g. while the
+// object is held) is still touching and needs no query.
+bool HandController::unblock_phalanges(const FingerStep& step) {
   const auto& specs = rig_->phalanges();
-  const std::size_t n = chain.size();
-  const double tol = settings_.contact_tolerance;
-  const bool precise = settings_.mode == ClosingMode::kPrecise;
   // A blocked capsule stays blocked while it touches: within the tolerance (precise, with 2x
   // hysteresis against rounding) or overlapping (discrete).
-  const double release_gap = precise ? 2.0 * tol : 0.0;
-
-  // A finger whose input is fully released holds nothing: it unblocks and opens without
-  // touching anything (so a finger bent back past its open angle cannot keep a grasp).
-  if (u <= 0.0) object = nullptr;
-
-  auto closing_sign = [&](std::size_t k) { return specs[chain[k].value].closed >= specs[chain[k].value].open ? 1.0 : -1.0; };
-
-  // Interaction manager: unblock phalanges whose hand opened past them or whose contact ended.
-  // A capsule whose pose in the object frame is bit-identical to its last check (e.g. while the
-  // object is held) is still touching and needs no query.
+  const double release_gap = step.precise ? 2.0 * step.tol : 0.0;
   bool pushed_in = false;
-  for (std::size_t k = 0; k < n; ++k) {
-    const int id = chain[k].value;
+  for (std::size_t k = 0; k < step.size(); ++k) {
+    const int id = step.id(k);
     if (!state_.blocked[id]) continue;
-    const double target = target_angle(specs[id], u);
-    bool unblock = (target - state_.blocked_angle[id]) * closing_sign(k) < -1e-12 || object == nullptr;
+    const double target = target_angle(specs[id], step.u);
+    bool unblock = (target - state_.blocked_angle[id]) * closing_sign(specs[id]) < -1e-12 || step.object == nullptr;
     if (!unblock && specs[id].capsule) {
-      const Capsule c = capsule_in_object(chain[k], X_ObjectPalm);
-      TouchCache& cache = touch_cache_[id];
-      if (cache.matches(object->id, c, true)) continue;
-      const MeshDistance& mesh = object->model->distance;
+      const Capsule c = capsule_in_object(step.chain[k], step.X_ObjectPalm);
+      Scratch::TouchCache& cache = scratch_->touch[id];
+      if (cache.matches(step.object->id, c, true)) continue;
+      const MeshDistance& mesh = step.object->model->distance;
       unblock = !mesh.capsule_overlaps(c.a, c.b, c.radius + release_gap, hint_[id]);
-      cache = {object->id, c.a, c.b, !unblock};
+      cache = {step.object->id, c.a, c.b, !unblock};
       // Precise mode: the hand's own motion pushed this finger into the object.
-      if (!unblock && precise && mesh.capsule_overlaps(c.a, c.b, c.radius - tol, hint_[id])) pushed_in = true;
+      if (!unblock && step.precise && mesh.capsule_overlaps(c.a, c.b, c.radius - step.tol, hint_[id])) pushed_in = true;
     }
     if (unblock) state_.blocked[id] = 0;
   }
-  auto forget_bounds = [&] {
-    for (PhalanxId id : chain) gap_bound_[id.value] = -kInf;
-  };
-  if (pushed_in && depenetrate(finger, X_ObjectPalm, *object)) {
-    forget_bounds();
-    return;
-  }
+  return pushed_in;
+}
 
-  int held = -1;  // the most distal blocked phalanx: it and every joint proximal to it hold
-  for (std::size_t k = 0; k < n; ++k)
-    if (state_.blocked[chain[k].value]) held = static_cast<int>(k);
-
-  // Finger movement: rate-limited steps toward the targets; held joints may only open.
-  std::vector<double>& delta = work_.delta;
-  delta.assign(n, 0.0);
-  bool moving = false, closing = false;
-  for (std::size_t k = 0; k < n; ++k) {
-    const PhalanxSpec& s = specs[chain[k].value];
+// Finger movement: rate-limited steps toward the targets into the work space's delta, where
+// joints up to `held` may only open; true when some joint moves (`closing`: some joint closes).
+bool HandController::plan_motion(const FingerStep& step, double dt, int held, bool& closing) {
+  const auto& specs = rig_->phalanges();
+  std::vector<double>& delta = scratch_->work.delta;
+  delta.assign(step.size(), 0.0);
+  bool moving = false;
+  closing = false;
+  for (std::size_t k = 0; k < step.size(); ++k) {
+    const PhalanxSpec& s = specs[step.id(k)];
     const double max_step = s.max_speed * settings_.speed_scale * dt;
-    double d = std::clamp(target_angle(s, u) - state_.q[chain[k].value], -max_step, max_step);
-    if (static_cast<int>(k) <= held && d * closing_sign(k) > 0) d = 0;
+    double d = std::clamp(target_angle(s, step.u) - state_.q[step.id(k)], -max_step, max_step);
+    if (static_cast<int>(k) <= held && d * closing_sign(s) > 0) d = 0;
     delta[k] = d;
     moving |= d != 0;
-    closing |= d * closing_sign(k) > 0;
+    closing |= d * closing_sign(s) > 0;
   }
-  if (!moving) {
-    // A finger at rest still blocks where the hand's motion brought a capsule into contact.
-    if (object == nullptr) return;
-    const double touch = precise ? tol : 0.0;
-    for (std::size_t m = 0; m < n; ++m) {
-      const int id = chain[m].value;
-      if (state_.blocked[id] || !specs[id].capsule || gap_bound_[id] > touch) continue;
-      const Capsule c = capsule_in_object(chain[m], X_ObjectPalm);
-      TouchCache& cache = touch_cache_[id];
-      if (cache.matches(object->id, c, false)) continue;
-      const MeshDistance& mesh = object->model->distance;
-      const bool touching = mesh.capsule_overlaps(c.a, c.b, c.radius + touch, hint_[id]);
-      cache = {object->id, c.a, c.b, touching};
-      if (!touching) continue;
-      // Pushed in, not just touching: precise mode bends the finger back onto the surface.
-      if (precise && mesh.capsule_overlaps(c.a, c.b, c.radius - tol, hint_[id]) && depenetrate(finger, X_ObjectPalm, *object)) {
-        forget_bounds();
-        return;
-      }
-      state_.blocked[id] = 1;
-      state_.blocked_angle[id] = state_.q[id];
+  return moving;
+}
+
+// A finger at rest still blocks where the hand's motion brought a capsule into contact.
+void HandController::block_at_rest(const FingerStep& step) {
+  if (step.object == nullptr) return;
+  const auto& specs = rig_->phalanges();
+  const double touch = step.precise ? step.tol : 0.0;
+  for (std::size_t m = 0; m < step.size(); ++m) {
+    const int id = step.id(m);
+    if (state_.blocked[id] || !specs[id].capsule || gap_bound_[id] > touch) continue;
+    const Capsule c = capsule_in_object(step.chain[m], step.X_ObjectPalm);
+    Scratch::TouchCache& cache = scratch_->touch[id];
+    if (cache.matches(step.object->id, c, false)) continue;
+    const MeshDistance& mesh = step.object->model->distance;
+    const bool touching = mesh.capsule_overlaps(c.a, c.b, c.radius + touch, hint_[id]);
+    cache = {step.object->id, c.a, c.b, touching};
+    if (!touching) continue;
+    // Pushed in, not just touching: precise mode bends the finger back onto the surface.
+    if (step.precise && mesh.capsule_overlaps(c.a, c.b, c.radius - step.tol, hint_[id]) &&
+        depenetrate(step.finger, step.X_ObjectPalm, *step.object)) {
+      forget_bounds(step);
+      return;
     }
-    return;
-  }
-
-  std::vector<double>& q0 = work_.q0;
-  q0.resize(n);
-  for (std::size_t k = 0; k < n; ++k) q0[k] = state_.q[chain[k].value];
-  auto set_fraction = [&](double s) {
-    for (std::size_t k = 0; k < n; ++k) state_.q[chain[k].value] = q0[k] + s * delta[k];
-    update_finger_poses(finger);
-  };
-  // Free capsules this step can move into the object.
-  std::vector<std::size_t>& affected = work_.affected;
-  affected.clear();
-  for (std::size_t m = static_cast<std::size_t>(held + 1); m < n; ++m)
-    if (specs[chain[m].value].capsule && !state_.blocked[chain[m].value]) affected.push_back(m);
-
-  if (!closing || object == nullptr || affected.empty()) {
-    set_fraction(1.0);
-    forget_bounds();
-    return;
-  }
-  // Capsules that move but are not advanced below (a held joint opening) lose their bounds.
-  for (std::size_t m = 0; m < n; ++m)
-    if (std::find(affected.begin(), affected.end(), m) == affected.end()) gap_bound_[chain[m].value] = -kInf;
-  const MeshDistance& mesh = object->model->distance;
-
-  auto block = [&](std::size_t m) {
-    const int id = chain[m].value;
     state_.blocked[id] = 1;
     state_.blocked_angle[id] = state_.q[id];
-    touch_cache_[id] = {};  // checked afresh next tick
-  };
-
-  if (!precise) {  // the paper's discrete test: move, then test overlap
-    set_fraction(1.0);
-    forget_bounds();
-    for (std::size_t m : affected) {
-      const Capsule c = capsule_in_object(chain[m], X_ObjectPalm);
-      if (mesh.capsule_overlaps(c.a, c.b, c.radius, hint_[chain[m].value])) block(m);
-    }
-    return;
   }
+}
 
-  // Precise: conservative advancement along the step s in [0, 1]. A capsule point moves at most
-  // rate(m) per unit s, so advancing by (gap - tol/2) / rate never crosses the surface.
-  std::vector<double>& rate = work_.rate;
-  rate.assign(n, 0.0);
+// The paper's discrete test: move the whole step, then block the capsules that overlap.
+void HandController::close_discrete(const FingerStep& step) {
+  const MeshDistance& mesh = step.object->model->distance;
+  set_fraction(step, 1.0);
+  forget_bounds(step);
+  for (std::size_t m : scratch_->work.affected) {
+    const Capsule c = capsule_in_object(step.chain[m], step.X_ObjectPalm);
+    if (mesh.capsule_overlaps(c.a, c.b, c.radius, hint_[step.id(m)])) block(step.id(m));
+  }
+}
+
+// Precise: conservative advancement along the step s in [0, 1]. A capsule point moves at most
+// rate(m) per unit s, so advancing by (gap - tol/2) / rate never crosses the surface.
+void HandController::close_precise(const FingerStep& step) {
+  Scratch::StepWork& work = scratch_->work;
+  const std::vector<std::size_t>& affected = work.affected;
+  std::vector<double>& rate = work.rate;
+  rate.assign(step.size(), 0.0);
   for (std::size_t m : affected)
-    for (std::size_t k = 0; k <= m; ++k) rate[m] += std::abs(delta[k]) * reach_[chain[k].value][chain[m].value];
+    for (std::size_t k = 0; k <= m; ++k) rate[m] += std::abs(work.delta[k]) * reach_[step.id(k)][step.id(m)];
 
   // Each affected capsule carries a lower bound on its gap (from earlier ticks, or from its last
   // exact query this step, minus its motion since): while the bound exceeds the tolerance it
   // replaces the query.
   double s = 0;
   for (int iter = 0; iter < kMaxAdvancementSteps; ++iter) {
-    set_fraction(s);
+    set_fraction(step, s);
     double ds = kInf;
     bool touched = false;
     for (std::size_t m : affected) {
-      double& bound = gap_bound_[chain[m].value];
-      const double horizon = rate[m] * (1.0 - s) + tol;  // beyond it, no contact this step
-      if (bound > horizon) continue;                   // free for the rest of the step
-      if (bound > tol) {
-        ds = std::min(ds, (bound - 0.5 * tol) / rate[m]);
-        continue;
-      }
-      const Capsule c = capsule_in_object(chain[m], X_ObjectPalm);
-      std::uint32_t& hint = hint_[chain[m].value];
-      if (!mesh.capsule_overlaps(c.a, c.b, c.radius + horizon, hint)) {  // free for the rest of the step
-        bound = horizon;
-        continue;
-      }
-      const SegmentQuery hit = mesh.closest_to_segment(c.a, c.b, c.radius + horizon, hint);
-      if (hit.found) {
-        hint = hit.triangle;
-        closest_[chain[m].value] = {object->id, &mesh, c.a, c.b, hit};
-      }
-      const bool inside = !hit.found || hit.distance == 0 || (hit.point_on_segment - hit.point_on_mesh).dot(hit.normal) < 0;
-      const double gap = inside ? -c.radius - (hit.found ? hit.distance : kInf) : hit.distance - c.radius;
-      bound = gap;
-      if (s == 0 && gap < -tol) {  // pushed in by the hand's motion before the fingers moved
-        set_fraction(0.0);
-        forget_bounds();
-        if (depenetrate(finger, X_ObjectPalm, *object)) return;
-        block(m);
-        touched = true;
-        continue;
-      }
-      if (gap <= tol) { block(m); touched = true; continue; }
-      ds = std::min(ds, (gap - 0.5 * tol) / rate[m]);
+      const Probe probe = probe_capsule(step, m, s, rate[m], ds);
+      if (probe == Probe::kDepenetrated) return;
+      touched |= probe == Probe::kBlocked;
     }
     if (touched || s >= 1.0) return;
     const double advance = std::isfinite(ds) ? std::min(1.0 - s, ds) : 1.0 - s;  // all free: to the end
-    for (std::size_t m : affected) gap_bound_[chain[m].value] -= rate[m] * advance;
+    for (std::size_t m : affected) gap_bound_[step.id(m)] -= rate[m] * advance;
     s += advance;
     if (s >= 1.0) {
-      set_fraction(1.0);
+      set_fraction(step, 1.0);
       return;
     }
   }
 }
 
-HandTickEvents HandController::tick(const ControllerInput& raw_input, double dt, std::span<const ObjectView> objects) {
-  HandTickEvents events;
-  if (!(dt > 0) || !std::isfinite(dt)) return events;  // no time passes
-  // An invalid input (callers should have rejected it) keeps the hand as it was.
-  ControllerInput fallback;
-  const bool valid = validate_input(raw_input, *rig_).empty();
-  if (!valid) {
-    fallback.X_WorldPalm = state_.X_WorldPalm;
-    fallback.trigger = state_.trigger;
-    fallback.curls = state_.curls;
-    fallback.tracking_valid = state_.has_pose;
+// One affected capsule m at fraction s of the step: its gap bound, refreshed by an exact query
+// when it no longer proves the capsule free until the step's end; blocks the capsule on contact.
+// Lowers `ds` to the advance its gap allows.
+HandController::Probe HandController::probe_capsule(const FingerStep& step, std::size_t m, double s, double rate,
+                                                    double& ds) {
+  const double tol = step.tol;
+  double& bound = gap_bound_[step.id(m)];
+  const double horizon = rate * (1.0 - s) + tol;  // beyond it, no contact this step
+  if (bound > horizon) return Probe::kFree;      // free for the rest of the step
+  if (bound > tol) {
+    ds = std::min(ds, (bound - 0.5 * tol) / rate);
+    return Probe::kFree;
   }
-  const ControllerInput& input = valid ? raw_input : fallback;
-  // Pose and hand velocity.
-  if (input.tracking_valid) {
-    if (state_.has_pose) {
-      state_.v_WorldPalm = (input.X_WorldPalm.translation() - state_.X_WorldPalm.translation()) / dt;
-      const Eigen::AngleAxisd dR(input.X_WorldPalm.linear() * state_.X_WorldPalm.linear().transpose());
-      state_.w_WorldPalm = dR.axis() * (dR.angle() / dt);
-    } else {
-      state_.v_WorldPalm.setZero();
-      state_.w_WorldPalm.setZero();
-    }
-    state_.X_WorldPalm = input.X_WorldPalm;
-    state_.has_pose = true;
-  } else {
-    state_.v_WorldPalm.setZero();
-    state_.w_WorldPalm.setZero();
+  const MeshDistance& mesh = step.object->model->distance;
+  const Capsule c = capsule_in_object(step.chain[m], step.X_ObjectPalm);
+  std::uint32_t& hint = hint_[step.id(m)];
+  if (!mesh.capsule_overlaps(c.a, c.b, c.radius + horizon, hint)) {  // free for the rest of the step
+    bound = horizon;
+    return Probe::kFree;
   }
-  state_.trigger = input.trigger;
-  state_.curls = input.curls;
+  const SegmentQuery hit = mesh.closest_to_segment(c.a, c.b, c.radius + horizon, hint);
+  if (hit.found) {
+    hint = hit.triangle;
+    scratch_->closest[step.id(m)] = {step.object->id, &mesh, c.a, c.b, hit};
+  }
+  const bool inside = !hit.found || hit.distance == 0 || (hit.point_on_segment - hit.point_on_mesh).dot(hit.normal) < 0;
+  const double gap = inside ? -c.radius - (hit.found ? hit.distance : kInf) : hit.distance - c.radius;
+  bound = gap;
+  if (s == 0 && gap < -tol) {  // pushed in by the hand's motion before the fingers moved
+    set_fraction(step, 0.0);
+    forget_bounds(step);
+    if (depenetrate(step.finger, step.X_ObjectPalm, *step.object)) return Probe::kDepenetrated;
+    block(step.id(m));
+    return Probe::kBlocked;
+  }
+  if (gap <= tol) {
+    block(step.id(m));
+    return Probe::kBlocked;
+  }
+  ds = std::min(ds, (gap - 0.5 * tol) / rate);
+  return Probe::kFree;
+}
 
-  // 1. Object selection (a grasped object stays selected).
+void HandController::step_finger(int finger, double u, double dt, const ObjectView* object,
+                                 const Eigen::Isometry3d& X_ObjectPalm) {
+  // A finger whose input is fully released holds nothing: it unblocks and opens without
+  // touching anything (so a finger bent back past its open angle cannot keep a grasp).
+  if (u <= 0.0) object = nullptr;
+  const FingerStep step{finger, rig_->fingers()[finger].phalanges, u, object, X_ObjectPalm,
+                        settings_.contact_tolerance, settings_.mode == ClosingMode::kPrecise};
+  const std::size_t n = step.size();
+
+  if (unblock_phalanges(step) && depenetrate(finger, X_ObjectPalm, *object)) {
+    forget_bounds(step);
+    return;
+  }
+
+  int held = -1;  // the most distal blocked phalanx: it and every joint proximal to it hold
+  for (std::size_t k = 0; k < n; ++k)
+    if (state_.blocked[step.id(k)]) held = static_cast<int>(k);
+
+  bool closing = false;
+  if (!plan_motion(step, dt, held, closing)) {
+    block_at_rest(step);
+    return;
+  }
+
+  Scratch::StepWork& work = scratch_->work;
+  work.q0.resize(n);
+  for (std::size_t k = 0; k < n; ++k) work.q0[k] = state_.q[step.id(k)];
+  // Free capsules this step can move into the object.
+  std::vector<std::size_t>& affected = work.affected;
+  affected.clear();
+  for (std::size_t m = static_cast<std::size_t>(held + 1); m < n; ++m)
+    if (rig_->phalanges()[step.id(m)].capsule && !state_.blocked[step.id(m)]) affected.push_back(m);
+
+  if (!closing || object == nullptr || affected.empty()) {
+    set_fraction(step, 1.0);
+    forget_bounds(step);
+    return;
+  }
+  // Capsules that move but are not advanced below (a held joint opening) lose their bounds.
+  for (std::size_t m = 0; m < n; ++m)
+    if (std::find(affected.begin(), affected.end(), m) == affected.end()) gap_bound_[step.id(m)] = -kInf;
+
+  if (step.precise) {
+    close_precise(step);
+  } else {
+    close_discrete(step);
+  }
+}
+
+namespace {
+
+// The input a tick uses in place of an invalid one: the hand's last pose, trigger and curls.
+ControllerInput last_input(const HandState& state) {
+  ControllerInput input;
+  input.X_WorldPalm = state.X_WorldPalm;
+  input.trigger = state.trigger;
+  input.curls = state.curls;
+  input.tracking_valid = state.has_pose;
+  return input;
+}
+
+// Pose and hand velocity (from the last pose, zero when tracking is lost), trigger and curls.
+void track_input(HandState& state, const ControllerInput& input, double dt) {
+  if (input.tracking_valid) {
+    if (state.has_pose) {
+      state.v_WorldPalm = (input.X_WorldPalm.translation() - state.X_WorldPalm.translation()) / dt;
+      const Eigen::AngleAxisd dR(input.X_WorldPalm.linear() * state.X_WorldPalm.linear().transpose());
+      state.w_WorldPalm = dR.axis() * (dR.angle() / dt);
+    } else {
+      state.v_WorldPalm.setZero();
+      state.w_WorldPalm.setZero();
+    }
+    state.X_WorldPalm = input.X_WorldPalm;
+    state.has_pose = true;
+  } else {
+    state.v_WorldPalm.setZero();
+    state.w_WorldPalm.setZero();
+  }
+  state.trigger = input.trigger;
+  state.curls = input.curls;
+}
+
+}  // namespace
+
+// 1. Object selection (a grasped object stays selected, posed by the hand in `held_view`; one
+// gone from `objects` is released). Returns the object the fingers work on, or nullptr.
+const ObjectView* HandController::choose_object(std::span<const ObjectView> objects, ObjectView& held_view,
+                                                HandTickEvents& events) {
   const ObjectView* object = nullptr;
-  ObjectView held_view;
   if (state_.grasped.valid()) {
     auto it = std::find_if(objects.begin(), objects.end(), [&](const ObjectView& v) { return v.id == state_.grasped; });
     if (it == objects.end()) {
@@ -432,12 +532,12 @@ HandTickEvents HandController::tick(const ControllerInput& raw_input, double dt,
     if (state_.selected.valid())
       object = &*std::find_if(objects.begin(), objects.end(), [&](const ObjectView& v) { return v.id == state_.selected; });
   }
-  const Eigen::Isometry3d X_ObjectPalm = !object ? Eigen::Isometry3d::Identity()
-      : state_.grasped.valid() ? state_.X_PalmObject.inverse()
-      : object->X_WorldObject.inverse() * state_.X_WorldPalm;
+  return object;
+}
 
-  // Gap bounds carried over from the last tick shrink by how far the hand moved relative to the
-  // object: a capsule point p (palm frame) moves at most |dt| + angle(dR) |p|.
+// Gap bounds carried over from the last tick shrink by how far the hand moved relative to the
+// object: a capsule point p (palm frame) moves at most |dt| + angle(dR) |p|.
+void HandController::carry_gap_bounds(const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm) {
   if (!object || object->id != bound_object_) {
     std::fill(gap_bound_.begin(), gap_bound_.end(), -kInf);
   } else {
@@ -448,14 +548,11 @@ HandTickEvents HandController::tick(const ControllerInput& raw_input, double dt,
   }
   bound_object_ = object ? object->id : ObjectId();
   bound_X_ObjectPalm_ = X_ObjectPalm;
+}
 
-  // 2 + 3. Interaction manager and finger movement, finger by finger.
-  for (std::size_t f = 0; f < rig_->fingers().size(); ++f) {
-    const double u = input.curls.empty() ? input.trigger : input.curls[f];
-    step_finger(static_cast<int>(f), u, dt, object, X_ObjectPalm);
-  }
-
-  // 4. Grasping logic.
+// 4. Grasping logic: the palm contact, then the grasp rule grasps or releases `object`.
+void HandController::apply_grasp_rule(const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm,
+                                      HandTickEvents& events) {
   state_.palm_contact = false;
   if (object) {
     const PalmSphere& palm = rig_->palm_contact();
@@ -480,6 +577,32 @@ HandTickEvents HandController::tick(const ControllerInput& raw_input, double dt,
     state_.grasped = ObjectId();
     metrics_.reset();
   }
+}
+
+HandTickEvents HandController::tick(const ControllerInput& raw_input, double dt, std::span<const ObjectView> objects) {
+  HandTickEvents events;
+  if (!(dt > 0) || !std::isfinite(dt)) return events;  // no time passes
+  // An invalid input (callers should have rejected it) keeps the hand as it was.
+  ControllerInput fallback;
+  const bool valid = validate_input(raw_input, *rig_).empty();
+  if (!valid) fallback = last_input(state_);
+  const ControllerInput& input = valid ? raw_input : fallback;
+  track_input(state_, input, dt);
+
+  ObjectView held_view;
+  const ObjectView* object = choose_object(objects, held_view, events);
+  const Eigen::Isometry3d X_ObjectPalm = !object ? Eigen::Isometry3d::Identity()
+      : state_.grasped.valid() ? state_.X_PalmObject.inverse()
+      : object->X_WorldObject.inverse() * state_.X_WorldPalm;
+  carry_gap_bounds(object, X_ObjectPalm);
+
+  // 2 + 3. Interaction manager and finger movement, finger by finger.
+  for (std::size_t f = 0; f < rig_->fingers().size(); ++f) {
+    const double u = input.curls.empty() ? input.trigger : input.curls[f];
+    step_finger(static_cast<int>(f), u, dt, object, X_ObjectPalm);
+  }
+
+  apply_grasp_rule(object, X_ObjectPalm, events);
   return events;
 }
 
@@ -519,7 +642,7 @@ std::optional<Eigen::Isometry3d> HandController::grasped_object_pose() const {
 
 SegmentQuery HandController::closest_pair(PhalanxId id, ObjectId object, const MeshDistance& mesh,
                                           const Eigen::Vector3d& a, const Eigen::Vector3d& b, double reach) const {
-  ClosestCache& cache = closest_[id.value];
+  Scratch::ClosestCache& cache = scratch_->closest[id.value];
   if (cache.matches(object, mesh, a, b)) return cache.pair;
   SegmentQuery q;
   if (std::isfinite(reach)) q = mesh.closest_to_segment(a, b, reach, hint_[id.value]);
@@ -618,5 +741,13 @@ std::vector<Contact> HandController::contacts() const {
   }
   return out;
 }
+
+std::optional<ClosingMode> parse_closing_mode(std::string_view name) {
+  if (name == "precise") return ClosingMode::kPrecise;
+  if (name == "discrete") return ClosingMode::kDiscrete;
+  return std::nullopt;
+}
+
+const char* closing_mode_name(ClosingMode mode) { return mode == ClosingMode::kDiscrete ? "discrete" : "precise"; }
 
 }  // namespace telegrasp::sim

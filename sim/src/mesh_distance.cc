@@ -21,6 +21,7 @@
 #include <cassert>
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 #include <unordered_map>
 #include <utility>
@@ -508,6 +509,173 @@ double half_area(const Vector3d& lo, const Vector3d& hi) {
   return e.x() * e.y() + e.y() * e.z() + e.z() * e.x();
 }
 
+/// Throws std::invalid_argument unless `mesh` has triangles, all indexing its vertices.
+void check_mesh(const TriangleMesh& mesh) {
+  if (mesh.triangles.empty()) throw std::invalid_argument("MeshDistance: mesh has no triangles");
+  const std::size_t nv = mesh.vertices.size();
+  for (const auto& t : mesh.triangles) {
+    for (std::uint32_t i : t) {
+      if (i >= nv) throw std::invalid_argument("MeshDistance: triangle index out of range");
+    }
+  }
+  if (mesh.triangles.size() >= std::numeric_limits<std::uint32_t>::max() / 2) {
+    throw std::invalid_argument("MeshDistance: too many triangles");
+  }
+}
+
+/// Per input triangle: its box and centroid, what the BVH build sorts.
+struct TriangleBounds {
+  std::vector<Vector3d> lo, hi, centroid;
+};
+
+TriangleBounds triangle_bounds(const TriangleMesh& mesh) {
+  const std::size_t nt = mesh.triangles.size();
+  TriangleBounds out{std::vector<Vector3d>(nt), std::vector<Vector3d>(nt), std::vector<Vector3d>(nt)};
+  for (std::size_t i = 0; i < nt; ++i) {
+    const auto& t = mesh.triangles[i];
+    const Vector3d& a = mesh.vertices[t[0]];
+    const Vector3d& b = mesh.vertices[t[1]];
+    const Vector3d& c = mesh.vertices[t[2]];
+    out.lo[i] = a.cwiseMin(b).cwiseMin(c);
+    out.hi[i] = a.cwiseMax(b).cwiseMax(c);
+    out.centroid[i] = (a + b + c) / 3.0;
+  }
+  return out;
+}
+
+/// The box of a range of triangles and the box of their centroids.
+struct RangeBounds {
+  Vector3d lo{kInf, kInf, kInf}, hi{-kInf, -kInf, -kInf};
+  Vector3d centroid_lo{kInf, kInf, kInf}, centroid_hi{-kInf, -kInf, -kInf};
+};
+
+RangeBounds range_bounds(const TriangleBounds& bounds, const std::vector<std::uint32_t>& order, std::uint32_t begin,
+                         std::uint32_t end) {
+  RangeBounds r;
+  for (std::uint32_t i = begin; i < end; ++i) {
+    const std::uint32_t t = order[i];
+    r.lo = r.lo.cwiseMin(bounds.lo[t]);
+    r.hi = r.hi.cwiseMax(bounds.hi[t]);
+    r.centroid_lo = r.centroid_lo.cwiseMin(bounds.centroid[t]);
+    r.centroid_hi = r.centroid_hi.cwiseMax(bounds.centroid[t]);
+  }
+  return r;
+}
+
+/// Stores box [lo, hi] rounded outwards to float in flo / fhi; returns the rounded-up half
+/// diagonal of the float box (a node's `radius`).
+float store_rounded_box(const Vector3d& lo, const Vector3d& hi, float* flo, float* fhi) {
+  Vector3d dlo, dhi;
+  for (int i = 0; i < 3; ++i) {
+    flo[i] = round_down(lo[i]);
+    fhi[i] = round_up(hi[i]);
+    dlo[i] = flo[i];
+    dhi[i] = fhi[i];
+  }
+  return round_up(0.5 * (dhi - dlo).norm() * (1 + 1e-9) + 1e-12);
+}
+
+/// kBins equal slices of a range's centroid extent along one axis.
+struct CentroidBins {
+  int axis;
+  double origin;  // lowest centroid coordinate
+  double scale;   // kBins / extent
+  [[nodiscard]] int operator()(const Vector3d& centroid) const {
+    return std::min(kBins - 1, static_cast<int>((centroid[axis] - origin) * scale));
+  }
+};
+
+/// The cheapest SAH split between centroid bins: left = bins below `bin` (-1: none splits).
+struct SahSplit {
+  double cost = kInf;
+  int bin = -1;
+};
+
+SahSplit best_sah_split(const TriangleBounds& bounds, const std::vector<std::uint32_t>& order, std::uint32_t begin,
+                        std::uint32_t end, const CentroidBins& bin_of) {
+  struct Bin {
+    Vector3d lo{kInf, kInf, kInf};
+    Vector3d hi{-kInf, -kInf, -kInf};
+    std::uint32_t count = 0;
+  };
+  Bin bins[kBins];
+  for (std::uint32_t i = begin; i < end; ++i) {
+    const std::uint32_t t = order[i];
+    Bin& b = bins[bin_of(bounds.centroid[t])];
+    b.lo = b.lo.cwiseMin(bounds.lo[t]);
+    b.hi = b.hi.cwiseMax(bounds.hi[t]);
+    ++b.count;
+  }
+  double right_cost[kBins];
+  {
+    Vector3d rlo(kInf, kInf, kInf), rhi(-kInf, -kInf, -kInf);
+    std::uint32_t rc = 0;
+    for (int i = kBins - 1; i > 0; --i) {
+      rlo = rlo.cwiseMin(bins[i].lo);
+      rhi = rhi.cwiseMax(bins[i].hi);
+      rc += bins[i].count;
+      right_cost[i] = rc > 0 ? rc * half_area(rlo, rhi) : 0.0;
+    }
+  }
+  const std::uint32_t count = end - begin;
+  SahSplit best;
+  Vector3d llo(kInf, kInf, kInf), lhi(-kInf, -kInf, -kInf);
+  std::uint32_t lc = 0;
+  for (int i = 1; i < kBins; ++i) {
+    llo = llo.cwiseMin(bins[i - 1].lo);
+    lhi = lhi.cwiseMax(bins[i - 1].hi);
+    lc += bins[i - 1].count;
+    if (lc == 0 || lc == count) continue;
+    const double cost = lc * half_area(llo, lhi) + right_cost[i];
+    if (cost < best.cost) {
+      best.cost = cost;
+      best.bin = i;
+    }
+  }
+  return best;
+}
+
+/// Where to split order[begin, end) in two, reordering it: at the cheapest binned-SAH plane
+/// along the centroids' widest axis, else at the median; nullopt (make a leaf) when the range is
+/// small enough and SAH finds no split cheaper than a leaf.
+std::optional<std::uint32_t> split_point(const TriangleBounds& bounds, const RangeBounds& range,
+                                         std::vector<std::uint32_t>& order, std::uint32_t begin, std::uint32_t end) {
+  const std::uint32_t count = end - begin;
+  const Vector3d cext = range.centroid_hi - range.centroid_lo;
+  int axis = 0;
+  if (cext[1] > cext[axis]) axis = 1;
+  if (cext[2] > cext[axis]) axis = 2;
+  std::uint32_t mid = begin + count / 2;
+  if (!(cext[axis] > 0)) return mid;  // all centroids coincide: any split is as good
+  const CentroidBins bin_of{axis, range.centroid_lo[axis], kBins / cext[axis]};
+  const SahSplit sah = best_sah_split(bounds, order, begin, end, bin_of);
+  const double leaf_cost = count * half_area(range.lo, range.hi);
+  if (count <= kMaxSahLeafSize && sah.cost >= leaf_cost) return std::nullopt;
+  if (sah.bin > 0) {
+    auto* it = std::partition(order.data() + begin, order.data() + end,
+                              [&](std::uint32_t t) { return bin_of(bounds.centroid[t]) < sah.bin; });
+    mid = static_cast<std::uint32_t>(it - order.data());
+  }
+  if (mid == begin || mid == end) {
+    mid = begin + count / 2;
+    std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end,
+                     [&](std::uint32_t x, std::uint32_t y) { return bounds.centroid[x][axis] < bounds.centroid[y][axis]; });
+  }
+  return mid;
+}
+
+/// For each vertex, the first vertex at its exact position (welding duplicated vertices).
+std::vector<std::uint32_t> weld_vertices(const std::vector<Vector3d>& vertices) {
+  const std::size_t nv = vertices.size();
+  std::vector<std::uint32_t> weld(nv);
+  std::unordered_map<PositionKey, std::uint32_t, PositionKeyHash> first_of;
+  first_of.reserve(nv);
+  for (std::size_t i = 0; i < nv; ++i) {
+    weld[i] = first_of.emplace(position_key(vertices[i]), static_cast<std::uint32_t>(i)).first->second;
+  }
+  return weld;
+}
+
 }  // namespace
 
 /// Depth-first walk of the BVH, nearer child first. `reach(node, key)` says whether a node may
@@ -549,30 +717,19 @@ void MeshDistance::traverse(Reach&& reach, Leaf&& leaf) const {
 }
 
 MeshDistance::MeshDistance(const TriangleMesh& mesh) {
-  if (mesh.triangles.empty()) throw std::invalid_argument("MeshDistance: mesh has no triangles");
-  const std::size_t nv = mesh.vertices.size();
-  for (const auto& t : mesh.triangles) {
-    for (std::uint32_t i : t) {
-      if (i >= nv) throw std::invalid_argument("MeshDistance: triangle index out of range");
-    }
-  }
-  if (mesh.triangles.size() >= std::numeric_limits<std::uint32_t>::max() / 2) {
-    throw std::invalid_argument("MeshDistance: too many triangles");
-  }
+  check_mesh(mesh);
   vertices_ = mesh.vertices;
-  const std::size_t nt = mesh.triangles.size();
+  const std::vector<std::uint32_t> order = build_bvh(mesh);
+  store_in_leaf_order(mesh, order);
+  build_pseudo_normals();
+  vertices_.shrink_to_fit();
+}
 
-  // ---- BVH over triangle boxes (binned SAH), leaves referencing ranges of `order`. ----
-  std::vector<Vector3d> tlo(nt), thi(nt), tc(nt);
-  for (std::size_t i = 0; i < nt; ++i) {
-    const auto& t = mesh.triangles[i];
-    const Vector3d& a = vertices_[t[0]];
-    const Vector3d& b = vertices_[t[1]];
-    const Vector3d& c = vertices_[t[2]];
-    tlo[i] = a.cwiseMin(b).cwiseMin(c);
-    thi[i] = a.cwiseMax(b).cwiseMax(c);
-    tc[i] = (a + b + c) / 3.0;
-  }
+/// BVH over triangle boxes (binned SAH), leaves referencing ranges of the returned order: a work
+/// list of node ranges, each made a leaf or split in two children appended next to each other.
+std::vector<std::uint32_t> MeshDistance::build_bvh(const TriangleMesh& mesh) {
+  const std::size_t nt = mesh.triangles.size();
+  const TriangleBounds bounds = triangle_bounds(mesh);
   std::vector<std::uint32_t> order(nt);
   for (std::size_t i = 0; i < nt; ++i) order[i] = static_cast<std::uint32_t>(i);
 
@@ -584,114 +741,38 @@ MeshDistance::MeshDistance(const TriangleMesh& mesh) {
   nodes_.reserve(2 * nt / kLeafSize + 1);
   nodes_.emplace_back();
   tasks.push_back({0, 0, static_cast<std::uint32_t>(nt), 0});
-  struct Bin {
-    Vector3d lo{kInf, kInf, kInf};
-    Vector3d hi{-kInf, -kInf, -kInf};
-    std::uint32_t count = 0;
-  };
   while (!tasks.empty()) {
     const Task task = tasks.back();
     tasks.pop_back();
-    Vector3d lo(kInf, kInf, kInf), hi(-kInf, -kInf, -kInf);
-    Vector3d clo(kInf, kInf, kInf), chi(-kInf, -kInf, -kInf);
-    for (std::uint32_t i = task.begin; i < task.end; ++i) {
-      const std::uint32_t t = order[i];
-      lo = lo.cwiseMin(tlo[t]);
-      hi = hi.cwiseMax(thi[t]);
-      clo = clo.cwiseMin(tc[t]);
-      chi = chi.cwiseMax(tc[t]);
-    }
+    const RangeBounds range = range_bounds(bounds, order, task.begin, task.end);
     {
       Node& n = nodes_[task.node];
-      Vector3d flo, fhi;
-      for (int i = 0; i < 3; ++i) {
-        n.lo[i] = round_down(lo[i]);
-        n.hi[i] = round_up(hi[i]);
-        flo[i] = n.lo[i];
-        fhi[i] = n.hi[i];
-      }
-      n.radius = round_up(0.5 * (fhi - flo).norm() * (1 + 1e-9) + 1e-12);
+      n.radius = store_rounded_box(range.lo, range.hi, n.lo, n.hi);
     }
     const std::uint32_t count = task.end - task.begin;
-    const auto make_leaf = [&] {
+    const std::optional<std::uint32_t> mid = count <= kLeafSize || task.depth >= kMaxDepth
+                                                 ? std::nullopt
+                                                 : split_point(bounds, range, order, task.begin, task.end);
+    if (!mid) {
       nodes_[task.node].first = task.begin;
       nodes_[task.node].count = count;
-    };
-    if (count <= kLeafSize || task.depth >= kMaxDepth) {
-      make_leaf();
       continue;
-    }
-    const Vector3d cext = chi - clo;
-    int axis = 0;
-    if (cext[1] > cext[axis]) axis = 1;
-    if (cext[2] > cext[axis]) axis = 2;
-    std::uint32_t mid = task.begin + count / 2;
-    if (cext[axis] > 0) {
-      Bin bins[kBins];
-      const double scale = kBins / cext[axis];
-      const auto bin_of = [&](std::uint32_t t) {
-        return std::min(kBins - 1, static_cast<int>((tc[t][axis] - clo[axis]) * scale));
-      };
-      for (std::uint32_t i = task.begin; i < task.end; ++i) {
-        const std::uint32_t t = order[i];
-        Bin& b = bins[bin_of(t)];
-        b.lo = b.lo.cwiseMin(tlo[t]);
-        b.hi = b.hi.cwiseMax(thi[t]);
-        ++b.count;
-      }
-      double right_cost[kBins];
-      {
-        Vector3d rlo(kInf, kInf, kInf), rhi(-kInf, -kInf, -kInf);
-        std::uint32_t rc = 0;
-        for (int i = kBins - 1; i > 0; --i) {
-          rlo = rlo.cwiseMin(bins[i].lo);
-          rhi = rhi.cwiseMax(bins[i].hi);
-          rc += bins[i].count;
-          right_cost[i] = rc > 0 ? rc * half_area(rlo, rhi) : 0.0;
-        }
-      }
-      double best_cost = kInf;
-      int best_split = -1;
-      Vector3d llo(kInf, kInf, kInf), lhi(-kInf, -kInf, -kInf);
-      std::uint32_t lc = 0;
-      for (int i = 1; i < kBins; ++i) {
-        llo = llo.cwiseMin(bins[i - 1].lo);
-        lhi = lhi.cwiseMax(bins[i - 1].hi);
-        lc += bins[i - 1].count;
-        if (lc == 0 || lc == count) continue;
-        const double cost = lc * half_area(llo, lhi) + right_cost[i];
-        if (cost < best_cost) {
-          best_cost = cost;
-          best_split = i;
-        }
-      }
-      const double leaf_cost = count * half_area(lo, hi);
-      if (count <= kMaxSahLeafSize && best_cost >= leaf_cost) {
-        make_leaf();
-        continue;
-      }
-      if (best_split > 0) {
-        auto* it = std::partition(order.data() + task.begin, order.data() + task.end,
-                                  [&](std::uint32_t t) { return bin_of(t) < best_split; });
-        mid = static_cast<std::uint32_t>(it - order.data());
-      }
-      if (mid == task.begin || mid == task.end) {
-        mid = task.begin + count / 2;
-        std::nth_element(order.begin() + task.begin, order.begin() + mid, order.begin() + task.end,
-                         [&](std::uint32_t x, std::uint32_t y) { return tc[x][axis] < tc[y][axis]; });
-      }
     }
     const auto left = static_cast<std::uint32_t>(nodes_.size());
     nodes_.emplace_back();
     nodes_.emplace_back();
     nodes_[task.node].first = left;
     nodes_[task.node].count = 0;
-    tasks.push_back({left + 1, mid, task.end, task.depth + 1});
-    tasks.push_back({left, task.begin, mid, task.depth + 1});
+    tasks.push_back({left + 1, *mid, task.end, task.depth + 1});
+    tasks.push_back({left, task.begin, *mid, task.depth + 1});
   }
   nodes_.shrink_to_fit();
+  return order;
+}
 
-  // ---- Per-triangle data in leaf order. ----
+/// Per-triangle data in leaf order: indices, corners, face normals and bounding spheres by slot.
+void MeshDistance::store_in_leaf_order(const TriangleMesh& mesh, const std::vector<std::uint32_t>& order) {
+  const std::size_t nt = order.size();
   triangle_ids_ = order;
   slot_of_triangle_.assign(order.size(), 0);
   for (std::uint32_t s = 0; s < order.size(); ++s) slot_of_triangle_[order[s]] = s;
@@ -710,16 +791,14 @@ MeshDistance::MeshDistance(const TriangleMesh& mesh) {
     for (const Vector3d& c : corners_[s]) rad = std::max(rad, (c - centroid).norm());
     bounding_spheres_[s] = {centroid.x(), centroid.y(), centroid.z(), rad * (1 + 1e-9) + 1e-15};
   }
+}
 
-  // ---- Pseudo-normals over welded vertices. ----
-  std::vector<std::uint32_t> weld(nv);
-  {
-    std::unordered_map<PositionKey, std::uint32_t, PositionKeyHash> first_of;
-    first_of.reserve(nv);
-    for (std::size_t i = 0; i < nv; ++i) {
-      weld[i] = first_of.emplace(position_key(vertices_[i]), static_cast<std::uint32_t>(i)).first->second;
-    }
-  }
+/// Pseudo-normals over welded vertices: a vertex's is the angle-weighted sum of its faces'
+/// normals, an edge's the sum of its two faces' (Baerentzen & Aanaes), normalized.
+void MeshDistance::build_pseudo_normals() {
+  const std::size_t nv = vertices_.size();
+  const std::size_t nt = triangles_.size();
+  const std::vector<std::uint32_t> weld = weld_vertices(vertices_);
   std::vector<Vector3d> vsum(nv, Vector3d::Zero());
   std::unordered_map<std::uint64_t, Vector3d> esum;
   esum.reserve(nt * 2);
@@ -751,7 +830,6 @@ MeshDistance::MeshDistance(const TriangleMesh& mesh) {
       edge_normals_[s][k] = normalized_or(esum.at(edge_key(t[k], t[(k + 1) % 3])), face_normals_[s]);
     }
   }
-  vertices_.shrink_to_fit();
 }
 
 std::size_t MeshDistance::triangle_count() const { return triangles_.size(); }

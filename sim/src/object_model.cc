@@ -1,10 +1,11 @@
-// Building object models from meshes, files and the built-in stand-ins.
+// Building object models from meshes and mesh files.
 #include "telegrasp/sim/object_model.h"
 
 #include "telegrasp/sim/mesh_loading.h"
 
 #include <algorithm>
 #include <filesystem>
+#include <string>
 
 namespace telegrasp::sim {
 
@@ -32,13 +33,38 @@ ObjectModelPtr make_object_model(const std::string& name, const TriangleMesh& me
   return model;
 }
 
-ObjectModelPtr load_object_model(const std::string& path) {
-  const std::string stem = std::filesystem::path(path).stem().string();
-  const auto known = find_protocol_object(stem);
-  return make_object_model(stem, load_mesh_file(path), known ? known->mass_kg : 0.0, path);
+ObjectModelPtr make_object_model_in_model_frame(const std::string& name, TriangleMesh mesh, double mass_kg,
+                                                const std::string& source, const Eigen::Vector3d& p_OriginalCenterOfMass) {
+  if (mesh.triangles.empty()) throw MeshLoadError(source + ": the mesh has no triangle");
+  for (const Eigen::Vector3d& v : mesh.vertices)
+    if (!v.allFinite()) throw MeshLoadError(source + ": the mesh has a non-finite vertex coordinate");
+  for (const auto& t : mesh.triangles)
+    for (std::uint32_t i : t)
+      if (i >= mesh.vertices.size())
+        throw MeshLoadError(source + ": triangle index " + std::to_string(i) + " is past the " +
+                            std::to_string(mesh.vertices.size()) + " vertices");
+  auto model = std::make_shared<ObjectModel>();
+  model->name = name;
+  model->source = source;
+  model->mass_properties = compute_mass_properties(mesh);
+  if (!(model->mass_properties.volume > 1e-12))
+    throw MeshLoadError(source + ": the mesh encloses no volume (" + std::to_string(model->mass_properties.volume) +
+                        " m^3): it must be closed and outward-facing");
+  model->mesh = std::move(mesh);
+  model->mass_kg = mass_kg > 0 ? mass_kg : model->mass_properties.volume * 500.0;
+  model->p_ObjectMin = model->mesh.min_corner();
+  model->p_ObjectMax = model->mesh.max_corner();
+  model->p_OriginalCenterOfMass = p_OriginalCenterOfMass;
+  model->distance = MeshDistance(model->mesh);
+  return model;
 }
 
-std::vector<ObjectModelPtr> load_object_dir(const std::string& dir) {
+ObjectModelPtr load_object_model(const std::string& path, double mass_kg) {
+  const std::string stem = std::filesystem::path(path).stem().string();
+  return make_object_model(stem, load_mesh_file(path), mass_kg, path);
+}
+
+std::vector<ObjectModelPtr> load_object_dir(const std::string& dir, const MassLookup& mass_kg_of) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw MeshLoadError(dir + ": not a folder");
@@ -48,12 +74,11 @@ std::vector<ObjectModelPtr> load_object_dir(const std::string& dir) {
   if (files.empty()) throw MeshLoadError(dir + ": no mesh file (PLY, OBJ, STL, glTF, ...) in this folder");
   std::sort(files.begin(), files.end());
   std::vector<ObjectModelPtr> models;
-  for (const auto& f : files) models.push_back(load_object_model(f));
+  for (const auto& f : files) {
+    const double mass_kg = mass_kg_of ? mass_kg_of(std::filesystem::path(f).stem().string()) : 0.0;
+    models.push_back(load_object_model(f, mass_kg));
+  }
   return models;
-}
-
-ObjectModelPtr make_standin_model(const ProtocolObject& object) {
-  return make_object_model(object.name, make_standin_mesh(object), object.mass_kg, "built-in stand-in");
 }
 
 }  // namespace telegrasp::sim

@@ -8,6 +8,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <numbers>
@@ -511,39 +512,48 @@ std::string lowercase(std::string s) {
 }  // namespace
 
 const std::vector<ProtocolObject>& protocol_objects() {
+  // The last column: the object's place in the paper's presentation order (its figures' labels
+  // a, b, ... ad), which is not the id order.
   static const std::vector<ProtocolObject> objects{
-      {"002", "002_master_chef_can", {0.103, 0.102, 0.140}, 0.414},
-      {"003", "003_cracker_box", {0.072, 0.164, 0.213}, 0.411},
-      {"004", "004_sugar_box", {0.050, 0.094, 0.176}, 0.514},
-      {"005", "005_tomato_soup_can", {0.068, 0.068, 0.102}, 0.349},
-      {"006", "006_mustard_bottle", {0.097, 0.067, 0.191}, 0.603},
-      {"007", "007_tuna_fish_can", {0.086, 0.086, 0.034}, 0.171},
-      {"009", "009_gelatin_box", {0.089, 0.101, 0.030}, 0.097},
-      {"010", "010_potted_meat_can", {0.102, 0.060, 0.084}, 0.370},
-      {"011", "011_banana", {0.109, 0.178, 0.037}, 0.066},
-      {"012", "012_strawberry", {0.045, 0.045, 0.046}, 0.018},
-      {"013", "013_apple", {0.075, 0.075, 0.072}, 0.068},
-      {"014", "014_lemon", {0.061, 0.059, 0.053}, 0.029},
-      {"015", "015_peach", {0.062, 0.063, 0.059}, 0.033},
-      {"016", "016_pear", {0.067, 0.101, 0.066}, 0.049},
-      {"017", "017_orange", {0.072, 0.074, 0.071}, 0.047},
-      {"018", "018_plum", {0.057, 0.055, 0.053}, 0.025},
-      {"021", "021_bleach_cleanser", {0.102, 0.068, 0.251}, 1.131},
-      {"030", "030_fork", {0.198, 0.027, 0.016}, 0.034},
-      {"031", "031_spoon", {0.186, 0.083, 0.021}, 0.030},
-      {"032", "032_knife", {0.215, 0.021, 0.023}, 0.031},
-      {"033", "033_spatula", {0.306, 0.125, 0.033}, 0.052},
-      {"035", "035_power_drill", {0.184, 0.188, 0.057}, 0.895},
-      {"037", "037_scissors", {0.096, 0.202, 0.016}, 0.082},
-      {"040", "040_large_marker", {0.021, 0.121, 0.019}, 0.016},
-      {"042", "042_adjustable_wrench", {0.125, 0.181, 0.015}, 0.252},
-      {"044", "044_flat_screwdriver", {0.162, 0.157, 0.035}, 0.098},
-      {"048", "048_hammer", {0.182, 0.333, 0.033}, 0.665},
-      {"055", "055_baseball", {0.073, 0.074, 0.073}, 0.148},
-      {"056", "056_tennis_ball", {0.067, 0.067, 0.067}, 0.058},
-      {"072-a", "072-a_toy_airplane", {0.255, 0.263, 0.183}, 0.570},
+      {"002", "002_master_chef_can", {0.103, 0.102, 0.140}, 0.414, 11},
+      {"003", "003_cracker_box", {0.072, 0.164, 0.213}, 0.411, 1},
+      {"004", "004_sugar_box", {0.050, 0.094, 0.176}, 0.514, 2},
+      {"005", "005_tomato_soup_can", {0.068, 0.068, 0.102}, 0.349, 3},
+      {"006", "006_mustard_bottle", {0.097, 0.067, 0.191}, 0.603, 4},
+      {"007", "007_tuna_fish_can", {0.086, 0.086, 0.034}, 0.171, 5},
+      {"009", "009_gelatin_box", {0.089, 0.101, 0.030}, 0.097, 6},
+      {"010", "010_potted_meat_can", {0.102, 0.060, 0.084}, 0.370, 7},
+      {"011", "011_banana", {0.109, 0.178, 0.037}, 0.066, 8},
+      {"012", "012_strawberry", {0.045, 0.045, 0.046}, 0.018, 9},
+      {"013", "013_apple", {0.075, 0.075, 0.072}, 0.068, 10},
+      {"014", "014_lemon", {0.061, 0.059, 0.053}, 0.029, 0},
+      {"015", "015_peach", {0.062, 0.063, 0.059}, 0.033, 12},
+      {"016", "016_pear", {0.067, 0.101, 0.066}, 0.049, 13},
+      {"017", "017_orange", {0.072, 0.074, 0.071}, 0.047, 14},
+      {"018", "018_plum", {0.057, 0.055, 0.053}, 0.025, 15},
+      {"021", "021_bleach_cleanser", {0.102, 0.068, 0.251}, 1.131, 16},
+      {"030", "030_fork", {0.198, 0.027, 0.016}, 0.034, 17},
+      {"031", "031_spoon", {0.186, 0.083, 0.021}, 0.030, 18},
+      {"032", "032_knife", {0.215, 0.021, 0.023}, 0.031, 19},
+      {"033", "033_spatula", {0.306, 0.125, 0.033}, 0.052, 20},
+      {"035", "035_power_drill", {0.184, 0.188, 0.057}, 0.895, 21},
+      {"037", "037_scissors", {0.096, 0.202, 0.016}, 0.082, 22},
+      {"040", "040_large_marker", {0.021, 0.121, 0.019}, 0.016, 23},
+      {"042", "042_adjustable_wrench", {0.125, 0.181, 0.015}, 0.252, 24},
+      {"044", "044_flat_screwdriver", {0.162, 0.157, 0.035}, 0.098, 25},
+      {"048", "048_hammer", {0.182, 0.333, 0.033}, 0.665, 26},
+      {"055", "055_baseball", {0.073, 0.074, 0.073}, 0.148, 27},
+      {"056", "056_tennis_ball", {0.067, 0.067, 0.067}, 0.058, 28},
+      {"072-a", "072-a_toy_airplane", {0.255, 0.263, 0.183}, 0.570, 29},
   };
   return objects;
+}
+
+std::vector<ProtocolObject> protocol_objects_in_paper_order() {
+  std::vector<ProtocolObject> out = protocol_objects();
+  std::sort(out.begin(), out.end(),
+            [](const ProtocolObject& a, const ProtocolObject& b) { return a.paper_order < b.paper_order; });
+  return out;
 }
 
 std::optional<ProtocolObject> find_protocol_object(const std::string& name_or_id) {
@@ -565,6 +575,28 @@ TriangleMesh make_standin_mesh(const ProtocolObject& object) {
   TriangleMesh mesh =
       it != builders.end() ? it->second(object.extent) : subdivided_box(object.extent);
   return fit_to_extent(std::move(mesh), object.extent);
+}
+
+ObjectModelPtr make_standin_model(const ProtocolObject& object) {
+  return make_object_model(object.name, make_standin_mesh(object), object.mass_kg, "built-in stand-in");
+}
+
+namespace {
+
+// The real mass of the protocol object a file stem names, or 0 (from the volume) if none.
+double protocol_mass_kg(const std::string& stem) {
+  const auto known = find_protocol_object(stem);
+  return known ? known->mass_kg : 0.0;
+}
+
+}  // namespace
+
+ObjectModelPtr load_protocol_object_model(const std::string& path) {
+  return load_object_model(path, protocol_mass_kg(std::filesystem::path(path).stem().string()));
+}
+
+std::vector<ObjectModelPtr> load_protocol_object_dir(const std::string& dir) {
+  return load_object_dir(dir, protocol_mass_kg);
 }
 
 }  // namespace telegrasp::sim

@@ -6,6 +6,7 @@
 #include "telegrasp/sim/hand_controller.h"
 #include "telegrasp/sim/mesh_loading.h"
 #include "telegrasp/sim/scripted_operator.h"
+#include "telegrasp/sim/standin_objects.h"
 #include "telegrasp/sim/world.h"
 
 #include <benchmark/benchmark.h>
@@ -56,7 +57,7 @@ const Fixture& fixture(const std::string& source) {
   if (it != cache.end()) return it->second;
   Fixture f;
   const auto known = find_protocol_object(source);
-  f.model = std::filesystem::exists(source) ? load_object_model(source) : make_standin_model(*known);
+  f.model = std::filesystem::exists(source) ? load_protocol_object_model(source) : make_standin_model(*known);
   f.X_WorldObject = World::resting_pose(*f.model, 0.45, 0.0, 0.4);
   f.plan = plan_grasp(rig(), {}, *f.model, f.X_WorldObject, kDt);
   HandController dry_run(rig(), {});

@@ -4,6 +4,7 @@
 // functions.
 #include "telegrasp/client/client.h"
 #include "telegrasp/idl/dds_participant.h"
+#include "telegrasp/idl/geometry_hash.h"
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
 #include "test_domain.h"
@@ -486,6 +487,59 @@ TEST(ClientLoopbackTest, AThrowingCallbackDoesNotStopDelivery) {
   }));
   ASSERT_EQ(client.latest_hand_skeletons().size(), 1u);
   EXPECT_GT(client.latest_hand_skeletons()[0].tick, 0u);
+}
+
+// A tetrahedron's geometry as a server publishes it, named `model`, with its true content hash.
+msg::ObjectGeometry tetrahedron_geometry(const std::string& model) {
+  msg::ObjectGeometry m;
+  m.model(model);
+  m.vertices({0.f, 0.f, 0.f, 0.1f, 0.f, 0.f, 0.f, 0.1f, 0.f, 0.f, 0.f, 0.1f});
+  m.triangles({0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3});
+  m.vertex_count(4);
+  m.triangle_count(4);
+  m.content_hash(idl::geometry_content_hash(m.vertices().data(), 4, m.triangles().data(), 4));
+  m.mass(0.25);
+  return m;
+}
+
+// Geometries arrive checked and cached by content hash: a damaged one is dropped, the same one
+// arriving again is the same object, and the same mesh under another name is taken from the cache.
+TEST(ClientLoopbackTest, ObjectGeometriesAreCheckedAndCachedByHash) {
+  const DomainLease lease;
+  const int domain = lease.domain();
+  idl::DdsParticipant server(domain, "loopback");
+  dds::DataWriter* writer = server.writer<msg::ObjectGeometryPubSubType>(idl::kObjectGeometryTopic);
+  Client client(options("viewer", domain, kObjectGeometries));
+  std::atomic<int> calls{0};
+  client.on_object_geometry([&](const std::shared_ptr<const ObjectGeometry>&) { ++calls; });
+
+  // Transient local: written before or after the client matched, it arrives.
+  msg::ObjectGeometry good = tetrahedron_geometry("tetra"), damaged = tetrahedron_geometry("damaged");
+  damaged.vertices()[4] = 0.5f;  // no longer what its hash says
+  ASSERT_TRUE(writer->write(&good));
+  ASSERT_TRUE(writer->write(&damaged));
+  msg::ObjectGeometry marker = tetrahedron_geometry("marker");
+  marker.mass(3.0);
+  ASSERT_TRUE(writer->write(&marker));  // reliable and in order: once it is in, so is the damaged one
+  ASSERT_TRUE(eventually([&] { return client.object_geometry("marker") != nullptr; }));
+  EXPECT_EQ(client.object_geometry("damaged"), nullptr);
+  const std::shared_ptr<const ObjectGeometry> first = client.object_geometry("tetra");
+  ASSERT_NE(first, nullptr);
+  EXPECT_EQ(first->vertices.size(), 4u);
+  EXPECT_EQ(first->triangles[1], (std::array<std::uint32_t, 3>{0, 1, 3}));
+  EXPECT_EQ(first->mass_kg, 0.25);
+  EXPECT_EQ(client.object_geometries().size(), 2u);
+  // The marker is the tetrahedron's mesh with another mass: its own object, the same mesh.
+  EXPECT_NE(client.object_geometry("marker").get(), first.get());
+  EXPECT_EQ(client.object_geometry("marker")->vertices, first->vertices);
+  EXPECT_EQ(client.object_geometry("marker")->mass_kg, 3.0);
+
+  // The same geometry again (e.g. a restarted server): delivered, but not rebuilt.
+  ASSERT_TRUE(eventually([&] { return calls == 2; })) << "tetra and marker, not the damaged one";
+  ASSERT_TRUE(writer->write(&good));
+  ASSERT_TRUE(eventually([&] { return calls == 3; }));
+  EXPECT_EQ(client.object_geometry("tetra").get(), first.get());
+  client.on_object_geometry(nullptr);  // before `calls` goes out of scope
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 // enum values), so a swapped field cannot round-trip unnoticed.
 #include "conversions.h"
 
+#include "telegrasp/idl/geometry_hash.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -45,7 +47,7 @@ void expect_same(const client::ContactPoint& a, const client::ContactPoint& b) {
   EXPECT_EQ(a.nd_hit, b.nd_hit);
 }
 
-void expect_same(const client::CapsuleReport& a, const client::CapsuleReport& b) {
+void expect_same(const client::CapsuleMetric& a, const client::CapsuleMetric& b) {
   EXPECT_EQ(a.phalanx, b.phalanx);
   EXPECT_EQ(a.phalanx_name, b.phalanx_name);
   EXPECT_EQ(a.hit, b.hit);
@@ -421,6 +423,78 @@ TEST(ConversionsTest, ServerStatusRoundTrip) {
   EXPECT_EQ(r.commands_accepted, s.commands_accepted);
   EXPECT_EQ(r.commands_rejected, s.commands_rejected);
   EXPECT_EQ(r.models, s.models);
+}
+
+// A tetrahedron (4 vertices, 4 triangles) with every field set and its true content hash.
+client::ObjectGeometry tetrahedron() {
+  client::ObjectGeometry g;
+  g.model = "tetra";
+  g.vertices = {{0.f, 0.f, 0.f}, {0.1f, 0.f, 0.f}, {0.f, 0.1f, 0.f}, {0.f, 0.f, 0.1f}};
+  g.triangles = {{{0, 2, 1}}, {{0, 1, 3}}, {{0, 3, 2}}, {{1, 2, 3}}};
+  g.vertex_count = 4;
+  g.triangle_count = 4;
+  g.p_ObjectMin = {-0.025, -0.025, -0.025};
+  g.p_ObjectMax = {0.075, 0.075, 0.075};
+  g.mass_kg = 0.25;
+  g.volume_m3 = 1.0 / 6000;
+  g.inertia_diagonal = {1e-4, 2e-4, 3e-4};
+  g.p_ObjectSourceOrigin = {-0.025, -0.025, -0.025};
+  const msg::ObjectGeometry m = to_msg(g);
+  g.content_hash = idl::geometry_content_hash(m.vertices().data(), 4, m.triangles().data(), 4);
+  return g;
+}
+
+TEST(ConversionsTest, ObjectGeometryRoundTrip) {
+  const client::ObjectGeometry g = tetrahedron();
+  const msg::ObjectGeometry m = to_msg(g);
+  ASSERT_EQ(m.vertices().size(), 12u);
+  EXPECT_EQ(m.vertices()[3], 0.1f) << "x, y, z per vertex, vertex after vertex";
+  ASSERT_EQ(m.triangles().size(), 12u);
+  EXPECT_EQ(m.triangles()[1], 2u);
+  EXPECT_EQ(check_object_geometry(m), "");
+  const client::ObjectGeometry r = from_msg(m);
+  EXPECT_EQ(r.model, g.model);
+  EXPECT_EQ(r.content_hash, g.content_hash);
+  EXPECT_EQ(r.vertices, g.vertices);
+  EXPECT_EQ(r.triangles, g.triangles);
+  EXPECT_EQ(r.vertex_count, g.vertex_count);
+  EXPECT_EQ(r.triangle_count, g.triangle_count);
+  EXPECT_EQ(r.mesh_omitted, g.mesh_omitted);
+  EXPECT_EQ(r.p_ObjectMin, g.p_ObjectMin);
+  EXPECT_EQ(r.p_ObjectMax, g.p_ObjectMax);
+  EXPECT_EQ(r.mass_kg, g.mass_kg);
+  EXPECT_EQ(r.volume_m3, g.volume_m3);
+  EXPECT_EQ(r.inertia_diagonal, g.inertia_diagonal);
+  EXPECT_EQ(r.p_ObjectSourceOrigin, g.p_ObjectSourceOrigin);
+  const client::ObjectGeometry header = from_msg_without_mesh(m);
+  EXPECT_TRUE(header.vertices.empty() && header.triangles.empty());
+  EXPECT_EQ(header.triangle_count, 4u);
+  EXPECT_EQ(header.mass_kg, g.mass_kg);
+}
+
+// A received geometry that is cut short, out of range, not finite or not what its hash says is
+// refused with the reason.
+TEST(ConversionsTest, DamagedObjectGeometryIsRefused) {
+  const msg::ObjectGeometry good = to_msg(tetrahedron());
+  auto refused = [&](auto&& damage) {
+    msg::ObjectGeometry m = good;
+    damage(m);
+    return check_object_geometry(m);
+  };
+  EXPECT_NE(refused([](msg::ObjectGeometry& m) { m.vertices().pop_back(); }).find("vertex coordinates"), std::string::npos);
+  EXPECT_NE(refused([](msg::ObjectGeometry& m) { m.triangle_count(5); }).find("triangle indices"), std::string::npos);
+  EXPECT_NE(refused([](msg::ObjectGeometry& m) { m.triangles()[5] = 4; }).find("past the 4 vertices"), std::string::npos);
+  EXPECT_NE(refused([](msg::ObjectGeometry& m) { m.vertices()[7] = std::numeric_limits<float>::quiet_NaN(); }).find("non-finite"),
+            std::string::npos);
+  EXPECT_NE(refused([](msg::ObjectGeometry& m) { m.vertices()[7] = 0.2f; }).find("content_hash"), std::string::npos);
+  EXPECT_NE(refused([](msg::ObjectGeometry& m) { m.mesh_omitted(true); }).find("mesh_omitted"), std::string::npos);
+  // Omitted and empty is whole: there is nothing to check the hash against.
+  EXPECT_EQ(refused([](msg::ObjectGeometry& m) {
+              m.mesh_omitted(true);
+              m.vertices().clear();
+              m.triangles().clear();
+            }),
+            "");
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// Tests client_lib/tools/echo_main.cc: telegrasp-echo, run as a process, prints what raw Fast DDS
+// Tests client_lib/tools/echo/main.cc: telegrasp-echo, run as a process, prints what raw Fast DDS
 // writers publish as one JSON object per line, and exits after --count lines.
 #include "telegrasp/idl/dds_participant.h"
 #include "telegrasp/idl/telegraspPubSubTypes.h"
@@ -83,8 +83,8 @@ TEST(EchoToolTest, PrintsOneJsonObjectPerSampleAndStopsAtTheCount) {
   EXPECT_EQ(event_line->at("kind"), "release");
   EXPECT_EQ(event_line->at("hand").at("client_id"), "bot-a");
   EXPECT_EQ(event_line->at("hand").at("side"), "left");
-  EXPECT_EQ(event_line->at("v_WorldObject").at(2), -0.5);
-  EXPECT_EQ(event_line->at("X_WorldObject").at("q").at(0), 1.0);  // w first
+  EXPECT_EQ(event_line->at("v_WorldObject_m_per_s").at(2), -0.5);
+  EXPECT_EQ(event_line->at("X_WorldObject").at("q_wxyz").at(0), 1.0);  // w first
 }
 
 }  // namespace

@@ -1,12 +1,15 @@
 // Tests server/src/conversions: sim <-> IDL round trips and hand-checked field mappings.
 #include "conversions.h"
 
+#include "telegrasp/idl/geometry_hash.h"
 #include "telegrasp/sim/hand_rig.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <numbers>
+#include <vector>
 
 namespace telegrasp::server {
 namespace {
@@ -141,6 +144,106 @@ TEST(ConversionsTest, GraspEventCarriesMetricsAndNames) {
   EXPECT_EQ(m.capsules()[0].signed_distance(), -0.0001);
   EXPECT_TRUE(m.capsules()[0].hit());
   EXPECT_TRUE(m.capsules()[0].blocked());
+}
+
+// A 0.125 x 0.25 x 0.5 m box with a corner at the origin (8 vertices, 12 triangles, outward),
+// built inline. Its sizes are powers of two, so its recentred corners are exact in float32.
+sim::TriangleMesh corner_box() {
+  sim::TriangleMesh m;
+  for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1 ? 0.125 : 0.0, i & 2 ? 0.25 : 0.0, i & 4 ? 0.5 : 0.0);
+  m.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                 {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  return m;
+}
+
+// FNV-1a 64 over a byte buffer laid out by hand (little-endian host): a second implementation of
+// the content hash's definition in telegrasp.idl.
+std::uint64_t fnv1a64_of_bytes(const std::vector<unsigned char>& bytes) {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  for (unsigned char b : bytes) h = (h ^ b) * 0x100000001b3ull;
+  return h;
+}
+
+template <class T>
+void append_bytes(std::vector<unsigned char>& out, const T& value) {
+  unsigned char b[sizeof(T)];
+  std::memcpy(b, &value, sizeof(T));
+  out.insert(out.end(), b, b + sizeof(T));
+}
+
+// The cube's geometry goes out in the model frame (recentred on the centre of mass) with its 8
+// vertices and 12 triangles, comes back as the same mesh, and carries the box's analytic bounds,
+// volume, inertia and hash.
+TEST(ConversionsTest, ObjectGeometryOfABoxRoundTripsWithItsBoundsMassAndHash) {
+  const double mass = 2.0, a = 0.125, b = 0.25, c = 0.5;
+  const sim::ObjectModelPtr model = sim::make_object_model("box", corner_box(), mass, "test");
+  const msg::ObjectGeometry m = make_object_geometry(*model);
+
+  EXPECT_EQ(m.model().to_string(), "box");
+  EXPECT_EQ(m.vertex_count(), 8u);
+  EXPECT_EQ(m.triangle_count(), 12u);
+  EXPECT_FALSE(m.mesh_omitted());
+  ASSERT_EQ(m.vertices().size(), 24u);
+  ASSERT_EQ(m.triangles().size(), 36u);
+
+  // Back to a sim mesh: the same triangles, the same (float-exact) corners.
+  const sim::TriangleMesh back = to_sim_mesh(m);
+  ASSERT_EQ(back.vertices.size(), 8u);
+  EXPECT_EQ(back.triangles, model->mesh.triangles);
+  constexpr double kFloat32Rounding = 1e-7;  // m, on coordinates under 1 m
+  for (std::size_t i = 0; i < 8; ++i)
+    EXPECT_LT((back.vertices[i] - model->mesh.vertices[i]).cwiseAbs().maxCoeff(), kFloat32Rounding) << "vertex " << i;
+  // The model frame has its origin at the box's centre: every corner is at (+-a/2, +-b/2, +-c/2).
+  for (const Eigen::Vector3d& v : back.vertices) EXPECT_EQ(v.cwiseAbs(), Eigen::Vector3d(a / 2, b / 2, c / 2));
+
+  constexpr double kTolerance = 1e-12;
+  EXPECT_TRUE(to_eigen(m.p_min()).isApprox(Eigen::Vector3d(-a / 2, -b / 2, -c / 2), kTolerance));
+  EXPECT_TRUE(to_eigen(m.p_max()).isApprox(Eigen::Vector3d(a / 2, b / 2, c / 2), kTolerance));
+  EXPECT_EQ(m.mass(), mass);
+  EXPECT_NEAR(m.volume(), a * b * c, kTolerance);
+  // A solid box: I_xx = m (b^2 + c^2) / 12, and so on.
+  const Eigen::Vector3d I(mass * (b * b + c * c) / 12, mass * (a * a + c * c) / 12, mass * (a * a + b * b) / 12);
+  EXPECT_TRUE(to_eigen(m.inertia_diagonal()).isApprox(I, kTolerance)) << to_eigen(m.inertia_diagonal()).transpose();
+  // The source file's origin (the box's corner) seen from the centre.
+  EXPECT_TRUE(to_eigen(m.p_source_origin()).isApprox(Eigen::Vector3d(-a / 2, -b / 2, -c / 2), kTolerance));
+
+  // The hash, laid out byte by byte as the IDL defines it.
+  std::vector<unsigned char> bytes;
+  append_bytes(bytes, std::uint32_t{8});
+  append_bytes(bytes, std::uint32_t{12});
+  for (float x : m.vertices()) append_bytes(bytes, x);
+  for (std::uint32_t i : m.triangles()) append_bytes(bytes, i);
+  EXPECT_EQ(m.content_hash(), fnv1a64_of_bytes(bytes));
+}
+
+// One coordinate one float step away, or one triangle turned round, is another hash.
+TEST(ConversionsTest, ObjectGeometryHashChangesWithTheMesh) {
+  const msg::ObjectGeometry m = make_object_geometry(*sim::make_object_model("box", corner_box(), 1.0, "test"));
+  std::vector<float> xyz = m.vertices();
+  std::vector<std::uint32_t> idx = m.triangles();
+  EXPECT_EQ(idl::geometry_content_hash(xyz.data(), 8, idx.data(), 12), m.content_hash());
+  xyz[4] = std::nextafter(xyz[4], 1.0f);
+  EXPECT_NE(idl::geometry_content_hash(xyz.data(), 8, idx.data(), 12), m.content_hash());
+  xyz = m.vertices();
+  std::swap(idx[0], idx[1]);
+  EXPECT_NE(idl::geometry_content_hash(xyz.data(), 8, idx.data(), 12), m.content_hash());
+}
+
+// Over the size limit, the mesh stays home: no vertices or triangles, everything else (the hash of
+// the whole mesh included) as before.
+TEST(ConversionsTest, ObjectGeometryOverTheLimitIsPublishedWithoutItsMesh) {
+  const sim::ObjectModelPtr model = sim::make_object_model("box", corner_box(), 1.0, "test");
+  const msg::ObjectGeometry whole = make_object_geometry(*model);
+  const msg::ObjectGeometry omitted = make_object_geometry(*model, 11);
+  EXPECT_TRUE(omitted.mesh_omitted());
+  EXPECT_TRUE(omitted.vertices().empty());
+  EXPECT_TRUE(omitted.triangles().empty());
+  EXPECT_EQ(omitted.vertex_count(), 8u);
+  EXPECT_EQ(omitted.triangle_count(), 12u);
+  EXPECT_EQ(omitted.content_hash(), whole.content_hash());
+  EXPECT_EQ(omitted.mass(), whole.mass());
+  EXPECT_TRUE(to_sim_mesh(omitted).triangles.empty());
+  EXPECT_FALSE(make_object_geometry(*model, 12).mesh_omitted()) << "the limit itself is allowed";
 }
 
 }  // namespace

@@ -2,15 +2,13 @@
 // Recorder (no DDS) replays with zero divergence; an altered input diverges where it should;
 // truncated and corrupted files keep exactly the records before the damage; the header carries
 // the settings; the contacts CSV holds every grasp contact; fill_standins completes a mesh folder.
-#include "controller_state.h"
+#include "recorded_session.h"
 #include "recording.h"
 #include "replay.h"
 #include "replay_export.h"
-#include "scene_server.h"
 #include "scene_setup.h"
 #include "server_config.pb.h"
 
-#include "telegrasp/sim/scripted_operator.h"
 #include "telegrasp/sim/standin_objects.h"
 
 #include <gtest/gtest.h>
@@ -26,9 +24,6 @@ namespace telegrasp::server {
 namespace {
 
 namespace fs = std::filesystem;
-
-constexpr std::int64_t kTickNs = 11'111'111;  // 90 Hz
-const ParticipantKey kParticipant{1};
 
 // A scratch folder of this test process (ctest runs every test as its own process, in parallel).
 const fs::path& scratch() {
@@ -59,85 +54,11 @@ void write_bytes(const std::string& path, const std::string& bytes) {
   ASSERT_TRUE(out.good()) << path;
 }
 
-// What the Recorder forwarded, to check the recording against.
-struct CollectingSink : OutputSink {
-  std::vector<msg::GraspEvent> events;
-  std::vector<HandAddress> removed;
-  void publish(const msg::HandSkeleton&) override {}
-  void publish(const msg::GraspState&) override {}
-  void publish(const msg::ContactSet&) override {}
-  void publish(const msg::GraspEvent& m) override { events.push_back(m); }
-  void publish(const msg::SceneState&) override {}
-  void publish(const msg::ServerStatus&) override {}
-  void hand_removed(const HandAddress& hand) override { removed.push_back(hand); }
-};
-
-struct Session {
-  std::string path;
-  std::vector<msg::GraspEvent> events;
-};
-
-// Records a run the way the server's simulation thread drives the scene: a soup can on the table,
-// 10 idle ticks, a tennis ball spawned by command, alice's right hand grasping and lifting the can
-// (the scripted operator), one ServerStatus, then silence until the hand is removed and the can
-// released.
-Session record_session(const std::string& path) {
-  ServerSettings settings;
-  settings.objects = {{"005_tomato_soup_can", 0.45, 0.0, 0.0}};
-  const SceneAssets assets = load_scene_assets(settings);
-  CollectingSink sink;
-  InputMailbox mailbox({assets.left_rig->fingers().size(), assets.right_rig->fingers().size()}, settings.max_hands,
-                       [](const std::string&) {});
-  {
-    Recorder recorder(path, settings, assets, sink);
-    SceneServer scene(settings, assets.models, assets.right_rig, assets.left_rig, mailbox, recorder);
-    std::int64_t now = 0;
-    std::uint64_t seq = 0;
-    auto tick = [&] {
-      now += kTickNs;
-      recorder.tick(now);
-      scene.tick(now);
-    };
-    auto send = [&](const sim::ControllerInput& in) {
-      EXPECT_TRUE(mailbox.offer(to_state("alice", 1, ++seq, in), kParticipant, now));
-      std::vector<InputSample> samples = mailbox.drain();
-      recorder.inputs(samples, now);
-      scene.on_inputs(std::move(samples), now);
-    };
-    for (int i = 0; i < 10; ++i) tick();
-    msg::SceneCommand spawn;
-    spawn.client_id("alice");
-    spawn.command_id(1);
-    spawn.kind(msg::SCENE_SPAWN);
-    spawn.model("056_tennis_ball");
-    spawn.on_table(true);
-    spawn.x(0.45);
-    spawn.y(0.4);
-    recorder.command(spawn, now);
-    EXPECT_EQ(scene.apply_command(spawn), "");
-
-    const sim::ObjectId can = scene.world().objects().front();
-    sim::ScriptedOperator op(assets.right_rig, sim::skill_profile("perfect"), 7);
-    Eigen::Isometry3d start = Eigen::Isometry3d::Identity();
-    start.translation() = scene.world().object_pose(can).translation() + Eigen::Vector3d(-0.3, -0.2, 0.3);
-    op.begin(scene.world().object_model(can), scene.world().object_pose(can), start, scene.world().time());
-    while (op.phase() != sim::OperatorPhase::kHold && scene.world().time() < 20) {
-      send(op.next(scene.world().time(), scene.world().holder(can).valid()));
-      tick();
-    }
-    recorder.publish(scene.status({}));
-    while (sink.removed.empty() && scene.world().time() < 25) tick();
-    tick();  // the release goes out with the next step
-    EXPECT_EQ(recorder.error(), "");
-  }
-  return {path, sink.events};
-}
-
 // One recorded session per test process, shared by the tests that only read it.
 class RecordingTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    session_ = new Session(record_session((scratch() / "session.tgrec").string()));
+    session_ = new RecordedSession(record_session((scratch() / "session.tgrec").string()));
     ASSERT_FALSE(session_->events.empty());
     ASSERT_EQ(session_->events[0].kind(), msg::GRASP_EVENT_GRASP);
     ASSERT_FALSE(session_->events[0].contacts().empty());
@@ -146,7 +67,7 @@ class RecordingTest : public ::testing::Test {
     delete session_;
     session_ = nullptr;
   }
-  const Session& session() const { return *session_; }
+  const RecordedSession& session() const { return *session_; }
   // Byte offsets at which each record's frame starts (the last entry: the End record's).
   static std::vector<std::uint64_t> frame_starts(const std::string& path) {
     RecordingReader reader(path);
@@ -158,9 +79,9 @@ class RecordingTest : public ::testing::Test {
   }
 
  private:
-  static Session* session_;
+  static RecordedSession* session_;
 };
-Session* RecordingTest::session_ = nullptr;
+RecordedSession* RecordingTest::session_ = nullptr;
 
 std::uint64_t count_ticks(const std::vector<proto::Record>& records, std::size_t before) {
   std::uint64_t n = 0;

@@ -254,6 +254,32 @@ TEST(HandControllerTest, GraspAfterBendingBackReleasesWhenTheTriggerIsReleased) 
   EXPECT_FALSE(hand.state().grasped.valid());
 }
 
+// A copy of a controller whose caches are filled (mid-close over a plate) ticks exactly as the
+// original does, on its own: through blocking, the hand pushing the finger in, and opening.
+TEST(HandControllerTest, CopyTicksLikeTheOriginal) {
+  BoxScene plate({0.1, 0.1, 0.01}, {0.1, 0, -0.025});
+  HandController hand(finger_rig_without_grasp(), {});
+  for (int t = 0; t < 2; ++t) hand.tick(at_identity(1.0), kDt, {&plate.view, 1});
+  ASSERT_FALSE(hand.state().blocked[1] || hand.state().blocked[2]) << "copied before any contact";
+  HandController copy = hand;
+  HandController assigned(finger_rig(), {});
+  assigned = hand;
+  bool blocked = false;
+  for (int t = 0; t < 90; ++t) {
+    ControllerInput in = at_identity(t < 70 ? 1.0 : 0.0);
+    if (t >= 50) in.X_WorldPalm.translation().z() = -0.003;  // pushes the resting finger in
+    copy.tick(in, kDt, {&plate.view, 1});  // the copies first: they must not disturb the original
+    assigned.tick(in, kDt, {&plate.view, 1});
+    hand.tick(in, kDt, {&plate.view, 1});
+    blocked |= hand.state().blocked[2] != 0;
+    ASSERT_EQ(copy.state().q, hand.state().q) << "tick " << t;
+    ASSERT_EQ(copy.state().blocked, hand.state().blocked) << "tick " << t;
+    ASSERT_EQ(assigned.state().q, hand.state().q) << "tick " << t;
+    ASSERT_EQ(assigned.state().blocked, hand.state().blocked) << "tick " << t;
+  }
+  EXPECT_TRUE(blocked) << "the distal capsule blocked on the plate";
+}
+
 // A finger resting at its target blocks when the hand brings its capsule into contact.
 TEST(HandControllerTest, RestingFingerBlocksWhenTheHandBringsItIntoContact) {
   HandController hand(finger_rig_without_grasp(), {});
@@ -503,6 +529,16 @@ TEST(HandControllerTest, GraspMetricsAndContactsEqualFreshExactQueries) {
     EXPECT_NEAR(mb.capsules[i].signed_distance, box.model->distance.capsule_signed_distance(a, b, r), 1e-12) << i;
     EXPECT_NE(mb.capsules[i].signed_distance, m.capsules[i].signed_distance) << i;
   }
+}
+
+// The closing modes' names, as flags, configuration files and records write them, read back.
+TEST(ClosingModeTest, NamesReadBackAndOthersAreRefused) {
+  for (ClosingMode m : {ClosingMode::kPrecise, ClosingMode::kDiscrete}) EXPECT_EQ(parse_closing_mode(closing_mode_name(m)), m);
+  EXPECT_STREQ(closing_mode_name(ClosingMode::kPrecise), "precise");
+  EXPECT_STREQ(closing_mode_name(ClosingMode::kDiscrete), "discrete");
+  EXPECT_EQ(parse_closing_mode("Precise"), std::nullopt);
+  EXPECT_EQ(parse_closing_mode("both"), std::nullopt);
+  EXPECT_EQ(parse_closing_mode(""), std::nullopt);
 }
 
 }  // namespace

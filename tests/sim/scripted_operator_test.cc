@@ -2,6 +2,7 @@
 // trials on stand-ins, including a fast close on the knife that must not tunnel.
 #include "telegrasp/sim/scripted_operator.h"
 
+#include "telegrasp/sim/standin_objects.h"
 #include "telegrasp/sim/world.h"
 
 #include <gtest/gtest.h>
@@ -83,7 +84,7 @@ std::vector<ObjectModelPtr> knives() {
   std::vector<ObjectModelPtr> out{standin("032_knife")};
   if (const char* ycb = std::getenv("TELEGRASP_YCB_DIR")) {
     const std::string scan = std::string(ycb) + "/032_knife.ply";
-    if (std::ifstream(scan).good()) out.push_back(load_object_model(scan));
+    if (std::ifstream(scan).good()) out.push_back(load_protocol_object_model(scan));
   }
   return out;
 }

@@ -1,5 +1,6 @@
-// Tests the protocol object table, find_protocol_object and the procedural stand-in meshes
-// (closed, consistently outward, sized to the table extent, resting on z = 0, centred in x/y).
+// Tests the protocol object table, find_protocol_object, the procedural stand-in meshes (closed,
+// consistently outward, sized to the table extent, resting on z = 0, centred in x/y) and the
+// loading of mesh files with the protocol objects' real masses.
 #include "telegrasp/sim/standin_objects.h"
 
 #include <gtest/gtest.h>
@@ -7,8 +8,11 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cctype>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <set>
+#include <random>
 #include <utility>
 
 #include "telegrasp/sim/mass_properties.h"
@@ -136,6 +140,51 @@ TEST(StandinMesh, UnknownObjectGetsABoxOfItsExtent) {
   const TriangleMesh mesh = make_standin_mesh(custom);
   EXPECT_NEAR(compute_mass_properties(mesh).volume, 0.05 * 0.04 * 0.03, 1e-12);
 }
+
+// A folder with two 10 cm cubes, one named after a protocol object: the protocol loaders give
+// that one its real mass and the other the mass of its volume at 500 kg/m^3; the generic
+// loaders, knowing no catalogue, give both the volume's.
+TEST(ProtocolObjectFiles, ProtocolNamesGetTheirRealMass) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("telegrasp_standin_objects_test_" + std::to_string(std::random_device{}()));
+  fs::create_directories(dir);
+  const std::string cube =
+      "v 0 0 0\nv 0.1 0 0\nv 0.1 0.1 0\nv 0 0.1 0\nv 0 0 0.1\nv 0.1 0 0.1\nv 0.1 0.1 0.1\nv 0 0.1 0.1\n"
+      "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+  const std::string baseball = (dir / "055_baseball.obj").string();
+  std::ofstream(baseball) << cube;
+  std::ofstream(dir / "zz_cube.obj") << cube;
+  constexpr double kVolumeMass = 1e-3 * 500.0;
+  constexpr double kTol = 1e-6;  // kg: the file is read in float (0.1 m is off by ~1e-9 m)
+  const double real_mass = find_protocol_object("055_baseball")->mass_kg;
+
+  const std::vector<ObjectModelPtr> protocol = load_protocol_object_dir(dir.string());
+  ASSERT_EQ(protocol.size(), 2u);
+  EXPECT_EQ(protocol[0]->name, "055_baseball");
+  EXPECT_EQ(protocol[0]->mass_kg, real_mass);
+  EXPECT_EQ(protocol[1]->name, "zz_cube");
+  EXPECT_NEAR(protocol[1]->mass_kg, kVolumeMass, kTol);
+  EXPECT_EQ(load_protocol_object_model(baseball)->mass_kg, real_mass);
+
+  const std::vector<ObjectModelPtr> generic = load_object_dir(dir.string(), nullptr);
+  ASSERT_EQ(generic.size(), 2u);
+  EXPECT_NEAR(generic[0]->mass_kg, kVolumeMass, kTol);
+  EXPECT_NEAR(load_object_model(baseball, 0.0)->mass_kg, kVolumeMass, kTol);
+  EXPECT_EQ(load_object_model(baseball, 2.0)->mass_kg, 2.0);
+  fs::remove_all(dir);
+}
+
+// The paper presented the objects in its own order (labels a..ad of its per-object figures):
+// every object has one place in it, lemon first and the toy airplane last.
+TEST(ProtocolObjects, PaperOrderIsAPermutationFromLemonToAirplane) {
+  const std::vector<ProtocolObject> ordered = protocol_objects_in_paper_order();
+  ASSERT_EQ(ordered.size(), protocol_objects().size());
+  for (std::size_t i = 0; i < ordered.size(); ++i) EXPECT_EQ(ordered[i].paper_order, static_cast<int>(i));
+  EXPECT_EQ(ordered.front().name, "014_lemon");
+  EXPECT_EQ(ordered[11].name, "002_master_chef_can");
+  EXPECT_EQ(ordered.back().name, "072-a_toy_airplane");
+}
+
 
 }  // namespace
 }  // namespace telegrasp::sim

@@ -3,6 +3,7 @@
 #include "telegrasp/sim/world.h"
 
 #include "telegrasp/sim/scripted_operator.h"
+#include "telegrasp/sim/standin_objects.h"
 #include "test_meshes.h"
 
 #include <gtest/gtest.h>

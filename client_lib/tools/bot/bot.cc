@@ -2,10 +2,13 @@
 #include "bot.h"
 
 #include "grasp_event_record.h"
+#include "telegrasp/sim/mesh_loading.h"
+#include "telegrasp/sim/standin_objects.h"
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <random>
@@ -27,6 +30,12 @@ constexpr double kStillMove = 1e-4;            // m, rad: pose changes below thi
 constexpr double kOnTableZ = -0.05;            // m: an object below this fell off the table
 constexpr double kNearObject = 0.15;           // m: a palm this close to an object's centre is working on it
 constexpr double kSameTime = 0.05;             // s of server time: two hands arriving this close together tie
+
+std::string hex64(std::uint64_t h) {
+  char text[19];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(h));
+  return text;
+}
 
 const char* side_name(client::HandSide s) { return s == client::HandSide::kRight ? "right" : "left"; }
 
@@ -64,6 +73,66 @@ std::string why_unavailable(const Target& t, const client::ObjectState* o, const
 }
 
 }  // namespace
+
+bool geometry_complete(const client::Client& c, const client::SceneState& scene,
+                       const std::map<std::string, sim::ObjectModelPtr>& local) {
+  for (const client::ObjectState& o : scene.objects)
+    if (!local.count(o.name) && !c.object_geometry(o.name)) return false;
+  return true;
+}
+
+sim::ObjectModelPtr model_from_geometry(const client::ObjectGeometry& g) {
+  const std::string source = "ObjectGeometry " + g.model + " (hash " + hex64(g.content_hash) + ")";
+  if (g.mesh_omitted)
+    throw sim::MeshLoadError(source + ": the server published it without its mesh (" + std::to_string(g.triangle_count) +
+                             " triangles, over its limit)");
+  sim::TriangleMesh mesh;
+  mesh.vertices.reserve(g.vertices.size());
+  for (const Eigen::Vector3f& v : g.vertices) mesh.vertices.push_back(v.cast<double>());
+  mesh.triangles = g.triangles;
+  return sim::make_object_model_in_model_frame(g.model, std::move(mesh), g.mass_kg, source, -g.p_ObjectSourceOrigin);
+}
+
+std::map<std::string, sim::ObjectModelPtr> resolve_models(const client::Client& c, const client::SceneState& scene,
+                                                          std::map<std::string, sim::ObjectModelPtr> local) {
+  std::map<std::string, sim::ObjectModelPtr> models;
+  std::map<std::uint64_t, sim::ObjectModelPtr> built;  // by content hash: each mesh is built once
+  std::set<std::string> received, standins;
+  for (const client::ObjectState& o : scene.objects) {
+    if (models.count(o.name)) continue;
+    if (auto it = local.find(o.name); it != local.end()) {
+      models.emplace(o.name, it->second);
+      continue;
+    }
+    if (const auto g = c.object_geometry(o.name)) {
+      try {
+        sim::ObjectModelPtr& m = built[g->content_hash];
+        if (!m || m->name != g->model || m->mass_kg != g->mass_kg) m = model_from_geometry(*g);
+        models.emplace(o.name, m);
+        received.insert(o.name);
+        continue;
+      } catch (const std::exception& e) {
+        std::cerr << "telegrasp-bot: cannot plan on the server's geometry of " << o.name << ": " << e.what() << "\n";
+      }
+    }
+    if (const auto p = sim::find_protocol_object(o.name); p && p->name == o.name) {
+      models.emplace(o.name, sim::make_standin_model(*p));
+      standins.insert(o.name);
+    }
+  }
+  auto names = [](const std::set<std::string>& s) {
+    std::string out;
+    for (const std::string& n : s) out += (out.empty() ? "" : ", ") + n;
+    return out;
+  };
+  if (!received.empty())
+    std::cerr << "telegrasp-bot: planning on the server's published geometry for " << received.size() << " model(s): " << names(received)
+              << "\n";
+  if (!standins.empty())
+    std::cerr << "telegrasp-bot: no mesh file and no geometry from the server for " << standins.size()
+              << " model(s): planning on the built-in stand-ins of " << names(standins) << "\n";
+  return models;
+}
 
 Bot::Bot(Options opt, client::Client& c, std::map<std::string, sim::ObjectModelPtr> models)
     : opt_(std::move(opt)), client_(c), models_(std::move(models)), skill_(sim::skill_profile(opt_.skill)) {

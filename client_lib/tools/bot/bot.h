@@ -40,6 +40,22 @@ struct Options {
   double timeout_s = 20;
 };
 
+// True once the server's geometry (ObjectGeometry) of every object in `scene` with no model in
+// `local` has arrived.
+bool geometry_complete(const client::Client& c, const client::SceneState& scene,
+                       const std::map<std::string, sim::ObjectModelPtr>& local);
+
+// The models to plan on for the objects of `scene`: the local mesh of that name (--objects) if
+// there is one, else a model built from the geometry the server published (once per content
+// hash), else the built-in stand-in of that name. Says on stderr which objects are planned on
+// received geometry and which on stand-ins.
+std::map<std::string, sim::ObjectModelPtr> resolve_models(const client::Client& c, const client::SceneState& scene,
+                                                          std::map<std::string, sim::ObjectModelPtr> local);
+
+// A sim model of a received geometry, in the same frame (not recentred). Throws
+// sim::MeshLoadError if the geometry carries no mesh or the mesh is unusable.
+sim::ObjectModelPtr model_from_geometry(const client::ObjectGeometry& geometry);
+
 // One object of the scene and this bot's trials on it.
 struct Target {
   int id = -1;

@@ -5,6 +5,7 @@
 #include "cli.h"
 #include "telegrasp/sim/standin_objects.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -47,8 +48,8 @@ Options:
   --skill NAME        perfect | experienced | inexperienced (default experienced)
   --trials N          grasps per object in the scene (default 1)
   --seed S            random seed: object order and operator noise (default 1)
-  --objects DIR       the server's mesh folder, to know each object's geometry (default: the
-                      30 built-in stand-ins)
+  --objects DIR       meshes of the server's models (default: none); an object with no mesh
+                      here is planned on the geometry the server publishes (ObjectGeometry)
   --json FILE         write every grasp record as telegrasp-eval does, plus "client_id",
                       "hand", "object_id" and "reason" ("mode" and "speed_scale" are null: they
                       are the server's settings)
@@ -59,14 +60,13 @@ Options:
                       (default 20)
   -h, --help          this text
 
-Exit status: 0 when every trial is done, 1 if no server was found or it went silent,
-2 for a bad option, 130 when stopped by SIGINT or SIGTERM (the table shows the trials done).
+Exit status: 0 every trial done, 1 a runtime failure (the --objects folder or a mesh in it
+missing or unreadable, the --json file not writable, DDS could not start, no server found or it
+went silent), 2 a usage error (a bad or missing option or value), 130 stopped by SIGINT or
+SIGTERM (the table shows the trials done).
 )";
 
-[[noreturn]] void usage_error(const std::string& what) {
-  std::cerr << "telegrasp-bot: " << what << "\n(see telegrasp-bot --help)\n";
-  std::exit(2);
-}
+[[noreturn]] void usage_error(const std::string& what) { telegrasp::cli::usage_exit("telegrasp-bot", what); }
 
 Options parse(int argc, char** argv) {
   Options o;
@@ -93,16 +93,11 @@ Options parse(int argc, char** argv) {
     else if (a == "--seed") o.seed = static_cast<std::uint64_t>(telegrasp::cli::parse_whole(a, value(), 0, 1L << 62, usage_error));
     else if (a == "--objects") o.objects_dir = value();
     else if (a == "--json") o.json_path = value();
-    else if (a == "--domain") o.domain = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 0, 232, usage_error));
-    else if (a == "--profile") o.profile = value();
+    else if (a == "--domain") o.domain = telegrasp::cli::parse_domain(a, value(), usage_error);
+    else if (a == "--profile") o.profile = telegrasp::cli::parse_profile(a, value(), usage_error);
     else if (a == "--profiles") o.profiles_file = value();
-    else if (a == "--timeout") {
-      const std::string v = value();
-      char* end = nullptr;
-      o.timeout_s = std::strtod(v.c_str(), &end);
-      if (v.empty() || *end != '\0' || !(o.timeout_s > 0) || o.timeout_s > 86400)
-        usage_error("--timeout expects seconds in (0, 86400], got '" + v + "'");
-    } else {
+    else if (a == "--timeout") o.timeout_s = telegrasp::cli::parse_number(a, value(), 0.1, 86400, usage_error);
+    else {
       return false;
     }
     return true;
@@ -131,18 +126,16 @@ int main(int argc, char** argv) {
   const Options opt = parse(argc, argv);
   std::map<std::string, sim::ObjectModelPtr> models;
   try {
-    if (opt.objects_dir.empty()) {
-      for (const auto& o : sim::protocol_objects()) models.emplace(o.name, sim::make_standin_model(o));
-    } else {
-      for (auto& m : sim::load_object_dir(opt.objects_dir)) models.emplace(m->name, std::move(m));
-    }
-  } catch (const std::exception& e) {
-    std::cerr << "telegrasp-bot: --objects " << opt.objects_dir << ": " << e.what() << "\n";
-    return 2;
+    // Without --objects every model comes from the server's published geometry (resolve_models).
+    if (!opt.objects_dir.empty())
+      for (auto& m : sim::load_protocol_object_dir(opt.objects_dir)) models.emplace(m->name, std::move(m));
+  } catch (const std::exception& e) {  // MeshLoadError, naming the folder or the file in it
+    std::cerr << "telegrasp-bot: --objects " << e.what() << "\n";
+    return telegrasp::cli::kExitFailure;
   }
   if (!opt.json_path.empty() && !std::ofstream(opt.json_path, std::ios::app)) {
-    std::cerr << "telegrasp-bot: cannot write --json file " << opt.json_path << "\n";
-    return 2;
+    std::cerr << "telegrasp-bot: --json " << opt.json_path << ": cannot write\n";
+    return telegrasp::cli::kExitFailure;
   }
 
   std::signal(SIGINT, on_signal);
@@ -153,13 +146,14 @@ int main(int argc, char** argv) {
   copt.domain = opt.domain;
   copt.profile = opt.profile;
   copt.profiles_file = opt.profiles_file;
-  copt.topics = client::kHandSkeletons | client::kGraspStates | client::kGraspEvents | client::kSceneStates | client::kServerStatuses;
+  copt.topics = client::kHandSkeletons | client::kGraspStates | client::kGraspEvents | client::kSceneStates | client::kServerStatuses |
+               client::kObjectGeometries;
   std::unique_ptr<client::Client> c;
   try {
     c = std::make_unique<client::Client>(copt);
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-bot: " << e.what() << "\n";
-    return 2;
+    return telegrasp::cli::kExitFailure;
   }
 
   std::cerr << "telegrasp-bot " << opt.client_id << ": waiting for a server on domain " << opt.domain << " (profile "
@@ -174,7 +168,11 @@ int main(int argc, char** argv) {
     return 1;
   }
 
-  Bot bot(opt, *c, std::move(models));
+  // Objects with no local mesh are planned on the geometry the server publishes: wait for it (a
+  // server that publishes none leaves the built-in stand-ins).
+  wait_until([&] { return telegrasp::bot::geometry_complete(*c, *scene, models); }, std::min(opt.timeout_s, 10.0));
+  if (g_stop) return 130;
+  Bot bot(opt, *c, telegrasp::bot::resolve_models(*c, *scene, std::move(models)));
   if (!bot.set_scene(*scene)) {
     std::cerr << "telegrasp-bot: the server's scene has no objects\n";
     bot.report_results();

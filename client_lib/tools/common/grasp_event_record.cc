@@ -9,7 +9,7 @@ void record_grasp_event(const client::GraspEvent& e, double trial_start_time, co
   rec.time_to_grasp_s = e.time - std::max(e.object_spawn_time, trial_start_time);
   rec.hand_error_mm = rec.grasp_tick_hand_error_mm = e.hand_error_mm;
   rec.capsules.clear();
-  for (const client::CapsuleReport& c : e.capsules)
+  for (const client::CapsuleMetric& c : e.capsules)
     rec.capsules.push_back({c.phalanx_name, c.hit, c.blocked, 1000 * c.nd, 1000 * c.signed_distance});
   rec.grasp_tick_capsules = rec.capsules;
   rec.contacts.clear();

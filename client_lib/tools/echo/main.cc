@@ -1,25 +1,27 @@
 // telegrasp-echo: subscribes to a telegrasp server's outputs through telegrasp::client and prints
 // one JSON object per sample and line on stdout, e.g.
 //   {"topic":"GraspEvent","event_id":3,"kind":"grasp","hand":{"client_id":"bot-a","side":"right"},...}
-// Poses are {"p":[x,y,z],"q":[w,x,y,z]} in metres; NaN prints as null.
+// Field names follow the client types (types.h) with the unit of every quantity appended: lengths
+// of positions in metres (_m), the grasp metrics in millimetres (nd_mm, signed_distance_mm,
+// hand_error_mm), times in seconds (_s); the format is printed by --help (kUsage).
 #include "telegrasp/client/client.h"
+
+#include "cli.h"
 
 #include <nlohmann/json.hpp>
 
 #include <atomic>
-#include <charconv>
 #include <chrono>
 #include <csignal>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <map>
 #include <mutex>
 #include <optional>
-#include <set>
 #include <sstream>
 #include <string>
-#include <string_view>
 #include <thread>
 #include <unistd.h>
 
@@ -37,55 +39,104 @@ const std::map<std::string, unsigned, std::less<>>& topic_bits() {
   static const std::map<std::string, unsigned, std::less<>> bits = {
       {"HandSkeleton", tc::kHandSkeletons}, {"GraspState", tc::kGraspStates}, {"ContactSet", tc::kContactSets},
       {"GraspEvent", tc::kGraspEvents},     {"SceneState", tc::kSceneStates}, {"ServerStatus", tc::kServerStatuses},
+      {"ObjectGeometry", tc::kObjectGeometries},
   };
   return bits;
 }
 
-constexpr const char* kUsage = R"(usage: telegrasp-echo [options]
+constexpr const char* kUsage = R"(Usage: telegrasp-echo [options]
+
 Prints every sample a telegrasp server publishes as one JSON object per line on stdout.
+
+Options:
   --topics LIST    comma separated, from HandSkeleton,GraspState,ContactSet,GraspEvent,
-                   SceneState,ServerStatus (default: all)
+                   SceneState,ServerStatus,ObjectGeometry (default: all; ObjectGeometry prints
+                   a summary of each model's mesh, not the mesh)
   --domain N       DDS domain, 0..232 (default 0)
   --profile NAME   participant profile: loopback, lan, wan (default loopback)
   --profiles FILE  Fast DDS XML profiles (default $TELEGRASP_PROFILES, else the shipped file)
   --count N        exit after N lines
   --seconds S      exit after S seconds
-  --help           this text
-Stops cleanly on SIGINT or SIGTERM.
+  -h, --help       this text
+
+Output: one object per sample, "topic" first, field names as in the client library's types
+with the unit appended to every quantity that has one. Frames as everywhere in telegrasp:
+X_WorldObject is the object's pose in the world frame.
+  pose            {"p_m":[x,y,z],"q_wxyz":[w,x,y,z]}: position in metres, unit quaternion
+  hand            {"client_id":"...","side":"left"|"right"}
+  every topic     "tick", "time_s" (server time), but ObjectGeometry
+  HandSkeleton    "hand", "rig", "input_sequence", "input_client_time_ns", "late_latched",
+                  "frozen", "X_WorldPalm" (pose), "X_WorldPhalanx" (poses, rig order),
+                  "joint_angles_rad"
+  GraspState      "hand", "selected_object", "grasped_object" (-1: none), "trigger" (0..1),
+                  "blocked" (per phalanx), "palm_contact"
+  ContactSet      "hand", "object_id", "X_WorldObject", "contacts"
+  GraspEvent      "event_id", "kind" ("grasp"|"release"), "hand", "object_id", "object_name",
+                  "object_spawn_time_s", "X_WorldObject", "input_sequence";
+                  grasp: "hand_error_mm", "capsules_without_hit", "capsules", "contacts";
+                  release: "v_WorldObject_m_per_s", "w_WorldObject_rad_per_s"
+  SceneState      "objects": {"id","name","X_WorldObject","v_WorldObject_m_per_s","held",
+                  "holder" (if held),"spawn_time_s"}
+  ServerStatus    "tick_rate_hz", "clients", "hands", "objects", "tick_us_p50", "tick_us_max",
+                  "missed_ticks", "inputs_accepted", "inputs_rejected", "rejected" (per reason),
+                  "commands_accepted", "commands_rejected", "models"
+  ObjectGeometry  a summary, never the mesh: "model", "content_hash" (16 hex digits),
+                  "vertex_count", "triangle_count", "mesh_omitted", "p_ObjectMin_m",
+                  "p_ObjectMax_m" (bounds, model frame), "mass_kg", "volume_m3",
+                  "inertia_diagonal_kg_m2"
+  capsule         {"phalanx","phalanx_name","hit","nd_mm","signed_distance_mm","blocked"}:
+                  the paper's ND (null when "hit" is false) and the exact signed distance
+  contact         {"phalanx" (-1: palm),"p_WorldContact_m","n_World","p_ObjectContact_m",
+                  "n_Object","nd_mm","nd_hit"}: point and unit normal in both frames, the
+                  capsule's ND (null when "nd_hit" is false)
+NaN prints as null.
+
+Stops cleanly on SIGINT or SIGTERM, or when stdout is closed (e.g. piped into head).
+Exit status: 0 done (count, seconds, a signal or a closed stdout), 1 a runtime failure (DDS could
+not start, e.g. an unknown --profile), 2 a usage error (a bad or missing option or value).
 )";
 
 // ---------------------------------------------------------------------------------------------
-// JSON for the client types (field names as in types.h).
+// JSON for the client types: their field names, with the unit of every quantity appended.
+
+constexpr double kMmPerM = 1000.0;
 
 Json to_json(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); }
 
 Json to_json(const Eigen::Isometry3d& X) {
   const Eigen::Quaterniond q(X.linear());
-  return Json{{"p", to_json(Eigen::Vector3d(X.translation()))}, {"q", Json::array({q.w(), q.x(), q.y(), q.z()})}};
+  return Json{{"p_m", to_json(Eigen::Vector3d(X.translation()))}, {"q_wxyz", Json::array({q.w(), q.x(), q.y(), q.z()})}};
 }
 
 Json to_json(const tc::HandKey& hand) { return Json{{"client_id", hand.client_id}, {"side", tc::to_string(hand.side)}}; }
 
 Json to_json(const tc::ContactPoint& c) {
-  return Json{{"phalanx", c.phalanx},           {"p_WorldContact", to_json(c.p_WorldContact)},
-              {"n_World", to_json(c.n_World)},  {"p_ObjectContact", to_json(c.p_ObjectContact)},
-              {"n_Object", to_json(c.n_Object)}, {"nd", c.nd},
+  return Json{{"phalanx", c.phalanx},
+              {"p_WorldContact_m", to_json(c.p_WorldContact)},
+              {"n_World", to_json(c.n_World)},
+              {"p_ObjectContact_m", to_json(c.p_ObjectContact)},
+              {"n_Object", to_json(c.n_Object)},
+              {"nd_mm", c.nd_hit ? Json(kMmPerM * c.nd) : Json()},
               {"nd_hit", c.nd_hit}};
 }
 
-Json to_json(const tc::CapsuleReport& r) {
-  return Json{{"phalanx", r.phalanx}, {"phalanx_name", r.phalanx_name}, {"hit", r.hit},
-              {"nd", r.nd},           {"signed_distance", r.signed_distance}, {"blocked", r.blocked}};
+Json to_json(const tc::CapsuleMetric& r) {
+  return Json{{"phalanx", r.phalanx},
+              {"phalanx_name", r.phalanx_name},
+              {"hit", r.hit},
+              {"nd_mm", r.hit ? Json(kMmPerM * r.nd) : Json()},
+              {"signed_distance_mm", kMmPerM * r.signed_distance},
+              {"blocked", r.blocked}};
 }
 
 Json to_json(const tc::ObjectState& o) {
   Json j{{"id", o.id},
          {"name", o.name},
          {"X_WorldObject", to_json(o.X_WorldObject)},
-         {"v_WorldObject", to_json(o.v_WorldObject)},
+         {"v_WorldObject_m_per_s", to_json(o.v_WorldObject)},
          {"held", o.held}};
   if (o.held) j["holder"] = to_json(o.holder);
-  j["spawn_time"] = o.spawn_time;
+  j["spawn_time_s"] = o.spawn_time;
   return j;
 }
 
@@ -101,21 +152,21 @@ Json to_json(const tc::HandSkeleton& s) {
               {"hand", to_json(s.hand)},
               {"rig", s.rig},
               {"tick", s.tick},
-              {"time", s.time},
+              {"time_s", s.time},
               {"input_sequence", s.input_sequence},
               {"input_client_time_ns", s.input_client_time_ns},
               {"late_latched", s.late_latched},
               {"frozen", s.frozen},
               {"X_WorldPalm", to_json(s.X_WorldPalm)},
               {"X_WorldPhalanx", to_json_array(s.X_WorldPhalanx)},
-              {"joint_angles", s.joint_angles}};
+              {"joint_angles_rad", s.joint_angles}};
 }
 
 Json to_json(const tc::GraspState& s) {
   return Json{{"topic", "GraspState"},
               {"hand", to_json(s.hand)},
               {"tick", s.tick},
-              {"time", s.time},
+              {"time_s", s.time},
               {"selected_object", s.selected_object},
               {"grasped_object", s.grasped_object},
               {"trigger", s.trigger},
@@ -127,27 +178,28 @@ Json to_json(const tc::ContactSet& s) {
   return Json{{"topic", "ContactSet"},
               {"hand", to_json(s.hand)},
               {"tick", s.tick},
-              {"time", s.time},
+              {"time_s", s.time},
               {"object_id", s.object_id},
               {"X_WorldObject", to_json(s.X_WorldObject)},
               {"contacts", to_json_array(s.contacts)}};
 }
 
 Json to_json(const tc::GraspEvent& e) {
+  using Kind = tc::GraspEvent::Kind;
   Json j{{"topic", "GraspEvent"},
          {"event_id", e.event_id},
-         {"kind", e.kind == tc::GraspEvent::Kind::kGrasp ? "grasp" : e.kind == tc::GraspEvent::Kind::kRelease ? "release" : "unknown"},
+         {"kind", e.kind == Kind::kGrasp ? "grasp" : e.kind == Kind::kRelease ? "release" : "unknown"},
          {"hand", to_json(e.hand)},
          {"object_id", e.object_id},
          {"object_name", e.object_name},
          {"tick", e.tick},
-         {"time", e.time},
-         {"object_spawn_time", e.object_spawn_time},
+         {"time_s", e.time},
+         {"object_spawn_time_s", e.object_spawn_time},
          {"X_WorldObject", to_json(e.X_WorldObject)},
          {"input_sequence", e.input_sequence}};
-  if (e.kind == tc::GraspEvent::Kind::kRelease) {
-    j["v_WorldObject"] = to_json(e.v_WorldObject);
-    j["w_WorldObject"] = to_json(e.w_WorldObject);
+  if (e.kind == Kind::kRelease) {
+    j["v_WorldObject_m_per_s"] = to_json(e.v_WorldObject);
+    j["w_WorldObject_rad_per_s"] = to_json(e.w_WorldObject);
   } else {
     j["hand_error_mm"] = e.hand_error_mm;
     j["capsules_without_hit"] = e.capsules_without_hit;
@@ -158,7 +210,7 @@ Json to_json(const tc::GraspEvent& e) {
 }
 
 Json to_json(const tc::SceneState& s) {
-  return Json{{"topic", "SceneState"}, {"tick", s.tick}, {"time", s.time}, {"objects", to_json_array(s.objects)}};
+  return Json{{"topic", "SceneState"}, {"tick", s.tick}, {"time_s", s.time}, {"objects", to_json_array(s.objects)}};
 }
 
 Json to_json(const tc::ServerStatus& s) {
@@ -166,7 +218,7 @@ Json to_json(const tc::ServerStatus& s) {
   for (const auto& [reason, count] : s.rejected) rejected[reason] = count;
   return Json{{"topic", "ServerStatus"},
               {"tick", s.tick},
-              {"time", s.time},
+              {"time_s", s.time},
               {"tick_rate_hz", s.tick_rate_hz},
               {"clients", s.clients},
               {"hands", s.hands},
@@ -182,6 +234,18 @@ Json to_json(const tc::ServerStatus& s) {
               {"models", s.models}};
 }
 
+// A summary: the mesh itself is too large for a line.
+Json to_json(const tc::ObjectGeometry& g) {
+  char hash[19];
+  std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(g.content_hash));
+  return Json{{"topic", "ObjectGeometry"},     {"model", g.model},
+              {"content_hash", hash},          {"vertex_count", g.vertex_count},
+              {"triangle_count", g.triangle_count}, {"mesh_omitted", g.mesh_omitted},
+              {"p_ObjectMin_m", to_json(g.p_ObjectMin)}, {"p_ObjectMax_m", to_json(g.p_ObjectMax)},
+              {"mass_kg", g.mass_kg},          {"volume_m3", g.volume_m3},
+              {"inertia_diagonal_kg_m2", to_json(g.inertia_diagonal)}};
+}
+
 // ---------------------------------------------------------------------------------------------
 // Command line.
 
@@ -189,22 +253,9 @@ struct Args {
   tc::ClientOptions options;
   std::optional<std::uint64_t> count;
   std::optional<double> seconds;
-  bool help = false;
 };
 
-[[noreturn]] void usage_error(const std::string& message) {
-  std::cerr << "telegrasp-echo: " << message << "\n" << kUsage;
-  std::exit(2);
-}
-
-template <class T>
-T parse_number(std::string_view flag, std::string_view text) {
-  T value{};
-  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (error != std::errc() || end != text.data() + text.size())
-    usage_error(std::string(flag) + " expects a number, got '" + std::string(text) + "'");
-  return value;
-}
+[[noreturn]] void usage_error(const std::string& what) { telegrasp::cli::usage_exit("telegrasp-echo", what); }
 
 unsigned parse_topics(const std::string& list) {
   unsigned bits = 0;
@@ -212,42 +263,29 @@ unsigned parse_topics(const std::string& list) {
   for (std::string name; std::getline(stream, name, ',');) {
     const auto it = topic_bits().find(name);
     if (it == topic_bits().end())
-      usage_error("unknown topic '" + name + "' in --topics (known: HandSkeleton,GraspState,ContactSet,GraspEvent,SceneState,ServerStatus)");
+      usage_error("--topics: unknown topic '" + name +
+                  "' (known: HandSkeleton,GraspState,ContactSet,GraspEvent,SceneState,ServerStatus,ObjectGeometry)");
     bits |= it->second;
   }
   if (bits == 0) usage_error("--topics names no topic");
   return bits;
 }
 
+// Every flag is checked here, so the client library never sees a bad option.
 Args parse_args(int argc, char** argv) {
+  namespace cli = telegrasp::cli;
   Args args;
   args.options.client_id = "echo-" + std::to_string(::getpid());
-  for (int i = 1; i < argc; ++i) {
-    const std::string_view flag = argv[i];
-    if (flag == "--help" || flag == "-h") {
-      args.help = true;
-      continue;
-    }
-    static const std::set<std::string_view> kTakesValue = {"--topics", "--domain", "--profile", "--profiles", "--count", "--seconds"};
-    if (!kTakesValue.contains(flag)) usage_error("unknown argument " + std::string(flag));
-    if (i + 1 >= argc) usage_error(std::string(flag) + " needs a value");
-    const std::string value = argv[++i];
-    if (flag == "--topics") {
-      args.options.topics = parse_topics(value);
-    } else if (flag == "--domain") {
-      args.options.domain = parse_number<int>(flag, value);
-    } else if (flag == "--profile") {
-      args.options.profile = value;
-    } else if (flag == "--profiles") {
-      args.options.profiles_file = value;
-    } else if (flag == "--count") {
-      args.count = parse_number<std::uint64_t>(flag, value);
-      if (*args.count == 0) usage_error("--count must be at least 1");
-    } else if (flag == "--seconds") {
-      args.seconds = parse_number<double>(flag, value);
-      if (!(*args.seconds > 0) || *args.seconds > 1e9) usage_error("--seconds must be in (0, 1e9]");
-    }
-  }
+  cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
+    if (a == "--topics") args.options.topics = parse_topics(value());
+    else if (a == "--domain") args.options.domain = cli::parse_domain(a, value(), usage_error);
+    else if (a == "--profile") args.options.profile = cli::parse_profile(a, value(), usage_error);
+    else if (a == "--profiles") args.options.profiles_file = value();
+    else if (a == "--count") args.count = static_cast<std::uint64_t>(cli::parse_whole(a, value(), 1, 1'000'000'000'000, usage_error));
+    else if (a == "--seconds") args.seconds = cli::parse_number(a, value(), 0.001, 1e9, usage_error);
+    else return false;
+    return true;
+  });
   return args;
 }
 
@@ -280,10 +318,6 @@ class LinePrinter {
 
 int main(int argc, char** argv) {
   const Args args = parse_args(argc, argv);
-  if (args.help) {
-    std::cout << kUsage;
-    return 0;
-  }
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   std::signal(SIGPIPE, SIG_IGN);  // a closed stdout shows up as a failed write instead
@@ -293,7 +327,7 @@ int main(int argc, char** argv) {
     client.emplace(args.options);
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-echo: " << e.what() << "\n";
-    return 1;
+    return telegrasp::cli::kExitFailure;
   }
   LinePrinter printer(args.count);
   client->on_hand_skeleton([&](const tc::HandSkeleton& s) { printer.print(s); });
@@ -302,6 +336,7 @@ int main(int argc, char** argv) {
   client->on_grasp_event([&](const tc::GraspEvent& e) { printer.print(e); });
   client->on_scene_state([&](const tc::SceneState& s) { printer.print(s); });
   client->on_server_status([&](const tc::ServerStatus& s) { printer.print(s); });
+  client->on_object_geometry([&](const std::shared_ptr<const tc::ObjectGeometry>& g) { printer.print(*g); });
 
   const auto start = std::chrono::steady_clock::now();
   const auto deadline = args.seconds ? start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(

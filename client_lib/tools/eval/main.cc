@@ -1,6 +1,7 @@
 // telegrasp-eval <subcommand>: grasp evaluation. In-process runs, the oracle ND bound and the
 // questionnaire's scoring (sim/tools/eval), the paper's protocol over DDS and its participant
 // processes (here); see commands.h.
+#include "cli.h"
 #include "commands.h"
 
 #include <cstring>
@@ -23,7 +24,8 @@ Subcommands (each has its own --help):
   questionnaire   scores the paper's questionnaire from a CSV of answers
   participant     one participant process of a protocol run (started by `protocol`)
 
-Exit status: 0 success, 1 runtime failure, 2 usage error.
+Exit status: 0 success, 1 a runtime failure (a missing file or folder, no server found, an I/O
+error), 2 a usage error (a bad or missing option or value); each subcommand's --help says more.
 )";
 
 using Command = int (*)(int, char**);
@@ -56,10 +58,8 @@ int main(int argc, char** argv) {
       std::cerr << "telegrasp-eval: deprecated: use `telegrasp-eval protocol [options]`\n";
       return telegrasp::eval::run_protocol(argc, argv);
     }
-  if (argc > 1 && argv[1][0] != '-') {
-    std::cerr << "telegrasp-eval: unknown subcommand '" << argv[1] << "'\n(see telegrasp-eval --help)\n";
-    return 2;
-  }
+  if (argc > 1 && argv[1][0] != '-')
+    telegrasp::cli::usage_exit("telegrasp-eval", std::string("unknown subcommand '") + argv[1] + "'");
   std::cerr << "telegrasp-eval: deprecated: use `telegrasp-eval run [options]`\n";
   return telegrasp::eval::run_in_process(argc, argv);
 }

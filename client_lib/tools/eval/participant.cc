@@ -4,12 +4,15 @@
 // it, removes it, and records each grasp from the server's GraspEvent. Every decision is a
 // function of the SceneState sequence alone, so with a lockstep server a run is deterministic.
 // Progress: one line per grasp on stdout ("grasp I/N OBJECT held|not-held"), read by the runner.
+// Each record also keeps the hand at the grasp tick (the server's HandSkeleton of that tick, in the
+// object's frame), so the report can draw the grasp.
 #include "cli.h"
 #include "commands.h"
 #include "grasp_event_record.h"
 #include "grasp_report.h"
 #include "protocol_common.h"
 #include "telegrasp/client/client.h"
+#include "telegrasp/sim/hand_controller.h"
 #include "telegrasp/sim/hand_rig.h"
 
 #include <nlohmann/json.hpp>
@@ -31,6 +34,7 @@ namespace telegrasp::eval {
 namespace {
 
 namespace client = telegrasp::client;
+namespace cli = telegrasp::cli;
 using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
@@ -51,6 +55,11 @@ Options:
   --count N         grasp only the first N protocol objects (default 30)
   --json FILE       write the grasp records (JSON array) here (default: stdout at the end)
   --timeout S       give up when the server sends nothing for S seconds (default 20)
+  -h, --help        this text
+
+Exit status: 0 every object done, 1 a runtime failure (the --objects folder or a mesh missing or
+unreadable, no server found or it went silent, the server lacks a protocol object, the --json
+file not writable), 2 a usage error (a bad or missing option or value).
 )";
 
 constexpr double kTrialLimit = 30.0;     // s of simulated time before a grasp is cut short
@@ -65,32 +74,34 @@ struct Options {
   double timeout_s = 20;
 };
 
-[[noreturn]] void usage_error(const std::string& what) {
-  std::cerr << "telegrasp-eval participant: " << what << "\n";
-  std::exit(2);
-}
+constexpr const char* kTool = "telegrasp-eval participant";
+
+[[noreturn]] void usage_error(const std::string& what) { cli::usage_exit(kTool, what); }
 
 Options parse(int argc, char** argv) {
   Options o;
-  telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
-    auto number = [&](double lo, double hi) {
-      const std::string v = value();
-      char* end = nullptr;
-      const double x = std::strtod(v.c_str(), &end);
-      if (v.empty() || *end != '\0' || !(x >= lo && x <= hi)) usage_error(a + " expects a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
-      return x;
-    };
-    if (a == "--domain") o.domain = static_cast<int>(number(0, 232));
-    else if (a == "--profile") o.profile = value();
+  cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
+    if (a == "--domain") o.domain = cli::parse_domain(a, value(), usage_error);
+    else if (a == "--profile") o.profile = cli::parse_profile(a, value(), usage_error);
     else if (a == "--profiles") o.profiles_file = value();
-    else if (a == "--group") o.group = value();
-    else if (a == "--participant") o.participant = static_cast<int>(number(1, 100000));
-    else if (a == "--seed") o.seed = static_cast<std::uint64_t>(number(0, 1e15));
-    else if (a == "--mode") o.mode = value();
+    else if (a == "--group") {
+      o.group = value();
+      try {
+        sim::skill_profile(o.group);
+      } catch (const std::invalid_argument&) {
+        usage_error("--group expects a skill profile: perfect, experienced or inexperienced, got '" + o.group + "'");
+      }
+    }
+    else if (a == "--participant") o.participant = static_cast<int>(cli::parse_whole(a, value(), 1, 100'000, usage_error));
+    else if (a == "--seed") o.seed = static_cast<std::uint64_t>(cli::parse_whole(a, value(), 0, 1L << 50, usage_error));
+    else if (a == "--mode") {
+      o.mode = value();
+      if (!sim::parse_closing_mode(o.mode)) usage_error("--mode expects precise or discrete, got '" + o.mode + "'");
+    }
     else if (a == "--objects") o.objects_dir = value();
-    else if (a == "--count") o.count = static_cast<int>(number(1, 30));
+    else if (a == "--count") o.count = static_cast<int>(cli::parse_whole(a, value(), 1, 30, usage_error));
     else if (a == "--json") o.json_path = value();
-    else if (a == "--timeout") o.timeout_s = number(0.1, 86400);
+    else if (a == "--timeout") o.timeout_s = cli::parse_number(a, value(), 0.1, 86400, usage_error);
     else return false;
     return true;
   });
@@ -223,7 +234,35 @@ class Participant {
   }
 
   // The trial starts when the object appears: the hand waits at home, free to reach.
-  void take_grasp_event(const client::GraspEvent& e) { tools::record_grasp_event(e, e.object_spawn_time, *rig_, rec_); }
+  void take_grasp_event(const client::GraspEvent& e) {
+    tools::record_grasp_event(e, e.object_spawn_time, *rig_, rec_);
+    record_grasp_tick_hand(e);
+  }
+
+  // The hand of the grasp tick, from that tick's HandSkeleton (published before the tick's
+  // SceneState; a lockstep server does not tick again before this participant answers). Best
+  // effort: a skeleton lost on the way leaves the record without the hand.
+  void record_grasp_tick_hand(const client::GraspEvent& e) {
+    const auto deadline = Clock::now() + std::chrono::duration<double>(kEventWait);
+    while (true) {
+      for (const client::HandSkeleton& s : client_.latest_hand_skeletons()) {
+        if (s.hand != e.hand || s.tick != e.tick || s.late_latched) continue;
+        if (s.rig != rig_->name() || s.X_WorldPhalanx.size() != rig_->phalanges().size()) return;  // not our rig
+        const Eigen::Isometry3d X_ObjectWorld = e.X_WorldObject.inverse();
+        rec_.grasp_tick_X_WorldObject = e.X_WorldObject;
+        rec_.grasp_tick_hand.push_back({"palm", X_ObjectWorld * s.X_WorldPalm});
+        for (std::size_t i = 0; i < s.X_WorldPhalanx.size(); ++i)
+          rec_.grasp_tick_hand.push_back({rig_->phalanges()[i].name, X_ObjectWorld * s.X_WorldPhalanx[i]});
+        return;
+      }
+      if (Clock::now() > deadline) {
+        std::cerr << "telegrasp-eval participant: no hand skeleton of grasp tick " << e.tick << " (" << rec_.object
+                  << "): the record has no hand pose\n";
+        return;
+      }
+      std::this_thread::sleep_for(std::chrono::microseconds(100));
+    }
+  }
 
   void finish(std::uint64_t tick) {
     rec_.mode = opt_.mode;
@@ -276,21 +315,22 @@ int run_participant(int argc, char** argv) {
   std::map<std::string, sim::ObjectModelPtr> models;
   try {
     models = protocol_models(opt.objects_dir, nullptr);
-    participant_skill(opt.group, opt.seed, opt.participant);
-  } catch (const std::exception& e) {
-    usage_error(e.what());
+  } catch (const std::exception& e) {  // MeshLoadError, naming the folder or the file in it
+    std::cerr << kTool << ": --objects " << e.what() << "\n";
+    return cli::kExitFailure;
   }
   client::ClientOptions copt;
   copt.client_id = opt.group + "-" + std::to_string(opt.participant);
   copt.domain = opt.domain;
   copt.profile = opt.profile;
   copt.profiles_file = opt.profiles_file;
-  copt.topics = client::kGraspEvents | client::kSceneStates | client::kServerStatuses;
+  copt.topics = client::kGraspEvents | client::kSceneStates | client::kServerStatuses | client::kHandSkeletons;
   try {
     client::Client c(copt);
     if (!c.wait_for_server(std::chrono::milliseconds(static_cast<long>(1000 * opt.timeout_s)))) {
-      std::cerr << "telegrasp-eval participant: no server on domain " << opt.domain << " within " << opt.timeout_s << " s\n";
-      return 1;
+      std::cerr << kTool << ": no telegrasp server found on domain " << opt.domain << " with profile " << opt.profile
+                << " within " << opt.timeout_s << " s (--timeout)\n";
+      return cli::kExitFailure;
     }
     // SceneStates arrive on a DDS thread; this thread answers each tick in order.
     std::mutex mutex;
@@ -305,9 +345,9 @@ int run_participant(int argc, char** argv) {
     if (const auto status = c.latest_server_status())
       for (std::size_t i = 0; i < paper_object_order().size() && static_cast<int>(i) < opt.count; ++i)
         if (std::find(status->models.begin(), status->models.end(), paper_object_order()[i]) == status->models.end()) {
-          std::cerr << "telegrasp-eval participant: the server has no model named " << paper_object_order()[i]
+          std::cerr << kTool << ": the server has no model named " << paper_object_order()[i]
                     << " (start it with --objects DIR --fill-standins, or without --objects)\n";
-          return 1;
+          return cli::kExitFailure;
         }
     Participant p(opt, c, std::move(models));
     p.start();
@@ -319,9 +359,9 @@ int run_participant(int argc, char** argv) {
       const auto give_up = Clock::now() + std::chrono::duration<double>(opt.timeout_s);
       while (!cv.wait_for(lock, std::chrono::milliseconds(100), [&] { return newest && newest->tick > answered; })) {
         if (Clock::now() > give_up) {
-          std::cerr << "telegrasp-eval participant " << copt.client_id << ": no scene state after tick " << answered << " for "
-                    << opt.timeout_s << " s\n";
-          return 1;
+          std::cerr << kTool << " " << copt.client_id << ": no scene state after tick " << answered << " for "
+                    << opt.timeout_s << " s (--timeout)\n";
+          return cli::kExitFailure;
         }
         lock.unlock();
         p.publish(answered);
@@ -330,7 +370,7 @@ int run_participant(int argc, char** argv) {
       const client::SceneState scene = *newest;
       lock.unlock();
       if (scene.tick != answered + 1 && answered > 0)
-        std::cerr << "telegrasp-eval participant " << copt.client_id << ": scene states " << answered + 1 << ".." << scene.tick - 1
+        std::cerr << kTool << " " << copt.client_id << ": scene states " << answered + 1 << ".." << scene.tick - 1
                   << " missed\n";
       answered = scene.tick;
       p.answer(scene);
@@ -344,13 +384,13 @@ int run_participant(int argc, char** argv) {
       std::ofstream out(opt.json_path);
       out << records.dump(1) << "\n";
       if (!out.flush()) {
-        std::cerr << "telegrasp-eval participant: cannot write " << opt.json_path << "\n";
-        return 1;
+        std::cerr << kTool << ": --json " << opt.json_path << ": cannot write\n";
+        return cli::kExitFailure;
       }
     }
   } catch (const std::exception& e) {
-    std::cerr << "telegrasp-eval participant: " << e.what() << "\n";
-    return 1;
+    std::cerr << kTool << ": " << e.what() << "\n";
+    return cli::kExitFailure;
   }
   return 0;
 }

@@ -6,9 +6,12 @@
 #include "cli.h"
 #include "commands.h"
 #include "experiment_report.h"
+#include "progress_line.h"
 #include "grasp_report.h"
 #include "protocol_common.h"
 #include "questionnaire.h"
+#include "telegrasp/sim/hand_controller.h"
+#include "telegrasp/sim/hand_rig.h"
 #include "telegrasp/sim/standin_objects.h"
 
 #include <nlohmann/json.hpp>
@@ -24,6 +27,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -72,9 +76,10 @@ Options:
   --seed S               random seed: placements, operators (default 1)
   --jobs J               (mode, participant) runs at a time (default: the number of cores)
   --json FILE            every grasp record (as telegrasp-eval writes them, plus "group",
-                         "participant", "contacts") and the aggregates
+                         "participant", "contacts", "grasp_tick_hand") and the aggregates
   --csv FILE             one row per grasp; FILE's stem + _by_object.csv: per object and group
-  --report FILE.html     self-contained HTML report with bar charts, the paper's numbers beside ours
+  --report FILE.html     self-contained HTML report with a picture of one grasp per object, bar
+                         charts, the paper's numbers beside ours
   --questionnaire FILE   questionnaire answers (see telegrasp-eval questionnaire --help) to score
                          into the report
   --domain N             first DDS domain of the servers; job slot k uses N + k (default: from
@@ -87,21 +92,24 @@ Options:
   --keep-logs DIR        keep each server's and participant's log and records in DIR
   -h, --help             this text
 
-Progress goes to stderr; the per-group summary and the worst objects to stdout.
-Exit status: 0 when every grasp was run (held or not), 1 if a run failed, 2 for a bad option.
+Progress goes to stderr (in place on a terminal, a line every few seconds in a log); the
+per-group summary and the worst objects to stdout.
+Exit status: 0 every grasp was run (held or not), 1 a runtime failure (a run failed; the --objects
+folder, a mesh or the questionnaire missing or unreadable; telegrasp-server not found next to
+telegrasp-eval; a folder or output not writable), 2 a usage error (a bad or missing option or
+value).
 )";
 
 struct Options {
   int experienced = 4, inexperienced = 6, count = 30, jobs = 2, domain = -1;
-  std::vector<std::string> modes{"precise"};
+  std::vector<std::string> modes{sim::closing_mode_name(sim::ClosingMode::kPrecise)};  // names, as records write them
   std::string objects_dir, json_path, csv_path, report_path, questionnaire_path, profile = "loopback", profiles_file, logs_dir, record_dir;
   std::uint64_t seed = 1;
 };
 
-[[noreturn]] void usage_error(const std::string& what) {
-  std::cerr << "telegrasp-eval: " << what << "\n(see telegrasp-eval protocol --help)\n";
-  std::exit(2);
-}
+constexpr const char* kTool = "telegrasp-eval protocol";
+
+[[noreturn]] void usage_error(const std::string& what) { cli::usage_exit(kTool, what); }
 
 Options parse(int argc, char** argv) {
   Options o;
@@ -121,8 +129,9 @@ Options parse(int argc, char** argv) {
       if (o.experienced + o.inexperienced == 0) usage_error("--participants: at least one participant");
     } else if (a == "--mode") {
       const std::string m = value();
-      if (m == "both") o.modes = {"precise", "discrete"};
-      else if (m == "precise" || m == "discrete") o.modes = {m};
+      using sim::ClosingMode;
+      if (m == "both") o.modes = {closing_mode_name(ClosingMode::kPrecise), closing_mode_name(ClosingMode::kDiscrete)};
+      else if (const std::optional<ClosingMode> mode = sim::parse_closing_mode(m)) o.modes = {closing_mode_name(*mode)};
       else usage_error("--mode expects precise, discrete or both, got '" + m + "'");
     }
     else if (a == "--objects") o.objects_dir = value();
@@ -133,8 +142,8 @@ Options parse(int argc, char** argv) {
     else if (a == "--csv") o.csv_path = value();
     else if (a == "--report") o.report_path = value();
     else if (a == "--questionnaire") o.questionnaire_path = value();
-    else if (a == "--domain") o.domain = static_cast<int>(cli::parse_whole(a, value(), 0, 232, usage_error));
-    else if (a == "--profile") o.profile = value();
+    else if (a == "--domain") o.domain = cli::parse_domain(a, value(), usage_error);
+    else if (a == "--profile") o.profile = cli::parse_profile(a, value(), usage_error);
     else if (a == "--profiles") o.profiles_file = value();
     else if (a == "--keep-logs") o.logs_dir = value();
     else if (a == "--record") o.record_dir = value();
@@ -142,7 +151,9 @@ Options parse(int argc, char** argv) {
     return true;
   });
   if (o.domain < 0) o.domain = 100 + static_cast<int>(getpid() % 101);
-  if (o.domain + o.jobs - 1 > 232) usage_error("--domain " + std::to_string(o.domain) + " + --jobs " + std::to_string(o.jobs) + " exceeds domain 232");
+  if (o.domain + o.jobs - 1 > cli::kMaxDomain)
+    usage_error("--domain " + std::to_string(o.domain) + " + --jobs " + std::to_string(o.jobs) + " exceeds domain " +
+                std::to_string(cli::kMaxDomain));
   return o;
 }
 
@@ -164,13 +175,14 @@ std::string self_dir() {
   return ec ? std::string(".") : exe.parent_path().string();
 }
 
-// "[#####.....] 123/600 grasps  45 s" on one stderr line.
-void draw_progress(int done, int total, double seconds, int running) {
+// "[#####.....] 123/600 grasps, 2 run(s) going, 45 s": the progress line.
+std::string progress_text(int done, int total, double seconds, int running) {
   const int width = 30;
   const int filled = total ? done * width / total : width;
-  std::fprintf(stderr, "\r[%s%s] %d/%d grasps, %d run(s) going, %.0f s ", std::string(filled, '#').c_str(),
-               std::string(width - filled, '.').c_str(), done, total, running, seconds);
-  std::fflush(stderr);
+  char text[160];
+  std::snprintf(text, sizeof text, "[%s%s] %d/%d grasps, %d run(s) going, %.0f s", std::string(filled, '#').c_str(),
+                std::string(width - filled, '.').c_str(), done, total, running, seconds);
+  return text;
 }
 
 // The three slowest and the three least exact objects of each mode, from aggregate_json.
@@ -213,6 +225,7 @@ struct ReportInputs {
   std::vector<std::string> standins;  // protocol objects with no mesh in --objects
   std::optional<report::QuestionnaireSummary> questionnaire;
   std::vector<report::PaperRow> paper;
+  report::GraspPictureInputs pictures;  // the models and the participants' rig, to draw the grasps
 };
 
 // Loads the objects (to fail early, naming a bad mesh), the questionnaire and the paper's numbers;
@@ -220,19 +233,20 @@ struct ReportInputs {
 std::optional<ReportInputs> load_report_inputs(const Options& opt) {
   ReportInputs in;
   try {
-    protocol_models(opt.objects_dir, &in.standins);  // fails early, naming a bad mesh
-  } catch (const std::exception& e) {
-    std::cerr << "telegrasp-eval: --objects " << opt.objects_dir << ": " << e.what() << "\n";
+    in.pictures.models = protocol_models(opt.objects_dir, &in.standins);  // fails early, naming a bad mesh
+  } catch (const std::exception& e) {  // MeshLoadError, naming the folder or the file in it
+    std::cerr << kTool << ": --objects " << e.what() << "\n";
     return std::nullopt;
   }
   try {
     if (!opt.questionnaire_path.empty()) {
       in.questionnaire = report::score_questionnaire_csv(opt.questionnaire_path);
-      for (const auto& r : in.questionnaire->rejected) std::cerr << "telegrasp-eval: questionnaire: " << r.message << "\n";
+      for (const auto& r : in.questionnaire->rejected) std::cerr << kTool << ": --questionnaire: " << r.message << "\n";
     }
     in.paper = load_paper_rows();
+    in.pictures.rig = std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")));
   } catch (const std::exception& e) {
-    std::cerr << "telegrasp-eval: " << e.what() << "\n";
+    std::cerr << kTool << ": " << e.what() << "\n";
     return std::nullopt;
   }
   return in;
@@ -245,29 +259,33 @@ struct Setup {
 };
 
 // Checks the server is there and makes the --record folder and the work folder; nothing (said on
-// stderr) without a server. A folder that cannot be made is a usage error.
+// stderr) without a server or a folder.
 std::optional<Setup> prepare_setup(const Options& opt) {
   Setup s;
   const std::string bin = self_dir();
   s.server_bin = bin + "/telegrasp-server";
   s.self_bin = bin + "/telegrasp-eval";
   if (access(s.server_bin.c_str(), X_OK) != 0) {
-    std::cerr << "telegrasp-eval: " << s.server_bin << " not found: the protocol runs the server built next to telegrasp-eval\n";
+    std::cerr << kTool << ": " << s.server_bin
+              << " not found: the protocol runs the server built next to telegrasp-eval\n";
     return std::nullopt;
   }
-  if (!opt.record_dir.empty()) {
+  auto make_folder = [](const char* flag, const std::string& dir) {
     std::error_code ec;
-    fs::create_directories(opt.record_dir, ec);
-    if (ec) usage_error("--record " + opt.record_dir + ": " + ec.message());
-  }
+    fs::create_directories(dir, ec);
+    if (ec) std::cerr << kTool << ": " << flag << " " << dir << ": " << ec.message() << "\n";
+    return !ec;
+  };
+  if (!opt.record_dir.empty() && !make_folder("--record", opt.record_dir)) return std::nullopt;
   if (!opt.logs_dir.empty()) {
+    if (!make_folder("--keep-logs", opt.logs_dir)) return std::nullopt;
     s.work = opt.logs_dir;
-    std::error_code ec;
-    fs::create_directories(s.work, ec);
-    if (ec) usage_error("--keep-logs " + opt.logs_dir + ": " + ec.message());
   } else {
     char tmpl[] = "/tmp/telegrasp-protocol-XXXXXX";
-    if (!mkdtemp(tmpl)) usage_error(std::string("cannot make a temporary folder: ") + std::strerror(errno));
+    if (!mkdtemp(tmpl)) {
+      std::cerr << kTool << ": cannot make a temporary folder: " << std::strerror(errno) << "\n";
+      return std::nullopt;
+    }
     s.work = tmpl;
   }
   return s;
@@ -288,7 +306,7 @@ std::vector<Job> make_jobs(const Options& opt) {
 }
 
 void print_plan(const Options& opt, int total, std::size_t standins) {
-  std::cerr << "telegrasp-eval: protocol paper, " << opt.count << " objects x (" << opt.experienced << " experienced + "
+  std::cerr << kTool << ": paper, " << opt.count << " objects x (" << opt.experienced << " experienced + "
             << opt.inexperienced << " inexperienced) participants x " << opt.modes.size() << " mode(s) = " << total << " grasps, "
             << opt.jobs << " at a time";
   if (standins) std::cerr << "; " << standins << " object(s) as built-in stand-ins";
@@ -385,10 +403,12 @@ void poll_jobs(std::vector<Job>& jobs, Progress& progress, const Options& opt, c
   }
 }
 
-// Runs every job, opt.jobs at a time, drawing a progress bar on stderr; returns the wall time (s).
+// Runs every job, opt.jobs at a time, with a progress bar on stderr (ProgressLine: in place on a
+// terminal, a line every few seconds in a log); returns the wall time (s).
 double run_jobs(std::vector<Job>& jobs, const Options& opt, const Setup& setup, int total) {
   std::signal(SIGPIPE, SIG_IGN);
   const auto t0 = Clock::now();
+  tools::ProgressLine line;
   Progress progress{std::vector<bool>(static_cast<std::size_t>(opt.jobs), false)};
   std::size_t next = 0;
   while (true) {
@@ -400,10 +420,11 @@ double run_jobs(std::vector<Job>& jobs, const Options& opt, const Setup& setup, 
       }
     if (progress.running == 0) break;
     poll_jobs(jobs, progress, opt, setup);
-    draw_progress(progress.done_grasps, total, std::chrono::duration<double>(Clock::now() - t0).count(), progress.running);
+    const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    if (line.due()) line.show(progress_text(progress.done_grasps, total, seconds, progress.running));
   }
   const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
-  std::fprintf(stderr, "\n");
+  line.finish(progress_text(progress.done_grasps, total, wall, 0));
   return wall;
 }
 
@@ -416,7 +437,7 @@ std::vector<report::Record> collect_records(const std::vector<Job>& jobs, int& f
   for (const Job& j : jobs) {
     if (j.failed) {
       ++failures;
-      std::cerr << "telegrasp-eval: " << j.error;
+      std::cerr << kTool << ": " << j.error;
     }
     records.insert(records.end(), j.records.begin(), j.records.end());
   }
@@ -485,11 +506,12 @@ bool write_reports(const report::ExperimentRun& run, const json& summaries, cons
       std::cerr << "wrote " << opt.csv_path << " and " << by_object << "\n";
     }
     if (!opt.report_path.empty()) {
-      report::write_text_file(opt.report_path, report::html_report(run, in.paper, in.questionnaire ? &*in.questionnaire : nullptr));
+      report::write_text_file(opt.report_path,
+                              report::html_report(run, in.paper, in.questionnaire ? &*in.questionnaire : nullptr, &in.pictures));
       std::cerr << "wrote " << opt.report_path << "\n";
     }
   } catch (const std::exception& e) {
-    std::cerr << "telegrasp-eval: " << e.what() << "\n";
+    std::cerr << kTool << ": " << e.what() << "\n";
     return false;
   }
   return true;
@@ -500,9 +522,9 @@ bool write_reports(const report::ExperimentRun& run, const json& summaries, cons
 int run_protocol(int argc, char** argv) {
   const Options opt = parse(argc, argv);
   const std::optional<ReportInputs> inputs = load_report_inputs(opt);
-  if (!inputs) return 2;
+  if (!inputs) return cli::kExitFailure;
   const std::optional<Setup> setup = prepare_setup(opt);
-  if (!setup) return 2;
+  if (!setup) return cli::kExitFailure;
   std::vector<Job> jobs = make_jobs(opt);
   const int total = static_cast<int>(jobs.size()) * opt.count;
   print_plan(opt, total, inputs->standins.size());
@@ -511,14 +533,14 @@ int run_protocol(int argc, char** argv) {
   int failures = 0;
   std::vector<report::Record> records = collect_records(jobs, failures);
   if (opt.logs_dir.empty()) fs::remove_all(setup->work);
-  std::cerr << "telegrasp-eval: " << records.size() << " grasp records in " << report::fmt(wall, 1) << " s"
+  std::cerr << kTool << ": " << records.size() << " grasp records in " << report::fmt(wall, 1) << " s"
             << (failures ? ", " + std::to_string(failures) + " run(s) failed" : "") << "\n";
 
   const json summaries = print_summaries(records, opt);
   const report::ExperimentRun run = experiment_run(argc, argv, opt, wall, inputs->standins, std::move(records));
   print_worst_objects(report::aggregate_json(run));
-  if (!write_reports(run, summaries, *inputs, opt)) return 1;
-  return failures ? 1 : 0;
+  if (!write_reports(run, summaries, *inputs, opt)) return cli::kExitFailure;
+  return failures ? cli::kExitFailure : 0;
 }
 
 }  // namespace telegrasp::eval

@@ -20,20 +20,18 @@ std::mt19937_64 generator(std::uint64_t seed, std::uint64_t purpose, int partici
 }  // namespace
 
 const std::vector<std::string>& paper_object_order() {
-  static const std::vector<std::string> order = {
-      "014_lemon",          "003_cracker_box",        "004_sugar_box",    "005_tomato_soup_can", "006_mustard_bottle",
-      "007_tuna_fish_can",  "009_gelatin_box",        "010_potted_meat_can", "011_banana",       "012_strawberry",
-      "013_apple",          "002_master_chef_can",    "015_peach",        "016_pear",            "017_orange",
-      "018_plum",           "021_bleach_cleanser",    "030_fork",         "031_spoon",           "032_knife",
-      "033_spatula",        "035_power_drill",        "037_scissors",     "040_large_marker",    "042_adjustable_wrench",
-      "044_flat_screwdriver", "048_hammer",           "055_baseball",     "056_tennis_ball",     "072-a_toy_airplane"};
+  static const std::vector<std::string> order = [] {
+    std::vector<std::string> names;
+    for (const sim::ProtocolObject& o : sim::protocol_objects_in_paper_order()) names.push_back(o.name);
+    return names;
+  }();
   return order;
 }
 
 std::map<std::string, sim::ObjectModelPtr> protocol_models(const std::string& objects_dir, std::vector<std::string>* standins) {
   std::map<std::string, sim::ObjectModelPtr> models;
   if (!objects_dir.empty())
-    for (auto& m : sim::load_object_dir(objects_dir)) models.emplace(m->name, std::move(m));
+    for (auto& m : sim::load_protocol_object_dir(objects_dir)) models.emplace(m->name, std::move(m));
   for (const auto& o : sim::protocol_objects()) {
     if (models.count(o.name)) continue;
     models.emplace(o.name, sim::make_standin_model(o));

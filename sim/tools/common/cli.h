@@ -1,6 +1,13 @@
-// Command-line parsing shared by the tools.
+// Command-line parsing shared by the tools, and the conventions every tool follows:
+//   exit status 0 on success, 1 for a runtime failure (a missing file or folder, no server found,
+//   an I/O error), 2 for a usage error (a bad or missing option or value), each written in the
+//   tool's --help with any special case of its own;
+//   a usage error is two lines on stderr, "<tool>: <what is wrong>" and "(see <tool> --help)";
+//   numbers in messages are written as people write them (format_number).
 #pragma once
 
+#include <charconv>
+#include <cmath>
 #include <cstdlib>
 #include <iostream>
 #include <stdexcept>
@@ -8,37 +15,86 @@
 
 namespace telegrasp::cli {
 
+/// Exit status of a runtime failure (missing file or folder, no server found, I/O error).
+constexpr int kExitFailure = 1;
+/// Exit status of a usage error (bad or missing option or value).
+constexpr int kExitUsage = 2;
+/// The highest DDS domain whose UDP ports fit in 16 bits; --domain takes 0..kMaxDomain.
+constexpr long kMaxDomain = 232;
+
+/// A tool's usage error: prints `what` and does not return.
+using Fail = void (*)(const std::string& what);
+
+/// Prints "<tool>: <what>" and "(see <tool> --help)" on stderr and exits with kExitUsage. `tool`
+/// is how the user calls it, e.g. "telegrasp-eval run".
+[[noreturn]] inline void usage_exit(const std::string& tool, const std::string& what) {
+  std::cerr << tool << ": " << what << "\n(see " << tool << " --help)\n";
+  std::exit(kExitUsage);
+}
+
+/// `x` as people write it: the shortest text that reads back as `x` ("0", "0.25", "90",
+/// "1000000000", "1e+20", "nan"), never std::to_string's "0.000000".
+[[nodiscard]] inline std::string format_number(double x) {
+  char text[32];
+  const bool whole = std::isfinite(x) && x == std::trunc(x) && std::abs(x) < 1e15;
+  const auto [end, error] = whole ? std::to_chars(text, text + sizeof text, static_cast<long long>(x))
+                                  : std::to_chars(text, text + sizeof text, x);
+  return error == std::errc() ? std::string(text, end) : std::string("?");
+}
+
 /// The whole number `v` given to option `flag`, if it lies in [lo, hi]; otherwise calls
 /// `fail` (the tool's usage error, which does not return) with a message naming both.
-[[nodiscard]] inline long parse_whole(const std::string& flag, const std::string& v, long lo, long hi,
-                                      void (*fail)(const std::string&)) {
-  try {
-    std::size_t used = 0;
-    const long x = std::stol(v, &used);
-    if (used == v.size() && x >= lo && x <= hi) return x;
-  } catch (const std::exception&) {
-  }
+[[nodiscard]] inline long parse_whole(const std::string& flag, const std::string& v, long lo, long hi, Fail fail) {
+  long x = 0;
+  const auto [end, error] = std::from_chars(v.data(), v.data() + v.size(), x);
+  if (!v.empty() && error == std::errc() && end == v.data() + v.size() && x >= lo && x <= hi) return x;
   fail(flag + " expects a whole number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
   throw std::logic_error("cli::parse_whole: fail returned");
 }
 
-/// Walks the arguments argv[1..]: -h or --help prints `usage` and exits 0; every other argument
-/// goes to handle(flag, value), where value() returns the next argument (or calls `fail` with
-/// "<flag> needs a value"). `handle` returns false for an option it does not know, and `fail`
-/// is called naming it. `fail` is the tool's usage error and does not return.
+/// The number `v` given to option `flag`, if it is finite and lies in [lo, hi]; otherwise calls
+/// `fail` with a message naming both.
+[[nodiscard]] inline double parse_number(const std::string& flag, const std::string& v, double lo, double hi, Fail fail) {
+  char* end = nullptr;
+  const double x = v.empty() ? NAN : std::strtod(v.c_str(), &end);
+  if (!v.empty() && *end == '\0' && std::isfinite(x) && x >= lo && x <= hi) return x;
+  fail(flag + " expects a number in [" + format_number(lo) + ", " + format_number(hi) + "], got '" + v + "'");
+  throw std::logic_error("cli::parse_number: fail returned");
+}
+
+/// The DDS domain given to `flag`: a whole number in [0, kMaxDomain].
+[[nodiscard]] inline int parse_domain(const std::string& flag, const std::string& v, Fail fail) {
+  return static_cast<int>(parse_whole(flag, v, 0, kMaxDomain, fail));
+}
+
+/// The Fast DDS participant profile name given to `flag`: any name but the empty one.
+[[nodiscard]] inline std::string parse_profile(const std::string& flag, const std::string& v, Fail fail) {
+  if (v.empty()) fail(flag + " expects a participant profile name (loopback, lan, wan), got ''");
+  return v;
+}
+
+/// Whether `arg` is an option ("-x", "--name") rather than a positional argument ("FILE", "-").
+[[nodiscard]] inline bool is_option(const std::string& arg) { return arg.size() > 1 && arg[0] == '-'; }
+
+/// Walks the arguments argv[1..] in order: -h or --help prints `usage` on stdout and exits 0;
+/// every other argument goes to handle(arg, value), where value() returns the next argument (or
+/// calls `fail` with "<arg> needs a value"). An option may be given more than once: `handle` sees
+/// each. Positional arguments reach `handle` too (is_option tells them apart). `handle` returns
+/// false for an argument it does not take, and `fail` is called naming it ("unknown option" or
+/// "unexpected argument"). `fail` is the tool's usage error and does not return.
 template <class Handle>
-void for_each_option(int argc, char** argv, const char* usage, void (*fail)(const std::string&), Handle&& handle) {
+void for_each_option(int argc, char** argv, const char* usage, Fail fail, Handle&& handle) {
   for (int i = 1; i < argc; ++i) {
-    const std::string flag = argv[i];
-    if (flag == "-h" || flag == "--help") {
+    const std::string arg = argv[i];
+    if (arg == "-h" || arg == "--help") {
       std::cout << usage;
       std::exit(0);
     }
     auto value = [&]() -> std::string {
-      if (i + 1 >= argc) fail(flag + " needs a value");
+      if (i + 1 >= argc) fail(arg + " needs a value");
       return argv[++i];
     };
-    if (!handle(flag, value)) fail("unknown option '" + flag + "'");
+    if (!handle(arg, value)) fail((is_option(arg) ? "unknown option '" : "unexpected argument '") + arg + "'");
   }
 }
 

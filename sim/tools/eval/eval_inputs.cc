@@ -1,9 +1,11 @@
 #include "eval_inputs.h"
 
+#include "telegrasp/sim/mesh_loading.h"
 #include "telegrasp/sim/standin_objects.h"
 
 #include <filesystem>
 #include <iostream>
+#include <stdexcept>
 
 namespace telegrasp::eval {
 
@@ -15,7 +17,11 @@ EvalInputs load_eval_inputs(const std::string& rig_path, const std::string& obje
     for (const auto& o : sim::protocol_objects()) in.models.push_back(sim::make_standin_model(o));
   } else {
     std::cerr << "loading meshes from " << objects_dir << " ...\n";
-    in.models = sim::load_object_dir(objects_dir);
+    try {
+      in.models = sim::load_protocol_object_dir(objects_dir);
+    } catch (const sim::MeshLoadError& e) {  // names the folder or the file in it
+      throw std::runtime_error(std::string("--objects ") + e.what());
+    }
   }
   return in;
 }
@@ -24,11 +30,11 @@ std::string prepare_outputs(const std::string& json_path, std::ofstream& json_ou
   if (!svg_dir.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(svg_dir, ec);
-    if (!std::filesystem::is_directory(svg_dir)) return "cannot create --svg folder " + svg_dir;
+    if (!std::filesystem::is_directory(svg_dir)) return "--svg " + svg_dir + ": cannot create the folder";
   }
   if (!json_path.empty()) {
     json_out.open(json_path);
-    if (!json_out) return "cannot write --json file " + json_path;
+    if (!json_out) return "--json " + json_path + ": cannot write";
   }
   return "";
 }

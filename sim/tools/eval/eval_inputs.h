@@ -17,7 +17,8 @@ struct EvalInputs {
 };
 
 /// The rig at `rig_path` (empty: the built-in human_right) and every mesh in `objects_dir`
-/// (empty: the 30 built-in stand-ins). Throws with a message naming the bad file.
+/// (empty: the 30 built-in stand-ins). Throws with a message naming the bad file (a mesh
+/// problem as "--objects <folder or file>: <what is wrong>", the way every tool says it).
 EvalInputs load_eval_inputs(const std::string& rig_path, const std::string& objects_dir);
 
 /// Opens `json_path` (if given) into `json_out` and creates `svg_dir` (if given), so a long run

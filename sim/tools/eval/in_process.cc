@@ -1,6 +1,7 @@
 // telegrasp-eval's in-process run: scripted grasps on objects with no network; reports success,
 // time and ND.
 #include "cli.h"
+#include "progress_line.h"
 #include "offline_commands.h"
 #include "eval_inputs.h"
 #include "grasp_report.h"
@@ -25,8 +26,6 @@
 #include <sstream>
 #include <string>
 #include <thread>
-
-#include <unistd.h>
 #include <vector>
 
 namespace {
@@ -60,6 +59,10 @@ Options:
   --threads N         worker threads (default 2)
   -h, --help          this text
 
+Progress goes to stderr (in place on a terminal, a line every few seconds in a log), the
+per-object tables and summaries to stdout.
+Exit status: 0 done, 1 a runtime failure (the --objects folder, the rig or a mesh missing or
+unreadable, an output not writable), 2 a usage error (a bad or missing option or value).
 Other subcommands: telegrasp-eval --help.
 )";
 
@@ -72,10 +75,9 @@ struct Options {
   std::uint64_t seed = 1;
 };
 
-[[noreturn]] void usage_error(const std::string& what) {
-  std::cerr << "telegrasp-eval run: " << what << "\n(see telegrasp-eval run --help)\n";
-  std::exit(2);
-}
+constexpr const char* kTool = "telegrasp-eval run";
+
+[[noreturn]] void usage_error(const std::string& what) { telegrasp::cli::usage_exit(kTool, what); }
 
 Options parse(int argc, char** argv) {
   Options o;
@@ -84,7 +86,14 @@ Options parse(int argc, char** argv) {
     else if (a == "--rig") o.rig_path = value();
     else if (a == "--json") o.json_path = value();
     else if (a == "--svg") o.svg_dir = value();
-    else if (a == "--skill") o.skill = value();
+    else if (a == "--skill") {
+      o.skill = value();
+      try {
+        skill_profile(o.skill);
+      } catch (const std::invalid_argument&) {
+        usage_error("--skill expects perfect, experienced or inexperienced, got '" + o.skill + "'");
+      }
+    }
     else if (a == "--selection") {
       const std::string m = value();
       if (m == "surface") o.selection = SelectionMetric::kSurface;
@@ -96,9 +105,8 @@ Options parse(int argc, char** argv) {
     else if (a == "--seed") o.seed = static_cast<std::uint64_t>(telegrasp::cli::parse_whole(a, value(), 0, 1L << 62, usage_error));
     else if (a == "--mode") {
       const std::string m = value();
-      if (m == "precise") o.modes = {ClosingMode::kPrecise};
-      else if (m == "discrete") o.modes = {ClosingMode::kDiscrete};
-      else if (m == "both") o.modes = {ClosingMode::kPrecise, ClosingMode::kDiscrete};
+      if (m == "both") o.modes = {ClosingMode::kPrecise, ClosingMode::kDiscrete};
+      else if (const std::optional<ClosingMode> mode = parse_closing_mode(m)) o.modes = {*mode};
       else usage_error("--mode expects precise, discrete or both, got '" + m + "'");
     } else if (a == "--speed-scale") {
       o.speeds.clear();
@@ -116,8 +124,6 @@ Options parse(int argc, char** argv) {
   });
   return o;
 }
-
-const char* mode_name(ClosingMode m) { return m == ClosingMode::kPrecise ? "precise" : "discrete"; }
 
 // The eval's view of a trial: the shared grasp record and its picture.
 struct Trial {
@@ -160,7 +166,7 @@ Trial run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRig
   Trial out;
   Record& rec = out.record;
   rec.object = model->name;
-  rec.mode = mode_name(cfg.mode);
+  rec.mode = closing_mode_name(cfg.mode);
   rec.speed_scale = cfg.speed;
   rec.trial = trial;
   double z_held = -1e9;
@@ -209,14 +215,13 @@ Trial run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRig
 std::optional<EvalInputs> load_inputs(const Options& opt, std::ofstream& json_out) {
   EvalInputs in;
   try {
-    skill_profile(opt.skill);
     in = telegrasp::eval::load_eval_inputs(opt.rig_path, opt.objects_dir);
   } catch (const std::exception& e) {
-    std::cerr << "telegrasp-eval: " << e.what() << "\n";
+    std::cerr << kTool << ": " << e.what() << "\n";
     return std::nullopt;
   }
   if (const std::string error = telegrasp::eval::prepare_outputs(opt.json_path, json_out, opt.svg_dir); !error.empty()) {
-    std::cerr << "telegrasp-eval: " << error << "\n";
+    std::cerr << kTool << ": " << error << "\n";
     return std::nullopt;
   }
   std::size_t max_bytes = 0;
@@ -248,7 +253,7 @@ std::vector<Job> make_jobs(std::size_t configs, std::size_t objects, int trials)
 
 // One job's trial. A trial that throws counts as not grasped, and is said once on stderr.
 Trial run_job(const Job& job, const std::vector<Config>& configs, const EvalInputs& in, const Options& opt,
-              std::mutex& log_mutex) {
+              std::mutex& log_mutex, telegrasp::tools::ProgressLine& progress) {
   // The trial's seed depends on the object and trial only, so modes and speeds see the same poses.
   const std::uint64_t seed = opt.seed * 1000003ULL + job.object * 1009ULL + static_cast<std::uint64_t>(job.trial);
   const bool draw = !opt.svg_dir.empty() && job.trial == 0;
@@ -258,40 +263,42 @@ Trial run_job(const Job& job, const std::vector<Config>& configs, const EvalInpu
     Trial failed;
     Record& rec = failed.record;
     rec.object = in.models[job.object]->name;
-    rec.mode = mode_name(configs[job.config].mode);
+    rec.mode = closing_mode_name(configs[job.config].mode);
     rec.speed_scale = configs[job.config].speed;
     rec.trial = job.trial;
     std::lock_guard lock(log_mutex);
-    std::cerr << "\ntelegrasp-eval: " << rec.object << " trial " << job.trial << " failed: " << e.what() << "\n";
+    progress.break_line();
+    std::cerr << kTool << ": " << rec.object << " trial " << job.trial << " failed: " << e.what() << "\n";
     return failed;
   }
 }
 
-// Runs every job on opt.threads threads, with a progress line per finished trial on stderr.
-// Returns the trials in the jobs' order.
+// Runs every job on opt.threads threads, with a progress line on stderr (ProgressLine: in place
+// on a terminal, every few seconds in a log). Returns the trials in the jobs' order.
 std::vector<Trial> run_jobs(const std::vector<Job>& jobs, const std::vector<Config>& configs, const EvalInputs& in,
                             const Options& opt) {
   std::vector<Trial> trials(jobs.size());
   std::atomic<std::size_t> next{0}, finished{0};
   std::mutex log_mutex;
-  const bool stderr_is_terminal = isatty(STDERR_FILENO) != 0;
+  telegrasp::tools::ProgressLine progress;
   auto worker = [&] {
     for (std::size_t j = next++; j < jobs.size(); j = next++) {
       const Job& job = jobs[j];
-      trials[j] = run_job(job, configs, in, opt, log_mutex);
+      trials[j] = run_job(job, configs, in, opt, log_mutex, progress);
       const Record& rec = trials[j].record;
       const std::size_t done = ++finished;
       std::lock_guard lock(log_mutex);
-      // One line rewritten in place on a terminal; a line per trial in a log file.
-      std::cerr << (stderr_is_terminal ? "\r[" : "[") << done << "/" << jobs.size() << "] " << rec.mode << " x"
-                << configs[job.config].speed << " " << rec.object << " trial " << job.trial
-                << (rec.held_after_lift ? " held" : " NOT held") << (stderr_is_terminal ? "        " : "\n") << std::flush;
+      if (done < jobs.size() && !progress.due()) continue;
+      std::ostringstream line;
+      line << "[" << done << "/" << jobs.size() << "] " << rec.mode << " x" << configs[job.config].speed << " "
+           << rec.object << " trial " << job.trial << (rec.held_after_lift ? " held" : " NOT held");
+      if (done == jobs.size()) progress.finish(line.str());
+      else progress.show(line.str());
     }
   };
   std::vector<std::thread> pool;
   for (int i = 0; i < opt.threads; ++i) pool.emplace_back(worker);
   for (auto& t : pool) t.join();
-  if (stderr_is_terminal) std::cerr << "\n";
   return trials;
 }
 
@@ -300,7 +307,7 @@ json print_summaries(const std::vector<Config>& configs, const std::vector<Job>&
                      const std::vector<ObjectModelPtr>& models, const Options& opt) {
   json summaries = json::array();
   for (std::size_t c = 0; c < configs.size(); ++c) {
-    std::cout << "\n== mode " << mode_name(configs[c].mode) << ", closing speed x" << configs[c].speed << ", skill " << opt.skill << " ==\n";
+    std::cout << "\n== mode " << closing_mode_name(configs[c].mode) << ", closing speed x" << configs[c].speed << ", skill " << opt.skill << " ==\n";
     std::vector<telegrasp::report::ObjectRows> rows(models.size());
     std::vector<const Record*> all;
     for (std::size_t o = 0; o < models.size(); ++o) rows[o].object = models[o]->name;
@@ -311,7 +318,7 @@ json print_summaries(const std::vector<Config>& configs, const std::vector<Job>&
     }
     telegrasp::report::print_object_table(rows);
     json s = summarize(all);
-    s["mode"] = mode_name(configs[c].mode);
+    s["mode"] = closing_mode_name(configs[c].mode);
     s["speed_scale"] = configs[c].speed;
     s["skill"] = opt.skill;
     std::cout << "summary: " << s.dump() << "\n";
@@ -353,7 +360,7 @@ bool write_json(std::ofstream& json_out, const std::string& json_path, const std
   json grasps = json::array();
   for (const Trial& t : trials) grasps.push_back(telegrasp::report::record_json(t.record));
   json_out << json{{"grasps", grasps}, {"summary", summaries[0]}, {"summaries", summaries}}.dump(1) << "\n";
-  if (!json_out.flush()) { std::cerr << "telegrasp-eval: cannot write " << json_path << "\n"; return false; }
+  if (!json_out.flush()) { std::cerr << kTool << ": --json " << json_path << ": cannot write\n"; return false; }
   std::cerr << "wrote " << json_path << "\n";
   return true;
 }
@@ -364,13 +371,14 @@ int telegrasp::eval::run_in_process(int argc, char** argv) {
   const Options opt = parse(argc, argv);
   std::ofstream json_out;
   const std::optional<EvalInputs> in = load_inputs(opt, json_out);
-  if (!in) return 1;
+  if (!in) return telegrasp::cli::kExitFailure;
   const std::vector<Config> configs = make_configs(opt);
   const std::vector<Job> jobs = make_jobs(configs.size(), in->models.size(), opt.trials);
   const std::vector<Trial> trials = run_jobs(jobs, configs, *in, opt);
   const json summaries = print_summaries(configs, jobs, trials, in->models, opt);
   if (configs.size() > 1) print_side_by_side(summaries);
   if (!opt.svg_dir.empty()) write_pictures(trials, opt.svg_dir);
-  if (!opt.json_path.empty() && !write_json(json_out, opt.json_path, trials, summaries)) return 1;
+  if (!opt.json_path.empty() && !write_json(json_out, opt.json_path, trials, summaries))
+    return telegrasp::cli::kExitFailure;
   return 0;
 }

@@ -2,6 +2,7 @@
 // An oracle searches palm poses around each object (random, then refined locally), closes the
 // hand at each with precise closing, and keeps the clean grasp with the lowest mean |ND|.
 #include "cli.h"
+#include "progress_line.h"
 #include "offline_commands.h"
 #include "eval_inputs.h"
 #include "grasp_report.h"
@@ -58,6 +59,11 @@ Options:
   --svg DIR        draw each object's kept grasp as DIR/<object>_nd_bound.svg
   --threads N      worker threads (default 2)
   -h, --help       this text
+
+Progress goes to stderr (in place on a terminal, a line every few seconds in a log), the table
+to stdout.
+Exit status: 0 done, 1 a runtime failure (the --objects folder, the rig or a mesh missing or
+unreadable, an output not writable), 2 a usage error (a bad or missing option or value).
 )";
 
 struct Options {
@@ -66,10 +72,9 @@ struct Options {
   std::uint64_t seed = 1;
 };
 
-[[noreturn]] void usage_error(const std::string& what) {
-  std::cerr << "telegrasp-eval nd-bound: " << what << "\n(see telegrasp-eval nd-bound --help)\n";
-  std::exit(2);
-}
+constexpr const char* kTool = "telegrasp-eval nd-bound";
+
+[[noreturn]] void usage_error(const std::string& what) { telegrasp::cli::usage_exit(kTool, what); }
 
 Options parse(int argc, char** argv) {
   using telegrasp::cli::parse_whole;
@@ -104,13 +109,13 @@ int telegrasp::eval::run_nd_bound(int argc, char** argv) {
     rig = std::move(in.rig);
     models = std::move(in.models);
   } catch (const std::exception& e) {
-    std::cerr << "telegrasp-eval nd-bound: " << e.what() << "\n";
-    return 1;
+    std::cerr << kTool << ": " << e.what() << "\n";
+    return telegrasp::cli::kExitFailure;
   }
   std::ofstream json_out;
   if (const std::string error = prepare_outputs(opt.json_path, json_out, opt.svg_dir); !error.empty()) {
-    std::cerr << "telegrasp-eval nd-bound: " << error << "\n";
-    return 1;
+    std::cerr << kTool << ": " << error << "\n";
+    return telegrasp::cli::kExitFailure;
   }
 
   NdSearchSettings search;
@@ -121,6 +126,7 @@ int telegrasp::eval::run_nd_bound(int argc, char** argv) {
   std::vector<Eigen::Isometry3d> poses(models.size());
   std::atomic<std::size_t> next{0}, finished{0};
   std::mutex log_mutex;
+  telegrasp::tools::ProgressLine progress;
   auto worker = [&] {
     for (std::size_t j = next++; j < models.size(); j = next++) {
       poses[j] = World::resting_pose(*models[j], 0.45, 0.0, 0.0);
@@ -128,8 +134,12 @@ int telegrasp::eval::run_nd_bound(int argc, char** argv) {
       s.seed = opt.seed * 1000003ULL + j;
       kept[j] = nd_pose_search(rig, *models[j], poses[j], s, kDt);
       std::lock_guard lock(log_mutex);
-      std::cerr << "[" << ++finished << "/" << models.size() << "] " << models[j]->name << ": " << kept[j].clean_grasps
-                << " clean grasps of " << kept[j].poses_tried << " poses\n";
+      const std::size_t done = ++finished;
+      const std::string line = "[" + std::to_string(done) + "/" + std::to_string(models.size()) + "] " +
+                               models[j]->name + ": " + std::to_string(kept[j].clean_grasps) + " clean grasps of " +
+                               std::to_string(kept[j].poses_tried) + " poses";
+      if (done == models.size()) progress.finish(line);
+      else progress.show(line);
     }
   };
   std::vector<std::thread> pool;
@@ -175,6 +185,12 @@ int telegrasp::eval::run_nd_bound(int argc, char** argv) {
                         {"nd_abs_median_mm", percentile(pooled, 0.5)}, {"nd_abs_p95_mm", percentile(pooled, 0.95)}};
   std::printf("over the kept grasps: %zu capsules hit, |ND| median %s mm, 95th percentile %s mm\n", pooled.size(),
               fmt(percentile(pooled, 0.5), 3).c_str(), fmt(percentile(pooled, 0.95), 3).c_str());
-  if (!opt.json_path.empty()) json_out << json{{"objects", objects}, {"summary", summary}}.dump(1) << "\n";
+  if (!opt.json_path.empty()) {
+    json_out << json{{"objects", objects}, {"summary", summary}}.dump(1) << "\n";
+    if (!json_out.flush()) {
+      std::cerr << kTool << ": --json " << opt.json_path << ": cannot write\n";
+      return telegrasp::cli::kExitFailure;
+    }
+  }
   return 0;
 }

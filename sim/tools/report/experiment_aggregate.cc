@@ -56,7 +56,7 @@ Stat stat(const std::vector<double>& v) {
 double grasp_nd_abs_mean(const Record& r, int* hits) {
   double sum = 0;
   int n = 0;
-  for (const CapsuleRecord& c : r.grasp_tick_capsules)
+  for (const CapsuleMetricRecord& c : r.grasp_tick_capsules)
     if (c.hit) {
       sum += std::abs(c.nd_mm);
       ++n;
@@ -67,7 +67,7 @@ double grasp_nd_abs_mean(const Record& r, int* hits) {
 
 double grasp_min_signed_distance(const Record& r) {
   double m = INFINITY;
-  for (const CapsuleRecord& c : r.grasp_tick_capsules)
+  for (const CapsuleMetricRecord& c : r.grasp_tick_capsules)
     if (c.blocked) m = std::min(m, c.signed_distance_mm);
   return std::isfinite(m) ? m : NAN;
 }
@@ -82,10 +82,11 @@ Aggregate aggregate(const std::vector<const Record*>& records) {
     if (!r->grasped) continue;
     ++a.grasped;
     times.push_back(r->time_to_grasp_s);
-    hand_errors.push_back(r->grasp_tick_hand_error_mm);
     int hits = 0;
     const double nd = grasp_nd_abs_mean(*r, &hits);
     if (hits) nds.push_back(nd);
+    // HandError sums |ND| over fingers: with no capsule hit it has no value (the server sends 0).
+    if (hits) hand_errors.push_back(r->grasp_tick_hand_error_mm);
     a.capsules_hit += hits;
     pooled_sum += std::isfinite(nd) ? nd * hits : 0;
   }
@@ -94,6 +95,30 @@ Aggregate aggregate(const std::vector<const Record*>& records) {
   a.hand_error = stat(hand_errors);
   if (a.capsules_hit) a.nd_pooled = pooled_sum / a.capsules_hit;
   return a;
+}
+
+AxisTicks axis_ticks(double largest_value) {
+  AxisTicks t;
+  if (largest_value > 0 && std::isfinite(largest_value)) {
+    const double raw = largest_value / 5;
+    int exponent = static_cast<int>(std::floor(std::log10(raw)));
+    int mantissa = 10;
+    for (int m : {1, 2, 5, 10})
+      if (m * std::pow(10.0, exponent) >= raw * (1 - 1e-12)) {
+        mantissa = m;
+        break;
+      }
+    if (mantissa == 10) mantissa = 1, ++exponent;
+    t.step = mantissa * std::pow(10.0, exponent);
+    t.top = std::ceil(largest_value / t.step * (1 - 1e-12)) * t.step;
+  }
+  const int decimals = std::max(0, -static_cast<int>(std::floor(std::log10(t.step) + 1e-9)));
+  const int ticks = static_cast<int>(std::lround(t.top / t.step));
+  for (int i = 0; i <= ticks; ++i) {
+    t.values.push_back(i * t.step);
+    t.labels.push_back(fmt(i * t.step, decimals));
+  }
+  return t;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -213,7 +238,8 @@ json aggregate_json(const ExperimentRun& run) {
       {"nd_abs_mean_mm", "per grasp: mean |ND| over the capsules that hit at the grasp tick; then mean and sample "
                          "sd over grasps (this is what the charts plot)"},
       {"nd_abs_pooled_mean_mm", "mean |ND| over every hit capsule of the grasped trials, at the grasp tick"},
-      {"hand_error_mean_mm", "the paper's HandError (sum over fingers of the per-finger mean |ND|) at the grasp tick"}};
+      {"hand_error_mean_mm", "the paper's HandError (sum over fingers of the per-finger mean |ND|) at the grasp tick, "
+                             "over grasps with a capsule that hit (without one it has no value)"}};
   json by_mgo = json::array(), by_mg = json::array(), by_mo = json::array(), worst = json::array();
   for (const std::string& mode : modes) {
     for (const std::string& group : groups) {

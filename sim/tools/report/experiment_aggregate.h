@@ -27,7 +27,7 @@ double grasp_min_signed_distance(const Record& r);
 // The aggregate of some trials (one mode, group and object, or wider).
 struct Aggregate {
   int n = 0, grasped = 0, held = 0, capsules_hit = 0;
-  Stat time, nd, hand_error;   // over grasped trials (nd: those with a hit capsule)
+  Stat time, nd, hand_error;   // over grasped trials (nd, hand_error: those with a hit capsule)
   double nd_pooled = NAN;      // mean |ND| over every hit capsule of those trials
 };
 
@@ -45,6 +45,17 @@ std::vector<std::string> objects_of(const ExperimentRun& run);
 // Records of one mode, group ("" = every group) and object ("" = every object).
 std::vector<const Record*> select(const ExperimentRun& run, const std::string& mode, const std::string& group,
                                   const std::string& object);
+
+// A bar chart's y axis from 0: a nice step (1, 2 or 5 x 10^k, the smallest at least a fifth of
+// the largest value), the axis top (the first multiple of the step at or above that value), and a
+// label per tick (0, step, 2 step, ... top) with exactly the decimals the step needs. No positive
+// finite value: 0 to 1 in steps of 0.2.
+struct AxisTicks {
+  double top = 1, step = 0.2;
+  std::vector<double> values;
+  std::vector<std::string> labels;
+};
+AxisTicks axis_ticks(double largest_value);
 
 // `v` with `prec` decimals; "" when undefined (NaN), as a CSV cell or data attribute wants it.
 inline std::string number(double v, int prec = 3) { return std::isfinite(v) ? fmt(v, prec) : ""; }

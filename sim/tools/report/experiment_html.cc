@@ -1,12 +1,16 @@
-// The experiment report as one self-contained HTML page: the run, the per-mode comparison, the
-// paper's bar charts as inline SVG with their numbers in tables, the paper's published numbers
-// beside ours, and the questionnaire's scores.
+// The experiment report as one self-contained HTML page: the run, the per-mode comparison, a
+// picture of one grasp per object, the paper's bar charts as inline SVG with their numbers in
+// tables, the paper's published numbers beside ours, and the questionnaire's scores.
 #include "experiment_aggregate.h"
+#include "grasp_svg.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <sstream>
+#include <tuple>
 
 namespace telegrasp::report {
 namespace {
@@ -19,11 +23,11 @@ const PaperRow* find_paper(const std::vector<PaperRow>& paper, const std::string
   return nullptr;
 }
 
-// The paper's letter for an object; objects outside the paper's table get their 1-based position
-// on the x axis, so a letter always means the paper's object.
+// The paper's letter for an object (the tables' id column, to find it in the paper's figures);
+// empty for an object outside the paper's table.
 std::string label_of(const std::vector<PaperRow>& paper, const std::vector<std::string>& objects, std::size_t i) {
   if (const PaperRow* p = find_paper(paper, objects[i])) return p->label;
-  return "#" + std::to_string(i + 1);
+  return "";
 }
 
 std::string mode_name(const std::string& mode) { return mode.empty() ? "(mode unknown)" : mode; }
@@ -46,9 +50,11 @@ std::string esc(const std::string& s) {
   return out;
 }
 
-// "1.23 ± 0.10" with the sd left out when undefined; "-" when the mean is.
+const char* const kNoData = "no data";
+
+// "1.23 ± 0.10" with the sd left out when undefined; "no data" when the mean is (never 0).
 std::string mean_sd(const Stat& s, int prec = 2) {
-  if (!std::isfinite(s.mean)) return "-";
+  if (!std::isfinite(s.mean)) return kNoData;
   return fmt(s.mean, prec) + (std::isfinite(s.sd) ? " &plusmn; " + fmt(s.sd, prec) : "");
 }
 
@@ -57,8 +63,8 @@ std::string mean_sd(const Stat& s, int prec = 2) {
 
 struct Series {
   std::string mode, group, legend, colour;
-  std::vector<bool> present;       // per object: false draws no bar (no trials, not in the paper)
-  std::vector<double> values;      // per object; NaN draws an empty bar (trials, but no value)
+  std::vector<bool> present;       // per object: false draws a "no data" slot, no bar (no trials, not in the paper)
+  std::vector<double> values;      // per object; NaN draws a "no data" bar (trials, but no value)
   std::vector<std::string> cells;  // per object, the table's text
 };
 
@@ -83,90 +89,124 @@ const char* mode_colour(const std::string& mode) {
   return "#2ca02c";  // precise and anything else
 }
 
-// A round axis maximum and tick step for values up to `max`.
-std::pair<double, double> axis_scale(double max) {
-  if (!(max > 0) || !std::isfinite(max)) return {1, 0.2};
-  const double raw = max / 5;
-  const double mag = std::pow(10, std::floor(std::log10(raw)));
-  double step = mag;
-  for (double m : {1.0, 2.0, 2.5, 5.0, 10.0})
-    if (m * mag >= raw) {
-      step = m * mag;
-      break;
-    }
-  return {std::ceil(max / step - 1e-9) * step, step};
+// An id usable in url(#...): the chart's id with anything but letters and digits as '-'.
+std::string css_id(const std::string& s) {
+  std::string out;
+  for (char c : s) out += std::isalnum(static_cast<unsigned char>(c)) ? c : '-';
+  return out;
+}
+
+// The hatching of a "no data" slot, in a series' colour.
+std::string hatch_pattern(const std::string& id, const std::string& colour) {
+  return "<pattern id=\"" + id + "\" width=\"4\" height=\"4\" patternUnits=\"userSpaceOnUse\" "
+         "patternTransform=\"rotate(45)\"><rect width=\"4\" height=\"4\" fill=\"#ffffff\"/><line x1=\"1\" y1=\"0\" "
+         "x2=\"1\" y2=\"4\" stroke=\"" + colour + "\" stroke-width=\"1.2\"/></pattern>";
+}
+
+// "no data" written up a hatched slot from the axis, on a white strip so it reads over the
+// hatching (drawn after the slot).
+std::string nodata_text(double x, double w, double axis_y) {
+  return "<rect x=\"" + fmt(x, 2) + "\" y=\"" + fmt(axis_y - 32, 1) + "\" width=\"" + fmt(w, 2) +
+         "\" height=\"32\" fill=\"#ffffff\"/><text class=\"nodata-label\" transform=\"translate(" + fmt(x + w / 2 + 2.4, 1) +
+         "," + fmt(axis_y - 3, 1) + ") rotate(-90)\">" + kNoData + "</text>\n";
 }
 
 std::string svg_chart(const Chart& c) {
-  const double left = 52, right = 12, top = 34, plot_h = 200, bottom = 34;
+  // Object names run at -60 degrees below the axis: the longest sets the bottom margin.
+  constexpr double kCharPx = 5.2, kSin = 0.866, kCos = 0.5;  // 9 px text; sin and cos of 60 degrees
+  std::size_t longest = 1;
+  for (const std::string& o : c.objects) longest = std::max(longest, o.size());
+  const double name_px = kCharPx * static_cast<double>(longest);
   const std::size_t ns = std::max<std::size_t>(1, c.series.size());
   const double slot = std::max(16.0, 6.0 * static_cast<double>(ns) + 6);
   const double bar_w = (slot - 4) / static_cast<double>(ns);
+  const double left = std::max(52.0, kCos * name_px - slot / 2 + 6), right = 12, top = 34, plot_h = 200;
+  const double bottom = 10 + kSin * name_px + 18;
   const double plot_w = slot * static_cast<double>(std::max<std::size_t>(1, c.objects.size()));
   const double width = left + plot_w + right, height = top + plot_h + bottom;
 
   double max = 0;
+  bool missing = false;
   for (const Series& s : c.series)
-    for (std::size_t i = 0; i < s.values.size(); ++i)
+    for (std::size_t i = 0; i < s.values.size(); ++i) {
       if (s.present[i] && std::isfinite(s.values[i])) max = std::max(max, s.values[i]);
-  const auto [y_max, y_step] = axis_scale(max);
-  auto y_of = [&](double v) { return top + plot_h * (1 - v / y_max); };
+      else missing = true;
+    }
+  const AxisTicks axis = axis_ticks(max);
+  auto y_of = [&](double v) { return top + plot_h * (1 - v / axis.top); };
+  const std::string id = css_id(c.id);
 
   std::ostringstream o;
   // No xmlns: inline SVG in HTML needs none, and the page names no URL at all.
   o << "<svg class=\"chart\" data-chart=\"" << esc(c.id) << "\" viewBox=\"0 0 "
     << fmt(width, 1) << " " << fmt(height, 1) << "\" width=\"" << fmt(width, 0) << "\" height=\"" << fmt(height, 0)
-    << "\" role=\"img\"><title>" << esc(c.title) << "</title>\n";
-  // Grid and y axis.
-  for (double v = 0; v <= y_max + 1e-9; v += y_step) {
-    const double y = y_of(v);
+    << "\" role=\"img\"><title>" << esc(c.title) << "</title>\n<defs>";
+  for (std::size_t k = 0; k < c.series.size(); ++k) o << hatch_pattern("nd-" + id + "-" + std::to_string(k), c.series[k].colour);
+  o << hatch_pattern("nd-" + id + "-legend", "#888888") << "</defs>\n";
+  // Grid and y axis: a line and an exact label per tick.
+  for (std::size_t t = 0; t < axis.values.size(); ++t) {
+    const double y = y_of(axis.values[t]);
     o << "<line class=\"grid\" x1=\"" << fmt(left, 1) << "\" x2=\"" << fmt(left + plot_w, 1) << "\" y1=\"" << fmt(y, 1)
       << "\" y2=\"" << fmt(y, 1) << "\"/><text class=\"tick\" x=\"" << fmt(left - 4, 1) << "\" y=\"" << fmt(y + 3, 1)
-      << "\" text-anchor=\"end\">" << fmt(v, y_step < 0.1 ? 2 : (y_step < 1 ? 1 : 0)) << "</text>\n";
+      << "\" text-anchor=\"end\">" << axis.labels[t] << "</text>\n";
   }
   o << "<text class=\"axis\" transform=\"translate(12," << fmt(top + plot_h / 2, 1) << ") rotate(-90)\" "
     << "text-anchor=\"middle\">" << esc(c.y_label) << "</text>\n";
-  // Legend, one entry per series.
+  // Legend, one entry per series, and the "no data" hatching when a slot has no value.
   double lx = left;
   for (const Series& s : c.series) {
     o << "<rect class=\"legend\" x=\"" << fmt(lx, 1) << "\" y=\"8\" width=\"10\" height=\"10\" fill=\"" << s.colour
       << "\"/><text class=\"legend\" x=\"" << fmt(lx + 14, 1) << "\" y=\"17\">" << esc(s.legend) << "</text>\n";
     lx += 24 + 6.5 * static_cast<double>(s.legend.size());
   }
-  // Bars and x labels; the object's name is in a tooltip, as the paper's axis has only letters.
+  if (missing)
+    o << "<rect class=\"legend\" x=\"" << fmt(lx, 1) << "\" y=\"8\" width=\"10\" height=\"10\" fill=\"url(#nd-" << id
+      << "-legend)\" stroke=\"#888888\" stroke-width=\"0.5\"/><text class=\"legend\" x=\"" << fmt(lx + 14, 1)
+      << "\" y=\"17\">" << kNoData << " (no bar, not zero)</text>\n";
+  // Bars, hatched "no data" slots and the object names.
   for (std::size_t i = 0; i < c.objects.size(); ++i) {
     const double x0 = left + slot * static_cast<double>(i) + 2;
     for (std::size_t k = 0; k < c.series.size(); ++k) {
       const Series& s = c.series[k];
-      if (!s.present[i]) continue;
       const double v = s.values[i];
-      const double h = std::isfinite(v) ? std::max(0.0, plot_h * std::min(v, y_max) / y_max) : 0;
+      const double x = x0 + bar_w * static_cast<double>(k);
+      const std::string hatch = "url(#nd-" + id + "-" + std::to_string(k) + ")";
+      if (!s.present[i]) {
+        o << "<rect class=\"nodata\" x=\"" << fmt(x, 2) << "\" y=\"" << fmt(top, 2) << "\" width=\"" << fmt(bar_w, 2)
+          << "\" height=\"" << fmt(plot_h, 2) << "\" fill=\"" << hatch << "\"><title>" << esc(c.objects[i]) << ", "
+          << esc(s.legend) << ": no data (" << (s.mode == "paper" ? "not in the paper" : "no trials") << ")</title></rect>\n"
+          << nodata_text(x, bar_w, top + plot_h);
+        continue;
+      }
+      const bool defined = std::isfinite(v);
+      const double h = defined ? std::max(0.0, plot_h * std::min(v, axis.top) / axis.top) : plot_h;
       o << "<rect class=\"bar\" data-chart=\"" << esc(c.id) << "\" data-mode=\"" << esc(s.mode) << "\" data-group=\""
         << esc(s.group) << "\" data-object=\"" << esc(c.objects[i]) << "\" data-value=\"" << number(v, 4) << "\" x=\""
-        << fmt(x0 + bar_w * static_cast<double>(k), 2) << "\" y=\"" << fmt(top + plot_h - h, 2) << "\" width=\""
-        << fmt(bar_w, 2) << "\" height=\"" << fmt(h, 2) << "\" fill=\"" << s.colour << "\"><title>" << esc(c.labels[i])
-        << " " << esc(c.objects[i]) << ", " << esc(s.legend) << ": "
-        << (std::isfinite(v) ? fmt(v, 3) : std::string("no value")) << "</title></rect>\n";
+        << fmt(x, 2) << "\" y=\"" << fmt(top + plot_h - h, 2) << "\" width=\"" << fmt(bar_w, 2) << "\" height=\"" << fmt(h, 2)
+        << "\" fill=\"" << (defined ? s.colour : hatch) << "\"><title>" << esc(c.objects[i]) << ", " << esc(s.legend) << ": "
+        << (defined ? fmt(v, 3) : std::string(kNoData)) << "</title></rect>\n";
+      if (!defined) o << nodata_text(x, bar_w, top + plot_h);
     }
-    o << "<text class=\"xlabel\" x=\"" << fmt(x0 + (slot - 4) / 2, 1) << "\" y=\"" << fmt(top + plot_h + 13, 1)
-      << "\" text-anchor=\"middle\"><title>" << esc(c.objects[i]) << "</title>" << esc(c.labels[i]) << "</text>\n";
+    const double xc = x0 + (slot - 4) / 2 + 3, yl = top + plot_h + 10;
+    o << "<text class=\"xlabel\" transform=\"translate(" << fmt(xc, 1) << "," << fmt(yl, 1)
+      << ") rotate(-60)\" text-anchor=\"end\">" << esc(c.objects[i]) << "</text>\n";
   }
   o << "<line class=\"axisline\" x1=\"" << fmt(left, 1) << "\" x2=\"" << fmt(left + plot_w, 1) << "\" y1=\""
     << fmt(top + plot_h, 1) << "\" y2=\"" << fmt(top + plot_h, 1) << "\"/>\n"
     << "<text class=\"axis\" x=\"" << fmt(left + plot_w / 2, 1) << "\" y=\"" << fmt(height - 4, 1)
-    << "\" text-anchor=\"middle\">Object ID</text>\n</svg>\n";
+    << "\" text-anchor=\"middle\">Object</text>\n</svg>\n";
   return o.str();
 }
 
 std::string chart_table(const Chart& c) {
   std::ostringstream o;
-  o << "<table class=\"numbers\"><tr><th>id</th><th>object</th>";
+  o << "<table class=\"numbers\"><tr><th>paper id</th><th>object</th>";
   for (const Series& s : c.series) o << "<th>" << esc(s.legend) << "</th>";
   for (const auto& [name, cells] : c.table_only) o << "<th>" << esc(name) << "</th>";
   o << "</tr>\n";
   for (std::size_t i = 0; i < c.objects.size(); ++i) {
     o << "<tr><td>" << esc(c.labels[i]) << "</td><td>" << esc(c.objects[i]) << "</td>";
-    for (const Series& s : c.series) o << "<td>" << (s.present[i] ? s.cells[i] : "") << "</td>";
+    for (const Series& s : c.series) o << "<td>" << (s.present[i] ? s.cells[i] : kNoData) << "</td>";
     for (const auto& [name, cells] : c.table_only) o << "<td>" << cells[i] << "</td>";
     o << "</tr>\n";
   }
@@ -189,8 +229,11 @@ th{background:#f2f2f2}td:first-child,th:first-child{text-align:left}
 figure{margin:0 0 1.5em 0}figcaption{font-weight:bold;margin-bottom:.3em}
 svg.chart{background:#fff;display:block}svg .grid{stroke:#e0e0e0;stroke-width:.5}
 svg .axisline{stroke:#333;stroke-width:1}svg text{font-size:9px;fill:#333}svg .axis{font-size:10px}
-svg .legend{font-size:10px}.caveat{background:#fff8e1;border-left:4px solid #f0ad4e;padding:.5em 1em;max-width:60em}
+svg .legend{font-size:10px}svg .nodata-label{font-size:7px;fill:#333}.caveat{background:#fff8e1;border-left:4px solid #f0ad4e;padding:.5em 1em;max-width:60em}
 .rejected{color:#a00}code{background:#f4f4f4;padding:0 3px}
+.pictures{display:flex;flex-wrap:wrap;gap:1em}.pictures figure{margin:0;width:260px}
+.pictures figcaption{font-weight:normal;font-size:.8em;margin-top:.2em}.pictures b{font-size:1.1em}
+svg.grasp{display:block;border:1px solid #ddd}.legend-key{font-size:.85em;max-width:60em}
 )";
 
 std::string page(const std::string& title, const std::string& body) {
@@ -353,6 +396,129 @@ std::string worst_objects_paragraph(const ExperimentRun& run) {
   return body.str();
 }
 
+// Precise against discrete time to grasp, grasp by grasp: the same participant, object and trial in
+// both modes. Says why they agree and lists where they differ.
+std::string mode_times_section(const ExperimentRun& run, const PageData& d) {
+  if (std::find(d.modes.begin(), d.modes.end(), "precise") == d.modes.end() ||
+      std::find(d.modes.begin(), d.modes.end(), "discrete") == d.modes.end())
+    return "";
+  constexpr double kSame = 1e-6;  // s: below this the two times are the same number
+  using Key = std::tuple<std::string, int, std::string, int>;
+  std::map<Key, const Record*> precise;
+  for (const Record& r : run.records)
+    if (r.mode == "precise" && r.grasped) precise[{r.group, r.participant, r.object, r.trial}] = &r;
+  struct Diff {
+    const Record *p, *q;
+    double delta;
+  };
+  std::vector<Diff> diffs;
+  int pairs = 0;
+  for (const Record& r : run.records) {
+    if (r.mode != "discrete" || !r.grasped) continue;
+    const auto it = precise.find({r.group, r.participant, r.object, r.trial});
+    if (it == precise.end()) continue;
+    ++pairs;
+    const double delta = r.time_to_grasp_s - it->second->time_to_grasp_s;
+    if (std::abs(delta) >= kSame) diffs.push_back({it->second, &r, delta});
+  }
+  std::ostringstream o;
+  o << "<h3 id=\"mode-times\">Precise against discrete time to grasp</h3>\n<p>Every participant is the same simulated "
+       "person in both modes (the same seed gives the same reaction time, reach speed and pose errors) and is shown the "
+       "same placements, so the hand arrives and closes at the same moments. The closing mode changes only how a "
+       "finger stops at the surface (precise: with a gap under 0.05 mm; discrete: up to one step inside), which can move "
+       "the tick the grasp rule turns true by a tick (1/90 s) or so, not the operator's timing. ";
+  o << "Of the " << pairs << " grasps made in both modes (same group, participant, object and trial), "
+    << pairs - static_cast<int>(diffs.size()) << " have the same time to grasp and " << diffs.size() << " differ";
+  if (diffs.empty()) {
+    o << ".</p>\n";
+    return o.str();
+  }
+  std::stable_sort(diffs.begin(), diffs.end(), [](const Diff& a, const Diff& b) { return std::abs(a.delta) > std::abs(b.delta); });
+  o << ", by at most " << fmt(std::abs(diffs.front().delta), 3) << " s";
+  constexpr std::size_t kShown = 12;
+  o << (diffs.size() > kShown ? " (the " + std::to_string(kShown) + " largest differences below)" : " (below)")
+    << ".</p>\n<table class=\"numbers\"><tr><th>group</th><th>participant</th><th>object</th><th>trial</th><th>precise (s)"
+       "</th><th>discrete (s)</th><th>discrete &minus; precise (s)</th></tr>\n";
+  for (std::size_t i = 0; i < diffs.size() && i < kShown; ++i) {
+    const Diff& x = diffs[i];
+    o << "<tr><td>" << esc(x.p->group) << "</td><td>" << x.p->participant << "</td><td>" << esc(x.p->object) << "</td><td>"
+      << x.p->trial << "</td><td>" << fmt(x.p->time_to_grasp_s, 3) << "</td><td>" << fmt(x.q->time_to_grasp_s, 3)
+      << "</td><td>" << (x.delta > 0 ? "+" : "") << fmt(x.delta, 3) << "</td></tr>\n";
+  }
+  o << "</table>\n";
+  return o.str();
+}
+
+// The hand and object of a record at its grasp tick, in the world frame; nothing when the record
+// lacks the palm or a phalanx of `rig`.
+std::optional<sim::GraspSnapshot> record_snapshot(const Record& r, const sim::HandRig& rig, const sim::ObjectModel& model) {
+  std::map<std::string, const Eigen::Isometry3d*> frames;
+  for (const HandFrameRecord& f : r.grasp_tick_hand) frames[f.frame] = &f.X_ObjectFrame;
+  const Eigen::Isometry3d& X_WorldObject = r.grasp_tick_X_WorldObject;
+  if (!frames.count("palm")) return std::nullopt;
+  std::vector<Eigen::Isometry3d> X_WorldPhalanx;
+  std::vector<bool> blocked;
+  for (const sim::PhalanxSpec& p : rig.phalanges()) {
+    const auto it = frames.find(p.name);
+    if (it == frames.end()) return std::nullopt;
+    X_WorldPhalanx.push_back(X_WorldObject * *it->second);
+    bool b = false;
+    for (const CapsuleMetricRecord& c : r.grasp_tick_capsules) b = b || (c.phalanx == p.name && c.blocked);
+    blocked.push_back(b);
+  }
+  sim::GraspSnapshot snap;
+  snap.title = r.object;
+  snap.model = &model;
+  snap.X_WorldObject = X_WorldObject;
+  sim::add_hand(snap, rig, X_WorldObject * *frames.at("palm"), X_WorldPhalanx, blocked);
+  for (const ContactPointRecord& c : r.contacts)
+    snap.contacts.push_back({X_WorldObject * c.p_ObjectContact, X_WorldObject.linear() * c.n_Object});
+  return snap;
+}
+
+// One picture per object: the representative grasp in its readable view, with what it shows.
+std::string pictures_section(const ExperimentRun& run, const PageData& d, const GraspPictureInputs& in) {
+  std::ostringstream o;
+  o << "<h2 id=\"pictures\">The grasps, one per object</h2>\n<p class=\"legend-key\">Each picture is one grasp at the "
+       "tick its grasp rule turned true: the first experienced participant's in precise mode, held after the lift "
+       "(failing that, the first record by: held, precise mode, experienced, participant, trial). The hand is the "
+       "server's HandSkeleton of that tick, kept in the object's frame. <b>Grey</b>: the object, its mesh decimated "
+       "to at most " << sim::PictureOptions{}.max_triangles << " triangles for drawing, flat shaded. <b>Light</b> "
+       "capsules: free phalanges; <b>dark</b>: blocked; <b>dashed</b> outline: behind the object. Pale see-through "
+       "shapes: the palm and the phalanges without a capsule, for context. <b>Red</b> dots: the contacts, with a 10 mm "
+       "tick along the surface normal; hollow: behind the object. Viewpoint: world z up; of the 16 views from azimuths "
+       "0, 45, ..., 315&deg; at elevations 20&deg; and 50&deg;, the one that shows the most of the hand and of where it "
+       "touches (capsule points the object does not hide, and contacts that neither the object nor a finger hides).</p>\n"
+       "<div class=\"pictures\">\n";
+  for (const std::string& object : d.objects) {
+    o << "<figure data-object=\"" << esc(object) << "\">";
+    const Record* r = representative_grasp(run, object);
+    const auto model = in.models.find(object);
+    std::optional<sim::GraspSnapshot> snap;
+    if (r && model != in.models.end() && model->second && in.rig) snap = record_snapshot(*r, *in.rig, *model->second);
+    const bool standin = std::find(run.standin_objects.begin(), run.standin_objects.end(), object) != run.standin_objects.end();
+    if (!snap) {
+      o << "<figcaption><b>" << esc(object) << "</b><br>no picture: "
+        << (!r ? "no record has the hand at the grasp tick" : "its model or the hand's rig is not known") << "</figcaption>";
+    } else {
+      const sim::View view = sim::readable_view(*snap);
+      int blocked = 0;
+      for (const auto& c : snap->capsules) blocked += c.blocked;
+      int hits = 0;
+      grasp_nd_abs_mean(*r, &hits);
+      o << sim::render_view_svg(*snap, view) << "<figcaption><b>" << esc(object) << "</b>" << (standin ? " (stand-in)" : "")
+        << "<br>" << esc(mode_name(r->mode)) << ", " << esc(r->group) << " participant " << r->participant << ", "
+        << (r->held_after_lift ? "held" : "grasped, not held") << "; " << fmt(r->time_to_grasp_s) << " s; HandError "
+        << (hits ? fmt(r->grasp_tick_hand_error_mm) + " mm" : std::string(kNoData)) << "<br>" << r->contacts.size()
+        << " contact(s), " << blocked << " of " << snap->capsules.size() << " capsules blocked<br>view from " << esc(view.name)
+        << "</figcaption>";
+    }
+    o << "</figure>\n";
+  }
+  o << "</div>\n";
+  return o.str();
+}
+
 // Overall per mode and group: the discrete-vs-precise comparison at a glance, then the worst
 // objects and how our numbers compare with the paper's.
 std::string overall_section(const ExperimentRun& run, const PageData& d) {
@@ -370,7 +536,7 @@ std::string overall_section(const ExperimentRun& run, const PageData& d) {
            << "</td><td>" << mean_sd(a.hand_error) << "</td></tr>\n";
     }
   body << "</table>\n";
-  return body.str() + worst_objects_paragraph(run) + unit_caveat(run);
+  return body.str() + mode_times_section(run, d) + worst_objects_paragraph(run) + unit_caveat(run);
 }
 
 // Charts (1) to (3): one column per mode, so discrete and precise sit side by side.
@@ -455,12 +621,24 @@ std::string paper_section(const std::vector<PaperRow>& paper, const PageData& d)
 
 }  // namespace
 
+const Record* representative_grasp(const ExperimentRun& run, const std::string& object) {
+  auto rank = [](const std::string& value, const char* first) { return value == first ? 0 : 1; };
+  auto key = [&](const Record& r) {
+    return std::make_tuple(!r.held_after_lift, rank(r.mode, "precise"), rank(r.group, "experienced"), r.participant, r.trial);
+  };
+  const Record* best = nullptr;
+  for (const Record& r : run.records)
+    if (r.object == object && r.grasped && !r.grasp_tick_hand.empty() && (!best || key(r) < key(*best))) best = &r;
+  return best;
+}
+
 std::string html_report(const ExperimentRun& run, const std::vector<PaperRow>& paper,
-                        const QuestionnaireSummary* questionnaire) {
+                        const QuestionnaireSummary* questionnaire, const GraspPictureInputs* pictures) {
   const PageData d = page_data(run, paper);
   std::string body = "<h1>telegrasp: the paper's grasping experiment (" + esc(run.protocol) + ")</h1>\n";
   body += run_section(run, d);
   body += overall_section(run, d);
+  if (pictures) body += pictures_section(run, d, *pictures);
   body += mode_charts_section(d);
   body += paper_section(paper, d);
   if (questionnaire) body += questionnaire_section(*questionnaire);

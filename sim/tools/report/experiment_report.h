@@ -1,24 +1,30 @@
-// Reports of a protocol run (the paper's experiment, GRASPING.md section 6): aggregates per mode,
-// operator group and object as JSON; the per-grasp and per-object CSV tables; and one
-// self-contained HTML page (inline CSS and SVG, nothing fetched) with the paper's bar charts,
-// the paper's published per-object numbers beside ours, and the questionnaire's scores.
+// Reports of a protocol run (the paper's experiment, ../shared/docs/GRASPING.md section 6):
+// aggregates per mode, operator group and object as JSON; the per-grasp and per-object CSV
+// tables; and one self-contained HTML page (inline CSS and SVG, nothing fetched) with a picture of
+// one grasp per object, the paper's bar charts, the paper's published per-object numbers beside
+// ours, and the questionnaire's scores.
 //
 // Which numbers: every error metric here is taken at the grasp tick (the moment the paper measures
 // "for each grasping", and what a GraspEvent carries), i.e. Record::grasp_tick_capsules and
 // Record::grasp_tick_hand_error_mm. A grasp's |ND| is the mean |ND| over its capsules that hit;
 // per object and group, "nd_abs_mean_mm" is the mean of those per-grasp values (every grasp weighs
 // the same, as each of the paper's grasps gives one error), and the charts plot that. The pooled
-// mean over all hit capsules is in the JSON too ("nd_abs_pooled_mean_mm"). Times are the mean over
-// grasped trials of spawn-to-grasp seconds; sd is the sample sd (n - 1), null/empty for n < 2.
+// mean over all hit capsules is in the JSON too ("nd_abs_pooled_mean_mm"). HandError, like |ND|,
+// exists only for a grasp with a capsule that hit (a grasp without one has no value, not zero).
+// Times are the mean over grasped trials of spawn-to-grasp seconds; sd is the sample sd (n - 1),
+// null/empty for n < 2. Undefined values are null in JSON, empty in CSV, "no data" in HTML.
 #pragma once
 
 #include "grasp_report.h"
 #include "questionnaire.h"
+#include "telegrasp/sim/hand_rig.h"
+#include "telegrasp/sim/object_model.h"
 
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -66,13 +72,29 @@ nlohmann::json aggregate_json(const ExperimentRun& run);
 /// Throws std::runtime_error naming the file if it cannot be written.
 std::string write_csv(const ExperimentRun& run, const std::string& path);
 
+/// What the report draws the grasps with: the hand's rig and the models the run loaded, by name.
+struct GraspPictureInputs {
+  std::shared_ptr<const sim::HandRig> rig;
+  std::map<std::string, sim::ObjectModelPtr> models;
+};
+
+/// The record whose grasp the report draws for `object`: among the records with the hand at the
+/// grasp tick (Record::grasp_tick_hand), held after the lift before merely grasped, precise mode
+/// before the others, experienced before the other groups, then the lowest participant and trial;
+/// null when no record has the hand.
+const Record* representative_grasp(const ExperimentRun& run, const std::string& object);
+
 /// The full report as one HTML page. `paper` may be empty (no paper bars); `questionnaire` may be
-/// null (no questionnaire section). Every bar is an SVG
+/// null (no questionnaire section); `pictures` may be null (no pictures section), else one
+/// picture per object (see representative_grasp), drawn by grasp_svg.h in its readable view.
+/// Every bar is an SVG
 /// `<rect class="bar" data-chart=".." data-mode=".." data-group=".." data-object=".." data-value="..">`
 /// (data-mode "paper" for the paper's bars; data-group "all" for both groups together; data-value
-/// empty when the value is undefined, e.g. no grasp succeeded).
+/// empty when the value is undefined, e.g. no grasp succeeded: then the bar is a hatched slot of
+/// the plot's height marked "no data"). A series with no trials of an object (or a paper without
+/// the object) gets a hatched `<rect class="nodata">` slot instead of a bar.
 std::string html_report(const ExperimentRun& run, const std::vector<PaperRow>& paper,
-                        const QuestionnaireSummary* questionnaire);
+                        const QuestionnaireSummary* questionnaire, const GraspPictureInputs* pictures = nullptr);
 
 /// A page with only the questionnaire section (telegrasp-eval questionnaire --report).
 std::string questionnaire_html_report(const QuestionnaireSummary& questionnaire);

@@ -8,7 +8,7 @@ namespace telegrasp::report {
 
 using nlohmann::json;
 
-json capsule_json(const std::vector<CapsuleRecord>& capsules) {
+json capsule_json(const std::vector<CapsuleMetricRecord>& capsules) {
   json out = json::array();
   for (const auto& c : capsules)
     out.push_back({{"phalanx", c.phalanx}, {"hit", c.hit}, {"blocked", c.blocked},
@@ -26,8 +26,8 @@ double percentile(std::vector<double> v, double p) {
 }
 
 
-std::vector<CapsuleRecord> capsule_records(const sim::GraspMetrics& metrics, const sim::HandRig& rig) {
-  std::vector<CapsuleRecord> out;
+std::vector<CapsuleMetricRecord> capsule_records(const sim::GraspMetrics& metrics, const sim::HandRig& rig) {
+  std::vector<CapsuleMetricRecord> out;
   for (const sim::CapsuleMetric& m : metrics.capsules)
     out.push_back({rig.phalanges()[m.phalanx.value].name, m.hit, m.blocked, 1000 * m.nd, 1000 * m.signed_distance});
   return out;
@@ -107,12 +107,28 @@ json record_json(const Record& r) {
   if (!r.group.empty()) {
     auto vec = [](const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); };
     json contacts = json::array();
-    for (const ContactRecord& c : r.contacts)
-      contacts.push_back({{"phalanx", c.phalanx}, {"p_world", vec(c.p_world)}, {"n_world", vec(c.n_world)},
-                          {"p_object", vec(c.p_object)}, {"n_object", vec(c.n_object)}});
+    for (const ContactPointRecord& c : r.contacts)
+      contacts.push_back({{"phalanx", c.phalanx}, {"p_WorldContact_m", vec(c.p_WorldContact)}, {"n_World", vec(c.n_World)},
+                          {"p_ObjectContact_m", vec(c.p_ObjectContact)}, {"n_Object", vec(c.n_Object)}});
     out["group"] = r.group;
     out["participant"] = r.participant;
     out["contacts"] = std::move(contacts);
+    if (!r.grasp_tick_hand.empty()) {
+      // Rounded to 1 um and 1e-6: a picture needs no more, and 600 records stay small.
+      auto round6 = [](double v) { return std::round(v * 1e6) / 1e6 + 0.0; };  // + 0.0: no "-0.0"
+      auto pose = [&](const Eigen::Isometry3d& X) {
+        const Eigen::Quaterniond q(X.linear());
+        return json{{"p", json::array({round6(X.translation().x()), round6(X.translation().y()), round6(X.translation().z())})},
+                    {"q_wxyz", json::array({round6(q.w()), round6(q.x()), round6(q.y()), round6(q.z())})}};
+      };
+      json frames = json::array();
+      for (const HandFrameRecord& f : r.grasp_tick_hand) {
+        json frame = pose(f.X_ObjectFrame);
+        frame["frame"] = f.frame;
+        frames.push_back(std::move(frame));
+      }
+      out["grasp_tick_hand"] = {{"X_WorldObject", pose(r.grasp_tick_X_WorldObject)}, {"frames", std::move(frames)}};
+    }
   }
   return out;
 }
@@ -132,7 +148,7 @@ Record record_from_json(const json& j) {
     r.grasp_tick_hand_error_mm = j.at("grasp_tick").at("hand_error_mm").get<double>();
   }
   auto capsules = [](const json& arr) {
-    std::vector<CapsuleRecord> out;
+    std::vector<CapsuleMetricRecord> out;
     for (const json& c : arr)
       out.push_back({c.at("phalanx").get<std::string>(), c.at("hit").get<bool>(), c.at("blocked").get<bool>(),
                      c.at("nd_mm").is_null() ? 0.0 : c.at("nd_mm").get<double>(), c.at("signed_distance_mm").get<double>()});
@@ -145,8 +161,21 @@ Record record_from_json(const json& j) {
   r.participant = j.at("participant").get<int>();
   auto vec = [](const json& v) { return Eigen::Vector3d(v.at(0).get<double>(), v.at(1).get<double>(), v.at(2).get<double>()); };
   for (const json& c : j.at("contacts"))
-    r.contacts.push_back({c.at("phalanx").get<std::string>(), vec(c.at("p_world")), vec(c.at("n_world")), vec(c.at("p_object")),
-                          vec(c.at("n_object"))});
+    r.contacts.push_back({c.at("phalanx").get<std::string>(), vec(c.at("p_WorldContact_m")), vec(c.at("n_World")), vec(c.at("p_ObjectContact_m")),
+                          vec(c.at("n_Object"))});
+  if (!j.contains("grasp_tick_hand")) return r;
+  auto pose = [&](const json& p) {
+    const json& q = p.at("q_wxyz");
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.linear() = Eigen::Quaterniond(q.at(0).get<double>(), q.at(1).get<double>(), q.at(2).get<double>(), q.at(3).get<double>())
+                     .normalized()
+                     .toRotationMatrix();
+    X.translation() = vec(p.at("p"));
+    return X;
+  };
+  const json& hand = j.at("grasp_tick_hand");
+  r.grasp_tick_X_WorldObject = pose(hand.at("X_WorldObject"));
+  for (const json& f : hand.at("frames")) r.grasp_tick_hand.push_back({f.at("frame").get<std::string>(), pose(f)});
   return r;
 }
 

@@ -13,17 +13,25 @@
 
 namespace telegrasp::report {
 
-/// One capsule's metrics, in millimetres.
-struct CapsuleRecord {
+/// One capsule's metrics as a report writes them: sim::CapsuleMetric (client::CapsuleMetric over
+/// DDS) with the phalanx's rig name, in millimetres.
+struct CapsuleMetricRecord {
   std::string phalanx;
   bool hit = false, blocked = false;
   double nd_mm = 0, signed_distance_mm = 0;
 };
 
-/// A contact of a grasp, in world and object coordinates (m; unit normals).
-struct ContactRecord {
+/// A contact of a grasp as a report writes it: sim::Contact (client::ContactPoint over DDS) with
+/// the phalanx's rig name; in world and object coordinates (m; unit normals).
+struct ContactPointRecord {
   std::string phalanx;  ///< "palm" for the palm.
-  Eigen::Vector3d p_world{0, 0, 0}, n_world{0, 0, 0}, p_object{0, 0, 0}, n_object{0, 0, 0};
+  Eigen::Vector3d p_WorldContact{0, 0, 0}, n_World{0, 0, 0}, p_ObjectContact{0, 0, 0}, n_Object{0, 0, 0};
+};
+
+/// A frame of the hand ("palm" or a rig phalanx) in the grasped object's frame.
+struct HandFrameRecord {
+  std::string frame;  ///< "palm" or the phalanx's rig name.
+  Eigen::Isometry3d X_ObjectFrame = Eigen::Isometry3d::Identity();
 };
 
 /// One grasp trial.
@@ -35,20 +43,24 @@ struct Record {
   bool grasped = false, held_after_lift = false;
   double time_to_grasp_s = 0;
   double hand_error_mm = 0;               ///< The settled hand while held (end of the hold), else the grasp tick's.
-  std::vector<CapsuleRecord> capsules;
+  std::vector<CapsuleMetricRecord> capsules;
   double grasp_tick_hand_error_mm = 0;    ///< The tick the grasp rule turned true.
-  std::vector<CapsuleRecord> grasp_tick_capsules;
+  std::vector<CapsuleMetricRecord> grasp_tick_capsules;
   // Protocol runs (telegrasp-eval --protocol) only; written when `group` is not empty.
   std::string group;                      ///< Operator group, e.g. "experienced".
   int participant = 0;                    ///< 1-based, unique in a run.
-  std::vector<ContactRecord> contacts;    ///< At the grasp tick.
+  std::vector<ContactPointRecord> contacts;    ///< At the grasp tick.
+  /// The hand at the grasp tick (palm, then every phalanx in rig order) in the object's frame,
+  /// from the server's HandSkeleton of that tick; empty when unknown. Written when not empty.
+  std::vector<HandFrameRecord> grasp_tick_hand;
+  Eigen::Isometry3d grasp_tick_X_WorldObject = Eigen::Isometry3d::Identity();  ///< With grasp_tick_hand.
 };
 
 /// The capsule metrics of a grasp, named by the rig's phalanges, in mm.
-std::vector<CapsuleRecord> capsule_records(const sim::GraspMetrics& metrics, const sim::HandRig& rig);
+std::vector<CapsuleMetricRecord> capsule_records(const sim::GraspMetrics& metrics, const sim::HandRig& rig);
 
 /// The capsules as a JSON array of {"phalanx","hit","blocked","nd_mm" (null without hit),"signed_distance_mm"}.
-nlohmann::json capsule_json(const std::vector<CapsuleRecord>& capsules);
+nlohmann::json capsule_json(const std::vector<CapsuleMetricRecord>& capsules);
 
 /// Success counts and metric statistics over `records` (keys as in telegrasp-eval's JSON summary).
 nlohmann::json summarize(const std::vector<const Record*>& records);
@@ -72,8 +84,9 @@ void print_object_table(const std::vector<ObjectRows>& objects);
 
 /// One grasp record as JSON: {"object","trial","mode","speed_scale","grasped","held_after_lift",
 /// "attempts","time_to_grasp_s","hand_error_mm","capsules":[...],"grasp_tick":{...}}, plus
-/// "group","participant","contacts":[{"phalanx","p_world","n_world","p_object","n_object"}] for
-/// protocol runs.
+/// "group","participant","contacts":[{"phalanx","p_WorldContact_m","n_World","p_ObjectContact_m","n_Object"}] for
+/// protocol runs, and "grasp_tick_hand":{"X_WorldObject":{"p","q_wxyz"},"frames":[{"frame","p","q_wxyz"}]}
+/// (X_ObjectFrame; m, unit quaternion w,x,y,z; rounded to 1e-6) when a protocol record has it.
 nlohmann::json record_json(const Record& record);
 
 /// The inverse of record_json (protocol runs read their participants' records back with it).

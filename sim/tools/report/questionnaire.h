@@ -1,6 +1,6 @@
-// The paper's questionnaire (Oprea et al. 2019, Table 1; GRASPING.md section 6): 14 answers on a
-// 7-point Likert scale (-3..3) per participant, scored into Motor Control, Finger Movement
-// Realism, Interaction Realism and the Embodiment score, per participant and per group.
+// The paper's questionnaire (Oprea et al. 2019, Table 1; ../shared/docs/GRASPING.md section 6):
+// 14 answers on a 7-point Likert scale (-3..3) per participant, scored into Motor Control, Finger
+// Movement Realism, Interaction Realism and the Embodiment score, per participant and per group.
 #pragma once
 
 #include <nlohmann/json.hpp>

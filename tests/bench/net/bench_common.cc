@@ -1,5 +1,6 @@
 #include "bench_common.h"
 
+#include "cli.h"
 #include "telegrasp/idl/profiles.h"
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
@@ -11,7 +12,6 @@
 #include <fastrtps/xmlparser/XMLProfileManager.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -20,6 +20,7 @@
 #include <fcntl.h>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <numbers>
 #include <set>
 #include <sstream>
@@ -37,37 +38,9 @@ std::int64_t now_ns() {
 
 // ---------------------------------------------------------------------------------------------
 
-bool ArgReader::next() {
-  if (++i_ >= argc_) return false;
-  flag_ = argv_[i_];
-  return true;
-}
-
-std::string ArgReader::value() {
-  if (i_ + 1 >= argc_) throw UsageError(flag_ + " needs a value");
-  return argv_[++i_];
-}
-
-long long ArgReader::integer(long long lo, long long hi) {
-  const std::string v = value();
-  char* end = nullptr;
-  errno = 0;
-  const long long x = std::strtoll(v.c_str(), &end, 10);
-  if (v.empty() || *end != '\0' || errno != 0 || x < lo || x > hi)
-    throw UsageError(flag_ + " expects an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
-  return x;
-}
-
-double ArgReader::number(double lo, double hi) {
-  const std::string v = value();
-  char* end = nullptr;
-  const double x = std::strtod(v.c_str(), &end);
-  if (v.empty() || *end != '\0' || !std::isfinite(x) || x < lo || x > hi) {
-    std::ostringstream s;
-    s << flag_ << " expects a number in [" << lo << ", " << hi << "], got '" << v << "'";
-    throw UsageError(s.str());
-  }
-  return x;
+void warn_deprecated_hz(const char* tool) {
+  std::cerr << tool << ": deprecated: --hz is now --sample-hz (the controller sample rate per hand; "
+            << "--hz goes in the next release)\n";
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -217,6 +190,7 @@ std::vector<std::string> server_argv(const ServerOptions& o) {
   std::vector<std::string> a{o.path, "--domain", std::to_string(o.domain), "--profile", o.profile, "--empty-scene"};
   if (!o.profiles_file.empty()) a.insert(a.end(), {"--profiles", o.profiles_file});
   if (!o.late_latch) a.push_back("--no-late-latch");
+  if (o.tick_hz > 0) a.insert(a.end(), {"--tick-hz", cli::format_number(o.tick_hz)});
   a.insert(a.end(), o.extra.begin(), o.extra.end());
   return a;
 }

@@ -1,9 +1,10 @@
 // Shared pieces of the network benchmarks (telegrasp-bench-latency, telegrasp-bench-scale):
-// flag parsing, the server child process, profile loading (the entities are
+// the deprecated --hz flag, the server child process, profile loading (the entities are
 // idl::DdsParticipant's), ServerStatus collection, CPU time from /proc, and latency summaries.
 #pragma once
 
 #include "child_process.h"
+#include "cli.h"
 
 #include "telegrasp/idl/dds_participant.h"
 #include "telegrasp/idl/telegrasp.h"
@@ -34,29 +35,47 @@ using Clock = std::chrono::steady_clock;
 std::int64_t now_ns();
 
 // ---------------------------------------------------------------------------------------------
-// Command line.
+// Command line (the option loop is cli::for_each_option).
 
-/// A command-line mistake: main prints it with the program name and exits 2.
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
+/// The controller sample rate per hand was --hz until it became --sample-hz (the server's tick
+/// rate is --tick-hz everywhere): says so on stderr, naming `tool`. --hz goes in the next release.
+void warn_deprecated_hz(const char* tool);
+
+/// The options both network benchmarks take: the controller rate, the server they start, how they
+/// reach it and where the results go. Each benchmark's Options extends it.
+struct CommonOptions {
+  double sample_hz = 90;
+  double tick_hz = 0;  // 0: the server's default
+  std::string json;
+  std::string profile = "loopback";
+  std::string profiles_file;
+  int domain = -1;  // -1: lease one
+  std::string server;
+  std::vector<std::string> server_args;
+  std::string server_log;
+  bool late_latch = true;
 };
 
-/// Walks argv; `value()` takes the argument of the current flag or throws naming it.
-class ArgReader {
- public:
-  ArgReader(int argc, char** argv) : argc_(argc), argv_(argv) {}
-  bool next();                      ///< Advances to the next argument; false at the end.
-  const std::string& flag() const { return flag_; }
-  std::string value();              ///< The current flag's value; throws UsageError if missing.
-  long long integer(long long lo, long long hi);  ///< value() as an integer in [lo, hi].
-  double number(double lo, double hi);            ///< value() as a finite number in [lo, hi].
-
- private:
-  int argc_;
-  char** argv_;
-  int i_ = 0;
-  std::string flag_;
-};
+/// Takes flag `f` into `o` if it is one of CommonOptions' (--sample-hz, --hz, --tick-hz, --json,
+/// --profile, --profiles, --domain, --server, --server-arg, --server-log, --no-late-latch);
+/// `value()` gives its value, `usage_error` rejects a bad one. False for any other flag.
+template <class Value>
+bool parse_common_option(const char* tool, const std::string& f, const Value& value, CommonOptions& o,
+                         void (*usage_error)(const std::string&)) {
+  if (f == "--sample-hz") o.sample_hz = cli::parse_number(f, value(), 1, 1000, usage_error);
+  else if (f == "--hz") warn_deprecated_hz(tool), o.sample_hz = cli::parse_number(f, value(), 1, 1000, usage_error);
+  else if (f == "--tick-hz") o.tick_hz = cli::parse_number(f, value(), 1, 2000, usage_error);
+  else if (f == "--json") o.json = value();
+  else if (f == "--profile") o.profile = cli::parse_profile(f, value(), usage_error);
+  else if (f == "--profiles") o.profiles_file = value();
+  else if (f == "--domain") o.domain = cli::parse_domain(f, value(), usage_error);
+  else if (f == "--server") o.server = value();
+  else if (f == "--server-arg") o.server_args.push_back(value());
+  else if (f == "--server-log") o.server_log = value();
+  else if (f == "--no-late-latch") o.late_latch = false;
+  else return false;
+  return true;
+}
 
 // ---------------------------------------------------------------------------------------------
 // Signals and child processes.
@@ -129,6 +148,7 @@ struct ServerOptions {
   std::string profile = "loopback";
   std::string profiles_file;        ///< "" = the server's default.
   bool late_latch = true;
+  double tick_hz = 0;               ///< The server's --tick-hz; 0 = its default.
   std::vector<std::string> extra;   ///< More arguments (--server-arg).
   std::string log_path;
 };

@@ -2,6 +2,7 @@
 // published -> first HandSkeleton reflecting it), and, in the same run, the raw Fast DDS round
 // trip of an echo process with the same transport and QoS.
 #include "bench_common.h"
+#include "cli.h"
 #include "test_domain.h"
 
 #include "telegrasp/idl/telegraspPubSubTypes.h"
@@ -28,6 +29,7 @@ namespace {
 
 namespace msg = telegrasp::msg;
 namespace idl = telegrasp::idl;
+namespace cli = telegrasp::cli;
 using namespace telegrasp::bench;
 namespace dds = eprosima::fastdds::dds;  // also a global namespace dds in the Fast DDS headers
 
@@ -38,7 +40,7 @@ Starts telegrasp-server (--empty-scene, private domain) as a child process and m
                   --echo-role) on topic bench/Ping and back on bench/Pong, with the ControllerState
                   writer/reader and HandSkeleton writer/reader QoS profiles: the transport alone;
   end to end      N client participants ("lat-<i>", 2 hands each, smooth motion in the air above
-                  the table, oscillating trigger) publish ControllerState at --hz; one observer
+                  the table, oscillating trigger) publish ControllerState at --sample-hz; one observer
                   participant takes HandSkeleton. Latency of sample s = first skeleton of that hand
                   with input_sequence >= s minus the publication of s (each sample counted once);
                   e2e_tick_us counts only tick skeletons (late_latched false).
@@ -50,7 +52,9 @@ The first --warmup seconds of each phase are excluded. A table goes to stdout, p
 
 Options:
   --clients N         client participants, 2 hands each (default 16)
-  --hz HZ             controller sample rate per hand (default 90)
+  --sample-hz HZ      controller sample rate per hand (default 90; --hz, its old name, still works
+                      for one release)
+  --tick-hz HZ        the server's tick rate (default: the server's, 90)
   --seconds S         measured seconds per phase, after the warm-up (default 10)
   --warmup S          warm-up seconds per phase, not measured (default 1)
   --json FILE         also write the results as JSON
@@ -66,52 +70,38 @@ Options:
                       independent clients; burst: all clients at the same instant
   -h, --help          this text
 
-Exit status: 0 done, 1 the server or the echo could not be started or never answered, 2 bad usage.
+Exit status: 0 done, 1 a runtime failure (the server or the echo could not be started or never
+answered, an output could not be written), 2 a usage error (a bad or missing option or value).
 )";
 
-struct Options {
+struct Options : CommonOptions {
   int clients = 16;
-  double hz = 90;
   double seconds = 10;
   double warmup = 1;
-  std::string json;
-  std::string profile = "loopback";
-  std::string profiles_file;
-  int domain = -1;  // -1: lease one
-  std::string server;
-  std::vector<std::string> server_args;
-  std::string server_log;
-  bool late_latch = true;
   bool spread = true;
 };
 
+constexpr const char* kTool = "telegrasp-bench-latency";
+
+[[noreturn]] void usage_error(const std::string& what) { cli::usage_exit(kTool, what); }
+
 Options parse(int argc, char** argv) {
   Options o;
-  ArgReader a(argc, argv);
-  while (a.next()) {
-    const std::string& f = a.flag();
-    if (f == "-h" || f == "--help") {
-      std::cout << kUsage;
-      std::exit(0);
-    } else if (f == "--clients") o.clients = static_cast<int>(a.integer(1, 1024));
-    else if (f == "--hz") o.hz = a.number(1, 1000);
-    else if (f == "--seconds") o.seconds = a.number(0.1, 86400);
-    else if (f == "--warmup") o.warmup = a.number(0, 3600);
-    else if (f == "--json") o.json = a.value();
-    else if (f == "--profile") o.profile = a.value();
-    else if (f == "--profiles") o.profiles_file = a.value();
-    else if (f == "--domain") o.domain = static_cast<int>(a.integer(0, 232));
-    else if (f == "--server") o.server = a.value();
-    else if (f == "--server-arg") o.server_args.push_back(a.value());
-    else if (f == "--server-log") o.server_log = a.value();
-    else if (f == "--no-late-latch") o.late_latch = false;
+  cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& f, const auto& value) {
+    if (parse_common_option(kTool, f, value, o, usage_error)) return true;
+    if (f == "--clients") o.clients = static_cast<int>(cli::parse_whole(f, value(), 1, 1024, usage_error));
+    else if (f == "--seconds") o.seconds = cli::parse_number(f, value(), 0.1, 86400, usage_error);
+    else if (f == "--warmup") o.warmup = cli::parse_number(f, value(), 0, 3600, usage_error);
     else if (f == "--phase") {
-      const std::string p = a.value();
+      const std::string p = value();
       if (p == "spread") o.spread = true;
       else if (p == "burst") o.spread = false;
-      else throw UsageError("--phase expects spread or burst, got '" + p + "'");
-    } else throw UsageError("unknown option '" + f + "'");
-  }
+      else usage_error("--phase expects spread or burst, got '" + p + "'");
+    } else {
+      return false;
+    }
+    return true;
+  });
   if (o.server.empty()) o.server = default_server_path();
   return o;
 }
@@ -132,15 +122,18 @@ class EchoListener : public dds::DataReaderListener {
   msg::ControllerState sample_;
 };
 
+// The echo role's command line: `self_exe() --echo-role --domain D --profile P [--profiles F]`.
 int echo_main(int argc, char** argv) {
   int domain = 120;
   std::string profile = "loopback", profiles_file;
-  ArgReader a(argc, argv);
-  while (a.next()) {
-    if (a.flag() == "--domain") domain = static_cast<int>(a.integer(0, 232));
-    else if (a.flag() == "--profile") profile = a.value();
-    else if (a.flag() == "--profiles") profiles_file = a.value();
-  }
+  cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& f, const auto& value) {
+    if (f == "--echo-role") return true;
+    if (f == "--domain") domain = cli::parse_domain(f, value(), usage_error);
+    else if (f == "--profile") profile = cli::parse_profile(f, value(), usage_error);
+    else if (f == "--profiles") profiles_file = value();
+    else return false;
+    return true;
+  });
   install_signal_handlers();
   load_profiles(profiles_file, profile);
   EchoListener listener;
@@ -390,50 +383,29 @@ nlohmann::ordered_json server_window(const StatusCollector& collector, std::int6
   return j;
 }
 
-int run(const Options& o) {
-  install_signal_handlers();
-  // Start-up and matching waits, two phases with their stragglers, generously.
-  const Watchdog watchdog(120 + 3 * (o.warmup + o.seconds + 2) + 0.2 * o.clients);
-  load_profiles(o.profiles_file, o.profile);
-  const int streams = o.clients * 2;
-  if (streams > 256)
-    std::cerr << "telegrasp-bench-latency: note: " << streams
-              << " hands exceed the server's default max_hands (256); pass --server-arg --config --server-arg FILE with max_hands\n";
-  std::string loadavg;
-  std::getline(std::ifstream("/proc/loadavg"), loadavg);
-  const std::string tmp = std::filesystem::temp_directory_path() / ("telegrasp-bench-latency-" + std::to_string(::getpid()));
-  const bool own_server_log = o.server_log.empty();
+// What both phases share: the server and the echo process, the send tables and the listeners
+// that resolve each sample, and the observer participant. Listeners and tables outlive the
+// participants that call them (declared first).
+struct Bench {
+  explicit Bench(const Options& opt)
+      : o(opt),
+        streams(opt.clients * 2),
+        samples_per_stream(static_cast<std::size_t>(std::ceil((opt.warmup + opt.seconds) * opt.sample_hz)) + 4),
+        raw_table(streams, samples_per_stream),
+        e2e_table(streams, samples_per_stream),
+        raw(raw_table, streams),
+        e2e_any(e2e_table, streams),
+        e2e_tick(e2e_table, streams),
+        pong_listener(raw, opt.clients),
+        skeleton_listener(e2e_any, e2e_tick, opt.clients) {}
 
-  ServerOptions so;
-  so.path = o.server;
-  so.domain = o.domain;
-  so.profile = o.profile;
-  so.profiles_file = o.profiles_file;
-  so.late_latch = o.late_latch;
-  so.extra = o.server_args;
-  so.log_path = own_server_log ? tmp + "-server.log" : o.server_log;
-  const std::string echo_log = tmp + "-echo.log";
-
-  // Listeners and tables outlive the participants that call them (declared first).
-  const auto samples_per_stream = static_cast<std::size_t>(std::ceil((o.warmup + o.seconds) * o.hz)) + 4;
-  SendTable raw_table(streams, samples_per_stream), e2e_table(streams, samples_per_stream);
-  Resolver raw(raw_table, streams), e2e_any(e2e_table, streams), e2e_tick(e2e_table, streams);
-  StatusCollector status;
-  PongListener pong_listener(raw, o.clients);
-  SkeletonListener skeleton_listener(e2e_any, e2e_tick, o.clients);
-  ChildProcess server, echo;
-
-  idl::DdsParticipant main_participant(o.domain, o.profile, o.profiles_file);
-  main_participant.reader<msg::ServerStatusPubSubType>(idl::kServerStatusTopic, &status);
-  std::cerr << "telegrasp-bench-latency: starting " << join_command(server_argv(so)) << " (log " << so.log_path << ")\n";
-  start_server(server, so, status, 20);
-  std::cerr << "telegrasp-bench-latency: server pid " << server.pid() << " answered\n";
-
-  auto window = [&](Clock::time_point t0) {
+  // The measured window of a phase that starts publishing at t0: after the warm-up, for --seconds.
+  std::pair<std::int64_t, std::int64_t> window(Clock::time_point t0) const {
     const std::int64_t t0_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(t0.time_since_epoch()).count();
-    return std::pair{t0_ns + static_cast<std::int64_t>(o.warmup * 1e9), t0_ns + static_cast<std::int64_t>((o.warmup + o.seconds) * 1e9)};
-  };
-  auto finish = [&](Resolver& r, const PublishStats& ps, std::int64_t cpu0, double wall_s) {
+    return {t0_ns + static_cast<std::int64_t>(o.warmup * 1e9), t0_ns + static_cast<std::int64_t>((o.warmup + o.seconds) * 1e9)};
+  }
+
+  static PhaseResult finish(Resolver& r, const PublishStats& ps, std::int64_t cpu0, double wall_s) {
     PhaseResult p;
     p.latency = summarize(r.latencies());
     p.lost = r.unresolved_in_window();
@@ -443,142 +415,205 @@ int run(const Options& o) {
     p.lateness = summarize(ps.lateness_us);
     p.bench_cpu_pct = static_cast<double>(self_cpu_us() - cpu0) / (wall_s * 1e6) * 100;
     return p;
-  };
-
-  // (a) Raw round trip through the echo process.
-  PhaseResult raw_result;
-  {
-    const std::vector<std::string> echo_argv{self_exe(), "--echo-role", "--domain", std::to_string(o.domain), "--profile", o.profile,
-                                             "--profiles", o.profiles_file};
-    echo.start(echo_argv, echo_log);
-    dds::DataWriter* ping = main_participant.writer<msg::ControllerStatePubSubType>("bench/Ping", idl::kControllerStateTopic);
-    dds::DataReader* pong = main_participant.reader<msg::ControllerStatePubSubType>("bench/Pong", &pong_listener, idl::kHandSkeletonTopic);
-    if (!wait_until([&] { return (matched_readers(ping) > 0 && matched_writers(pong) > 0) || !echo.running(); }, 15) || !echo.running())
-      throw std::runtime_error("the echo process (" + join_command(echo_argv) + ") did not match bench/Ping and bench/Pong within 15 s" +
-                               (echo.running() ? std::string() : " (it exited: " + echo.exit_description() + ")") + "\n  log " +
-                               echo_log + ":\n" + echo.log_tail());
-    std::cerr << "telegrasp-bench-latency: raw round trip: " << streams << " streams at " << o.hz << " Hz for " << o.warmup << " + "
-              << o.seconds << " s\n";
-    const auto t0 = Clock::now() + std::chrono::milliseconds(100);
-    const auto [from, until] = window(t0);
-    raw.set_window(from, until);
-    const std::int64_t cpu0 = self_cpu_us(), busy0 = machine_busy_us(), server0 = process_cpu_us(server.pid()),
-                       echo0 = process_cpu_us(echo.pid());
-    const PublishStats ps = publish(std::vector<dds::DataWriter*>(o.clients, ping), "ping-", raw_table, o.hz, o.spread, t0, o.warmup + o.seconds);
-    sleep_unless_stopped(0.5);  // stragglers
-    const double wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
-    raw_result = finish(raw, ps, cpu0, wall_s);
-    const double self_us = static_cast<double>(self_cpu_us() - cpu0), busy_us = static_cast<double>(machine_busy_us() - busy0),
-                 server_us = static_cast<double>(process_cpu_us(server.pid()) - server0),
-                 echo_us = static_cast<double>(process_cpu_us(echo.pid()) - echo0);
-    auto pct = [&](double us) { return std::round(us / (wall_s * 1e6) * 1000) / 10; };
-    raw_result.cpu = {{"server_cpu_pct", pct(server_us)},
-                      {"echo_process_cpu_pct", pct(echo_us)},
-                      {"bench_process_cpu_pct", pct(self_us)},
-                      {"other_processes_cpu_pct", pct(busy_us - self_us - server_us - echo_us)}};
-    echo.stop();
-    std::cerr << "telegrasp-bench-latency: echo stopped: " << echo.exit_description() << "\n";
   }
-  if (stop_requested()) throw std::runtime_error("interrupted");
 
-  // (b) End to end through the server.
-  PhaseResult e2e_result, tick_result;
-  nlohmann::ordered_json server_json;
-  {
-    dds::DataReader* skeletons =
-        main_participant.reader<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic, &skeleton_listener);
-    std::vector<std::unique_ptr<idl::DdsParticipant>> clients;
-    std::vector<dds::DataWriter*> writers;
-    for (int c = 0; c < o.clients; ++c) {
-      clients.push_back(std::make_unique<idl::DdsParticipant>(o.domain, o.profile, o.profiles_file));
-      writers.push_back(clients.back()->writer<msg::ControllerStatePubSubType>(idl::kControllerStateTopic));
-    }
-    const bool matched = wait_until(
-        [&] {
-          if (matched_writers(skeletons) == 0) return false;
-          for (auto* w : writers)
-            if (matched_readers(w) == 0) return false;
-          return true;
-        },
-        15);
-    if (!matched)
-      throw std::runtime_error("the " + std::to_string(o.clients) +
-                               " client participants and the observer did not all match the server within 15 s");
-    std::cerr << "telegrasp-bench-latency: end to end: " << o.clients << " clients x 2 hands at " << o.hz << " Hz for " << o.warmup
-              << " + " << o.seconds << " s, late latching " << (o.late_latch ? "on" : "off") << "\n";
-    const auto t0 = Clock::now() + std::chrono::milliseconds(100);
-    const auto [from, until] = window(t0);
-    e2e_any.set_window(from, until);
-    e2e_tick.set_window(from, until);
-    const auto before = status.latest();
-    const std::int64_t cpu0 = self_cpu_us();
-    const PublishStats ps = publish(writers, "lat-", e2e_table, o.hz, o.spread, t0, o.warmup + o.seconds);
-    const std::int64_t end_ns = now_ns();
-    sleep_unless_stopped(0.5);
-    const double wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
-    e2e_result = finish(e2e_any, ps, cpu0, wall_s);
-    tick_result = finish(e2e_tick, ps, cpu0, wall_s);
-    // The status that covers the end of the run arrives within a second.
-    status.wait_for(end_ns, 1.5);
-    server_json = server_window(status, from, end_ns + static_cast<std::int64_t>(1.2e9), before);
-    server_json["skeletons_late_latched"] = skeleton_listener.late_latched.load();
-    server_json["skeletons_tick"] = skeleton_listener.tick_skeletons.load();
+  void start_server(const std::string& tmp);
+  PhaseResult raw_phase(const std::string& echo_log);
+  void e2e_phase(PhaseResult& e2e_result, PhaseResult& tick_result, nlohmann::ordered_json& server_json);
+
+  const Options& o;
+  const int streams;
+  const std::size_t samples_per_stream;
+  SendTable raw_table, e2e_table;
+  Resolver raw, e2e_any, e2e_tick;
+  StatusCollector status;
+  PongListener pong_listener;
+  SkeletonListener skeleton_listener;
+  ChildProcess server, echo;
+  ServerOptions so;
+  std::optional<idl::DdsParticipant> main_participant;
+};
+
+void Bench::start_server(const std::string& tmp) {
+  so.path = o.server;
+  so.domain = o.domain;
+  so.profile = o.profile;
+  so.profiles_file = o.profiles_file;
+  so.late_latch = o.late_latch;
+  so.tick_hz = o.tick_hz;
+  so.extra = o.server_args;
+  so.log_path = o.server_log.empty() ? tmp + "-server.log" : o.server_log;
+  main_participant.emplace(o.domain, o.profile, o.profiles_file);
+  main_participant->reader<msg::ServerStatusPubSubType>(idl::kServerStatusTopic, &status);
+  std::cerr << "telegrasp-bench-latency: starting " << join_command(server_argv(so)) << " (log " << so.log_path << ")\n";
+  telegrasp::bench::start_server(server, so, status, 20);
+  std::cerr << "telegrasp-bench-latency: server pid " << server.pid() << " answered\n";
+}
+
+// (a) Raw round trip through the echo process.
+PhaseResult Bench::raw_phase(const std::string& echo_log) {
+  const std::vector<std::string> echo_argv{self_exe(), "--echo-role", "--domain", std::to_string(o.domain), "--profile", o.profile,
+                                           "--profiles", o.profiles_file};
+  echo.start(echo_argv, echo_log);
+  dds::DataWriter* ping = main_participant->writer<msg::ControllerStatePubSubType>("bench/Ping", idl::kControllerStateTopic);
+  dds::DataReader* pong = main_participant->reader<msg::ControllerStatePubSubType>("bench/Pong", &pong_listener, idl::kHandSkeletonTopic);
+  if (!wait_until([&] { return (matched_readers(ping) > 0 && matched_writers(pong) > 0) || !echo.running(); }, 15) || !echo.running())
+    throw std::runtime_error("the echo process (" + join_command(echo_argv) + ") did not match bench/Ping and bench/Pong within 15 s" +
+                             (echo.running() ? std::string() : " (it exited: " + echo.exit_description() + ")") + "\n  log " +
+                             echo_log + ":\n" + echo.log_tail());
+  std::cerr << "telegrasp-bench-latency: raw round trip: " << streams << " streams at " << o.sample_hz << " Hz for " << o.warmup << " + "
+            << o.seconds << " s\n";
+  const auto t0 = Clock::now() + std::chrono::milliseconds(100);
+  const auto [from, until] = window(t0);
+  raw.set_window(from, until);
+  const std::int64_t cpu0 = self_cpu_us(), busy0 = machine_busy_us(), server0 = process_cpu_us(server.pid()),
+                     echo0 = process_cpu_us(echo.pid());
+  const PublishStats ps = publish(std::vector<dds::DataWriter*>(o.clients, ping), "ping-", raw_table, o.sample_hz, o.spread, t0, o.warmup + o.seconds);
+  sleep_unless_stopped(0.5);  // stragglers
+  const double wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  PhaseResult result = finish(raw, ps, cpu0, wall_s);
+  const double self_us = static_cast<double>(self_cpu_us() - cpu0), busy_us = static_cast<double>(machine_busy_us() - busy0),
+               server_us = static_cast<double>(process_cpu_us(server.pid()) - server0),
+               echo_us = static_cast<double>(process_cpu_us(echo.pid()) - echo0);
+  auto pct = [&](double us) { return std::round(us / (wall_s * 1e6) * 1000) / 10; };
+  result.cpu = {{"server_cpu_pct", pct(server_us)},
+                {"echo_process_cpu_pct", pct(echo_us)},
+                {"bench_process_cpu_pct", pct(self_us)},
+                {"other_processes_cpu_pct", pct(busy_us - self_us - server_us - echo_us)}};
+  echo.stop();
+  std::cerr << "telegrasp-bench-latency: echo stopped: " << echo.exit_description() << "\n";
+  return result;
+}
+
+// (b) End to end through the server.
+void Bench::e2e_phase(PhaseResult& e2e_result, PhaseResult& tick_result, nlohmann::ordered_json& server_json) {
+  dds::DataReader* skeletons = main_participant->reader<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic, &skeleton_listener);
+  std::vector<std::unique_ptr<idl::DdsParticipant>> clients;
+  std::vector<dds::DataWriter*> writers;
+  for (int c = 0; c < o.clients; ++c) {
+    clients.push_back(std::make_unique<idl::DdsParticipant>(o.domain, o.profile, o.profiles_file));
+    writers.push_back(clients.back()->writer<msg::ControllerStatePubSubType>(idl::kControllerStateTopic));
   }
-  if (stop_requested()) throw std::runtime_error("interrupted");
-  server.stop();
-  const std::string server_exit = server.exit_description();
+  const bool matched = wait_until(
+      [&] {
+        if (matched_writers(skeletons) == 0) return false;
+        for (auto* w : writers)
+          if (matched_readers(w) == 0) return false;
+        return true;
+      },
+      15);
+  if (!matched)
+    throw std::runtime_error("the " + std::to_string(o.clients) +
+                             " client participants and the observer did not all match the server within 15 s");
+  std::cerr << "telegrasp-bench-latency: end to end: " << o.clients << " clients x 2 hands at " << o.sample_hz << " Hz for " << o.warmup
+            << " + " << o.seconds << " s, late latching " << (o.late_latch ? "on" : "off") << "\n";
+  const auto t0 = Clock::now() + std::chrono::milliseconds(100);
+  const auto [from, until] = window(t0);
+  e2e_any.set_window(from, until);
+  e2e_tick.set_window(from, until);
+  const auto before = status.latest();
+  const std::int64_t cpu0 = self_cpu_us();
+  const PublishStats ps = publish(writers, "lat-", e2e_table, o.sample_hz, o.spread, t0, o.warmup + o.seconds);
+  const std::int64_t end_ns = now_ns();
+  sleep_unless_stopped(0.5);
+  const double wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  e2e_result = finish(e2e_any, ps, cpu0, wall_s);
+  tick_result = finish(e2e_tick, ps, cpu0, wall_s);
+  // The status that covers the end of the run arrives within a second.
+  status.wait_for(end_ns, 1.5);
+  server_json = server_window(status, from, end_ns + static_cast<std::int64_t>(1.2e9), before);
+  server_json["skeletons_late_latched"] = skeleton_listener.late_latched.load();
+  server_json["skeletons_tick"] = skeleton_listener.tick_skeletons.load();
+}
 
-  std::cout << "telegrasp-bench-latency: " << o.clients << " clients x 2 hands at " << o.hz << " Hz, " << o.seconds << " s (+" << o.warmup
+// The results of both phases, for the table and the JSON.
+struct Results {
+  PhaseResult raw, e2e, tick;
+  nlohmann::ordered_json server;
+  std::string server_command, server_exit, loadavg;
+};
+
+void print_results(const Options& o, const Results& r) {
+  std::cout << "telegrasp-bench-latency: " << o.clients << " clients x 2 hands at " << o.sample_hz << " Hz, " << o.seconds << " s (+" << o.warmup
             << " s warm-up), profile " << o.profile << ", late latching " << (o.late_latch ? "on" : "off") << ", "
             << (o.spread ? "spread" : "burst") << " phases\n";
   std::cout << std::left << std::setw(28) << "latency (us)" << std::right << std::setw(8) << "samples" << std::setw(7) << "lost"
             << std::setw(9) << "p50" << std::setw(9) << "p90" << std::setw(9) << "p99" << std::setw(9) << "max" << std::setw(9) << "mean"
             << "\n";
-  print_row("raw round trip (echo)", raw_result.latency, raw_result.lost);
-  print_row("e2e, first skeleton", e2e_result.latency, e2e_result.lost);
-  print_row("e2e, first tick skeleton", tick_result.latency, tick_result.lost);
-  std::cout << "e2e samples reflected exactly " << e2e_result.exact << ", superseded " << e2e_result.superseded << "\n";
-  std::cout << "server over the e2e phase: " << server_json.dump() << "\n";
-  std::cout << "CPU over the raw phase (% of one core): " << raw_result.cpu.dump() << "\n";
-  std::cout << "publisher lateness (us) raw p99 " << std::setprecision(0) << raw_result.lateness.p99 << " max " << raw_result.lateness.max
-            << ", e2e p99 " << e2e_result.lateness.p99 << " max " << e2e_result.lateness.max << "; bench process CPU raw "
-            << std::setprecision(1) << raw_result.bench_cpu_pct << "%, e2e " << e2e_result.bench_cpu_pct << "%\n";
-  const double margin = e2e_result.latency.p99 - raw_result.latency.p99;
+  print_row("raw round trip (echo)", r.raw.latency, r.raw.lost);
+  print_row("e2e, first skeleton", r.e2e.latency, r.e2e.lost);
+  print_row("e2e, first tick skeleton", r.tick.latency, r.tick.lost);
+  std::cout << "e2e samples reflected exactly " << r.e2e.exact << ", superseded " << r.e2e.superseded << "\n";
+  std::cout << "server over the e2e phase: " << r.server.dump() << "\n";
+  std::cout << "CPU over the raw phase (% of one core): " << r.raw.cpu.dump() << "\n";
+  std::cout << "publisher lateness (us) raw p99 " << std::setprecision(0) << r.raw.lateness.p99 << " max " << r.raw.lateness.max
+            << ", e2e p99 " << r.e2e.lateness.p99 << " max " << r.e2e.lateness.max << "; bench process CPU raw "
+            << std::setprecision(1) << r.raw.bench_cpu_pct << "%, e2e " << r.e2e.bench_cpu_pct << "%\n";
+  const double margin = r.e2e.latency.p99 - r.raw.latency.p99;
   std::cout << "target e2e p99 <= raw p99 + 1000 us: " << (margin <= 1000 ? "met" : "NOT met") << " (e2e p99 - raw p99 = "
             << std::setprecision(0) << margin << " us)\n";
+}
 
-  if (!o.json.empty()) {
-    nlohmann::ordered_json j;
-    j["clients"] = o.clients;
-    j["hz"] = o.hz;
-    j["e2e_us"] = to_json(e2e_result.latency);
-    j["raw_rtt_us"] = to_json(raw_result.latency);
-    j["e2e_tick_us"] = to_json(tick_result.latency);
-    j["seconds"] = o.seconds;
-    j["warmup_s"] = o.warmup;
-    j["profile"] = o.profile;
-    j["late_latch"] = o.late_latch;
-    j["phase"] = o.spread ? "spread" : "burst";
-    j["echo"] = "separate process (this program re-executed with --echo-role); echoes from its DataReader listener";
-    j["samples"] = {{"raw_published", raw_result.published},
-                    {"raw_lost", raw_result.lost},
-                    {"e2e_published", e2e_result.published},
-                    {"e2e_lost", e2e_result.lost},
-                    {"e2e_reflected_exactly", e2e_result.exact},
-                    {"e2e_superseded", e2e_result.superseded},
-                    {"e2e_tick_lost", tick_result.lost}};
-    j["server"] = server_json;
-    j["raw_phase_cpu"] = raw_result.cpu;
-    j["publisher_lateness_us"] = {{"raw", to_json(raw_result.lateness)}, {"e2e", to_json(e2e_result.lateness)}};
-    j["machine"] = {{"cpus", std::thread::hardware_concurrency()}, {"loadavg_at_start", loadavg}};
-    j["server_command"] = join_command(server_argv(so));
-    j["server_exit"] = server_exit;
-    std::ofstream out(o.json);
-    out << j.dump(2) << "\n";
-    if (!out) throw std::runtime_error("--json: cannot write " + o.json);
-    std::cerr << "telegrasp-bench-latency: wrote " << o.json << "\n";
-  }
-  if (own_server_log) std::filesystem::remove(so.log_path);
+void write_json(const Options& o, const Results& r) {
+  nlohmann::ordered_json j;
+  j["clients"] = o.clients;
+  j["sample_hz"] = o.sample_hz;
+  // null: the server's default
+  j["tick_hz"] = o.tick_hz > 0 ? nlohmann::ordered_json(o.tick_hz) : nlohmann::ordered_json();
+  j["e2e_us"] = to_json(r.e2e.latency);
+  j["raw_rtt_us"] = to_json(r.raw.latency);
+  j["e2e_tick_us"] = to_json(r.tick.latency);
+  j["seconds"] = o.seconds;
+  j["warmup_s"] = o.warmup;
+  j["profile"] = o.profile;
+  j["late_latch"] = o.late_latch;
+  j["phase"] = o.spread ? "spread" : "burst";
+  j["echo"] = "separate process (this program re-executed with --echo-role); echoes from its DataReader listener";
+  j["samples"] = {{"raw_published", r.raw.published},
+                  {"raw_lost", r.raw.lost},
+                  {"e2e_published", r.e2e.published},
+                  {"e2e_lost", r.e2e.lost},
+                  {"e2e_reflected_exactly", r.e2e.exact},
+                  {"e2e_superseded", r.e2e.superseded},
+                  {"e2e_tick_lost", r.tick.lost}};
+  j["server"] = r.server;
+  j["raw_phase_cpu"] = r.raw.cpu;
+  j["publisher_lateness_us"] = {{"raw", to_json(r.raw.lateness)}, {"e2e", to_json(r.e2e.lateness)}};
+  j["machine"] = {{"cpus", std::thread::hardware_concurrency()}, {"loadavg_at_start", r.loadavg}};
+  j["server_command"] = r.server_command;
+  j["server_exit"] = r.server_exit;
+  std::ofstream out(o.json);
+  out << j.dump(2) << "\n";
+  if (!out) throw std::runtime_error("--json: cannot write " + o.json);
+  std::cerr << "telegrasp-bench-latency: wrote " << o.json << "\n";
+}
+
+int run(const Options& o) {
+  install_signal_handlers();
+  // Start-up and matching waits, two phases with their stragglers, generously.
+  const Watchdog watchdog(120 + 3 * (o.warmup + o.seconds + 2) + 0.2 * o.clients);
+  load_profiles(o.profiles_file, o.profile);
+  if (o.clients * 2 > 256)
+    std::cerr << "telegrasp-bench-latency: note: " << o.clients * 2
+              << " hands exceed the server's default max_hands (256); pass --server-arg --config --server-arg FILE with max_hands\n";
+  Results r;
+  std::getline(std::ifstream("/proc/loadavg"), r.loadavg);
+  const std::string tmp = std::filesystem::temp_directory_path() / ("telegrasp-bench-latency-" + std::to_string(::getpid()));
+  const std::string echo_log = tmp + "-echo.log";
+
+  Bench bench(o);
+  bench.start_server(tmp);
+  r.raw = bench.raw_phase(echo_log);
+  if (stop_requested()) throw std::runtime_error("interrupted");
+  bench.e2e_phase(r.e2e, r.tick, r.server);
+  if (stop_requested()) throw std::runtime_error("interrupted");
+  bench.server.stop();
+  r.server_exit = bench.server.exit_description();
+  r.server_command = join_command(server_argv(bench.so));
+
+  print_results(o, r);
+  if (!o.json.empty()) write_json(o, r);
+  if (o.server_log.empty()) std::filesystem::remove(bench.so.log_path);
   std::filesystem::remove(echo_log);
   return 0;
 }
@@ -595,13 +630,7 @@ int main(int argc, char** argv) {
         return 1;
       }
     }
-  Options o;
-  try {
-    o = parse(argc, argv);
-  } catch (const UsageError& e) {
-    std::cerr << "telegrasp-bench-latency: " << e.what() << "\n(see telegrasp-bench-latency --help)\n";
-    return 2;
-  }
+  Options o = parse(argc, argv);  // the domain may still be leased below
   try {
     // Unless told otherwise, a domain that no test run or other benchmark uses meanwhile (the
     // server and the children started hold it too).
@@ -613,6 +642,6 @@ int main(int argc, char** argv) {
     return run(o);
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-bench-latency: " << e.what() << "\n";
-    return 1;
+    return cli::kExitFailure;
   }
 }

@@ -1,6 +1,7 @@
 // telegrasp-bench-scale: how many hands telegrasp-server sustains at its tick rate without
 // missing a tick, and what each costs in server CPU.
 #include "bench_common.h"
+#include "cli.h"
 #include "test_domain.h"
 
 #include "telegrasp/idl/telegraspPubSubTypes.h"
@@ -25,6 +26,7 @@ namespace {
 namespace msg = telegrasp::msg;
 namespace idl = telegrasp::idl;
 using namespace telegrasp::bench;
+namespace cli = telegrasp::cli;
 namespace dds = eprosima::fastdds::dds;  // also a global namespace dds in the Fast DDS headers
 
 constexpr const char* kUsage = R"(Usage: telegrasp-bench-scale [options]
@@ -36,7 +38,7 @@ of hands from publisher threads of this process (one DomainParticipant each; cli
 level. Each level is measured over --seconds-per-step between two ServerStatus samples: missed
 ticks, tick work p50/max, hands, accepted inputs, and the CPU time (utime+stime, /proc) of the
 server, of its simulation thread and of this publisher process. A level is sustained when no tick
-was missed, the server reports every hand, the publishers kept --hz and the server accepted at
+was missed, the server reports every hand, the publishers kept --sample-hz and the server accepted at
 least 90% of what they wrote. The first level that is not sustained is measured once more (a
 one-off hiccup does not count); if it fails again, or at --max, the run stops. Level 0 (idle
 server) is measured first as the baseline.
@@ -53,7 +55,9 @@ saturation the server's cost per hand falls (samples batch up per wake-up, some 
 that figure is the honest one for the server itself.
 
 Options:
-  --hz HZ                controller sample rate per hand (default 90)
+  --sample-hz HZ         controller sample rate per hand (default 90; --hz, its old name, still
+                         works for one release)
+  --tick-hz HZ           the server's tick rate (default: the server's, 90)
   --step N               hands added per level, even (default 8)
   --max N                last level (default 512)
   --seconds-per-step S   measured seconds per level (default 3)
@@ -69,50 +73,36 @@ Options:
   --no-late-latch        start the server with --no-late-latch
   -h, --help             this text
 
-Exit status: 0 done, 1 the server could not be started or never answered, 2 bad usage.
+Exit status: 0 done, 1 a runtime failure (the server could not be started or never answered, an
+output could not be written), 2 a usage error (a bad or missing option or value).
 )";
 
-struct Options {
-  double hz = 90;
+struct Options : CommonOptions {
   int step = 8;
   int max = 512;
   double seconds_per_step = 3;
   int publishers = 2;
-  std::string json;
-  std::string profile = "loopback";
-  std::string profiles_file;
-  int domain = -1;  // -1: lease one
-  std::string server;
-  std::vector<std::string> server_args;
-  std::string server_log;
-  bool late_latch = true;
 };
+
+constexpr const char* kTool = "telegrasp-bench-scale";
+
+[[noreturn]] void usage_error(const std::string& what) { cli::usage_exit(kTool, what); }
 
 Options parse(int argc, char** argv) {
   Options o;
-  ArgReader a(argc, argv);
-  while (a.next()) {
-    const std::string& f = a.flag();
-    if (f == "-h" || f == "--help") {
-      std::cout << kUsage;
-      std::exit(0);
-    } else if (f == "--hz") o.hz = a.number(1, 1000);
-    else if (f == "--step") o.step = static_cast<int>(a.integer(2, 4096));
-    else if (f == "--max") o.max = static_cast<int>(a.integer(2, 4096));
-    else if (f == "--seconds-per-step") o.seconds_per_step = a.number(1, 600);
-    else if (f == "--publishers") o.publishers = static_cast<int>(a.integer(1, 64));
-    else if (f == "--json") o.json = a.value();
-    else if (f == "--profile") o.profile = a.value();
-    else if (f == "--profiles") o.profiles_file = a.value();
-    else if (f == "--domain") o.domain = static_cast<int>(a.integer(0, 232));
-    else if (f == "--server") o.server = a.value();
-    else if (f == "--server-arg") o.server_args.push_back(a.value());
-    else if (f == "--server-log") o.server_log = a.value();
-    else if (f == "--no-late-latch") o.late_latch = false;
-    else throw UsageError("unknown option '" + f + "'");
-  }
-  if (o.step % 2 != 0) throw UsageError("--step expects an even number of hands (2 per client id), got " + std::to_string(o.step));
-  if (o.max % 2 != 0) throw UsageError("--max expects an even number of hands (2 per client id), got " + std::to_string(o.max));
+  cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& f, const auto& value) {
+    if (parse_common_option(kTool, f, value, o, usage_error)) return true;
+    if (f == "--step") o.step = static_cast<int>(cli::parse_whole(f, value(), 2, 4096, usage_error));
+    else if (f == "--max") o.max = static_cast<int>(cli::parse_whole(f, value(), 2, 4096, usage_error));
+    else if (f == "--seconds-per-step") o.seconds_per_step = cli::parse_number(f, value(), 1, 600, usage_error);
+    else if (f == "--publishers") o.publishers = static_cast<int>(cli::parse_whole(f, value(), 1, 64, usage_error));
+    else return false;
+    return true;
+  });
+  if (o.step % 2 != 0)
+    usage_error("--step expects an even number of hands (2 per client id), got " + std::to_string(o.step));
+  if (o.max % 2 != 0)
+    usage_error("--max expects an even number of hands (2 per client id), got " + std::to_string(o.max));
   if (o.server.empty()) o.server = default_server_path();
   return o;
 }
@@ -283,10 +273,12 @@ Step measure(int hands, int attempt, const Options& o, StatusCollector& status, 
   if (st.missed > 0) why.push_back(std::to_string(st.missed) + " ticks missed");
   if (st.hands_min != hands || st.hands_max != hands)
     why.push_back("server reported " + std::to_string(st.hands_min) + ".." + std::to_string(st.hands_max) + " hands");
-  if (hands > 0 && st.published_per_hand_hz < 0.9 * o.hz)
-    why.push_back("publishers reached only " + std::to_string(st.published_per_hand_hz) + " Hz per hand");
+  if (hands > 0 && st.published_per_hand_hz < 0.9 * o.sample_hz)
+    why.push_back("publishers reached only " + cli::format_number(std::round(st.published_per_hand_hz * 10) / 10) +
+                  " Hz per hand");
   if (hands > 0 && st.accepted_per_hand_hz < 0.9 * st.published_per_hand_hz)
-    why.push_back("server accepted only " + std::to_string(st.accepted_per_hand_hz) + " Hz per hand");
+    why.push_back("server accepted only " + cli::format_number(std::round(st.accepted_per_hand_hz * 10) / 10) +
+                  " Hz per hand");
   if (st.rejected > 0) why.push_back(std::to_string(st.rejected) + " inputs rejected");
   st.sustained = why.empty();
   for (const auto& w : why) st.why += (st.why.empty() ? "" : "; ") + w;
@@ -374,6 +366,7 @@ int run(const Options& o) {
   so.profile = o.profile;
   so.profiles_file = o.profiles_file;
   so.late_latch = o.late_latch;
+  so.tick_hz = o.tick_hz;
   so.extra = {"--config", config};
   so.extra.insert(so.extra.end(), o.server_args.begin(), o.server_args.end());
   so.log_path = own_server_log ? tmp + "-server.log" : o.server_log;
@@ -392,10 +385,10 @@ int run(const Options& o) {
   std::optional<std::size_t> at_sustained;  // index into steps
   std::string stop_reason;
   {
-    Publishers pubs(o.publishers, o.domain, o.profile, o.profiles_file, o.hz, o.max);
+    Publishers pubs(o.publishers, o.domain, o.profile, o.profiles_file, o.sample_hz, o.max);
     if (!pubs.matched(15)) throw std::runtime_error("the publisher participants did not match the server's ControllerState reader within 15 s");
     pubs.start();
-    std::cout << "telegrasp-bench-scale: " << o.publishers << " publisher threads at " << o.hz << " Hz, +" << o.step << " hands per "
+    std::cout << "telegrasp-bench-scale: " << o.publishers << " publisher threads at " << o.sample_hz << " Hz, +" << o.step << " hands per "
               << o.seconds_per_step << " s level, up to " << o.max << "; late latching " << (o.late_latch ? "on" : "off")
               << "; CPU in % of one core\n";
     print_header();
@@ -460,7 +453,7 @@ int run(const Options& o) {
   const double per_hand_tick = at_sustained ? steps[*at_sustained].cpu_us_per_hand_tick() : 0;
   const double per_hand_tick_unsaturated = at_unsaturated ? steps[*at_unsaturated].cpu_us_per_hand_tick() : 0;
 
-  std::cout << "hands sustained at " << o.hz << " Hz with no missed tick: " << hands_sustained << " (stop: " << stop_reason << ")\n"
+  std::cout << "hands sustained at " << o.sample_hz << " Hz with no missed tick: " << hands_sustained << " (stop: " << stop_reason << ")\n"
             << std::setprecision(2) << "server CPU per hand per tick at that level: " << per_hand_tick
             << " us (all threads, fixed cost included); marginal " << slope << " us/hand/tick over a fixed " << std::setprecision(0)
             << intercept << " us/tick (least squares over the sustained, unsaturated levels)\n"
@@ -478,7 +471,9 @@ int run(const Options& o) {
     j["hands_unsaturated"] = hands_unsaturated;
     j["cpu_us_per_hand_tick_unsaturated"] = std::round(per_hand_tick_unsaturated * 1000) / 1000;
     j["hands_sustained_lossless"] = hands_lossless;
-    j["hz"] = o.hz;
+    j["sample_hz"] = o.sample_hz;
+    // null: the server's default
+    j["tick_hz"] = o.tick_hz > 0 ? nlohmann::ordered_json(o.tick_hz) : nlohmann::ordered_json();
     j["step"] = o.step;
     j["max"] = o.max;
     j["seconds_per_step"] = o.seconds_per_step;
@@ -505,13 +500,7 @@ int run(const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  Options o;
-  try {
-    o = parse(argc, argv);
-  } catch (const UsageError& e) {
-    std::cerr << "telegrasp-bench-scale: " << e.what() << "\n(see telegrasp-bench-scale --help)\n";
-    return 2;
-  }
+  Options o = parse(argc, argv);  // the domain may still be leased below
   try {
     // Unless told otherwise, a domain that no test run or other benchmark uses meanwhile (the
     // server and the children started hold it too).
@@ -523,6 +512,6 @@ int main(int argc, char** argv) {
     return run(o);
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-bench-scale: " << e.what() << "\n";
-    return 1;
+    return cli::kExitFailure;
   }
 }

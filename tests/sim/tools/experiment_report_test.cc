@@ -1,7 +1,12 @@
 // Tests experiment_report.h on a handmade protocol run with known means: the aggregates, the two
-// CSV files, the HTML report's bars (one per object per group per mode per chart), that the page
-// is self-contained and states the unit caveat, and loading the paper's per-object numbers.
+// CSV files, the HTML report's bars (one per object per group per mode per chart), its axis ticks,
+// that a missing value reads "no data" and never 0, the precise-vs-discrete time comparison, the
+// grasp pictures and which grasp they draw, that the page is self-contained and states the unit
+// caveat, and loading the paper's per-object numbers.
+#include "experiment_aggregate.h"
 #include "experiment_report.h"
+
+#include "../test_meshes.h"
 
 #include <gtest/gtest.h>
 
@@ -121,6 +126,12 @@ int count_bars(const std::vector<std::map<std::string, std::string>>& all, const
   return n;
 }
 
+int count_substr(const std::string& text, const std::string& what) {
+  int n = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
 std::vector<std::string> read_lines(const std::string& path) {
   std::ifstream in(path);
   std::vector<std::string> lines;
@@ -215,7 +226,7 @@ TEST(ExperimentReportTest, HtmlHasOneBarPerObjectPerGroupPerModePerChart) {
       const std::string chart = kind + "." + mode;
       for (const std::string& object : recorded) {
         EXPECT_EQ(count_bars(all, chart, mode, "experienced", object), 1) << chart << " " << object;
-        // Nobody inexperienced tried the custom object: no bar, not a zero bar.
+        // Nobody inexperienced tried the custom object: no bar, not a zero bar (a hatched slot).
         EXPECT_EQ(count_bars(all, chart, mode, "inexperienced", object), object == "999_custom" ? 0 : 1)
             << chart << " " << object;
       }
@@ -242,7 +253,8 @@ TEST(ExperimentReportTest, HtmlHasOneBarPerObjectPerGroupPerModePerChart) {
   //   modes: 2 x 16 = 32; paper_*.experienced: 2 x (2 + 3 + 3) = 16; inexperienced: 2 x (2 + 2 + 2) = 12.
   EXPECT_EQ(all.size(), 32u + 16u + 12u);
 
-  // Values: the bar is the mean the aggregates computed; an undefined value is an empty bar.
+  // Values: the bar is the mean the aggregates computed; an undefined value is a hatched slot of
+  // the plot's full height (200 px) saying "no data", not a bar of height 0.
   for (const auto& b : all) {
     if (b.at("data-chart") == "time_by_group.precise" && b.at("data-group") == "experienced" &&
         b.at("data-object") == "014_lemon") {
@@ -259,13 +271,157 @@ TEST(ExperimentReportTest, HtmlHasOneBarPerObjectPerGroupPerModePerChart) {
     if (b.at("data-chart") == "time_by_group.discrete" && b.at("data-group") == "inexperienced" &&
         b.at("data-object") == "003_cracker_box") {
       EXPECT_EQ(b.at("data-value"), "");
-      EXPECT_EQ(b.at("height"), "0.00");
+      EXPECT_EQ(b.at("height"), "200.00");
+      EXPECT_EQ(b.at("fill").rfind("url(#nd-", 0), 0u) << b.at("fill");
     }
   }
-  // The x axis uses the paper's letters, the object's name in a tooltip; other objects a number.
-  EXPECT_NE(html.find("<title>014_lemon</title>a</text>"), std::string::npos);
-  EXPECT_NE(html.find("<title>003_cracker_box</title>b</text>"), std::string::npos);
-  EXPECT_NE(html.find("<title>999_custom</title>#3</text>"), std::string::npos);
+  const std::string time_chart = html.substr(html.find("data-chart=\"time_by_group.discrete\""));
+  EXPECT_NE(time_chart.find("003_cracker_box, inexperienced: no data</title>"), std::string::npos);
+  // The inexperienced never tried 999_custom: a hatched slot (class "nodata"), titled why.
+  EXPECT_NE(html.find("999_custom, inexperienced: no data (no trials)</title>"), std::string::npos);
+  // The x axis names the objects (rotated), not the paper's letters.
+  for (const std::string object : {"014_lemon", "003_cracker_box", "999_custom"})
+    EXPECT_NE(html.find("rotate(-60)\" text-anchor=\"end\">" + object + "</text>"), std::string::npos) << object;
+  EXPECT_EQ(html.find(">a</text>"), std::string::npos);
+  EXPECT_EQ(html.find(">#3</text>"), std::string::npos);
+}
+
+// Nice steps of 1, 2 or 5 x 10^k, at least a fifth of the largest value, worked by hand.
+TEST(AxisTicksTest, NiceStepsAndExactLabels) {
+  auto labels = [](double largest) {
+    std::string out;
+    for (const std::string& l : axis_ticks(largest).labels) out += (out.empty() ? "" : " ") + l;
+    return out;
+  };
+  // 12.3 / 5 = 2.46: 1 and 2 are too small, 5 is the step; the top is 3 x 5 = 15.
+  EXPECT_EQ(labels(12.3), "0 5 10 15");
+  EXPECT_DOUBLE_EQ(axis_ticks(12.3).top, 15);
+  EXPECT_DOUBLE_EQ(axis_ticks(12.3).step, 5);
+  // The report's old axis: 12 would have had ticks every 2.5 labelled 0 2 5 8 10 12.
+  EXPECT_EQ(labels(12), "0 5 10 15");
+  // 10 / 5 = 2: the step is 2, and 10 is a tick.
+  EXPECT_EQ(labels(10), "0 2 4 6 8 10");
+  // 4.16 / 5 = 0.832: 0.1, 0.2 and 0.5 are too small, so 1.
+  EXPECT_EQ(labels(4.16), "0 1 2 3 4 5");
+  // 0.87 / 5 = 0.174: the step is 0.2 and every label has one decimal.
+  EXPECT_EQ(labels(0.87), "0.0 0.2 0.4 0.6 0.8 1.0");
+  // 0.046 / 5 = 0.0092: the step is 0.01, two decimals, top 0.05.
+  EXPECT_EQ(labels(0.046), "0.00 0.01 0.02 0.03 0.04 0.05");
+  // 250 / 5 = 50: a step of 50 exactly.
+  EXPECT_EQ(labels(250), "0 50 100 150 200 250");
+  // Nothing to plot: 0 to 1 in steps of 0.2.
+  EXPECT_EQ(labels(0), "0.0 0.2 0.4 0.6 0.8 1.0");
+  EXPECT_EQ(labels(NAN), "0.0 0.2 0.4 0.6 0.8 1.0");
+}
+
+// A grasp whose capsules all missed has no |ND| and no HandError (the server sends 0): the
+// aggregates say null, the CSV leaves the cell empty, the page says "no data" and never 0.00.
+TEST(ExperimentReportTest, NoCapsuleHitIsNoDataNotZero) {
+  ExperimentRun run = handmade_run();
+  run.objects.push_back("032_knife");
+  for (const std::string mode : {"precise", "discrete"}) {
+    Record knife = grasp(mode, "experienced", 1, "032_knife", 3, 1.25, 0.0, {});
+    run.records.push_back(knife);
+  }
+  const nlohmann::json j = aggregate_json(run);
+  const auto& row = find_row(j["by_mode_group_object"], "precise", "experienced", "032_knife");
+  EXPECT_EQ(row["grasped"], 1);
+  EXPECT_NEAR(row["time_to_grasp_mean_s"].get<double>(), 1.25, kTol);
+  EXPECT_TRUE(row["hand_error_mean_mm"].is_null());
+  EXPECT_TRUE(row["nd_abs_mean_mm"].is_null());
+
+  const std::string html = html_report(run, paper(), nullptr);
+  // The paper's error table row for the knife: paper, ours per mode, our HandError per mode.
+  const auto paper_table = html.find("data-chart=\"paper_error.experienced\"");
+  ASSERT_NE(paper_table, std::string::npos);
+  const auto knife_row = html.find("<td>032_knife</td>", paper_table);
+  ASSERT_NE(knife_row, std::string::npos);
+  const std::string row_html = html.substr(knife_row, html.find("</tr>", knife_row) - knife_row);
+  EXPECT_EQ(row_html.find("0.00"), std::string::npos) << row_html;
+  EXPECT_EQ(count_substr(row_html, "no data"), 4) << row_html;  // |ND| and HandError, both modes
+  // The |ND| bar of the knife is a "no data" slot.
+  for (const auto& b : bars(html)) {
+    if (b.at("data-object") == "032_knife" && b.at("data-chart").rfind("nd_", 0) == 0) {
+      EXPECT_EQ(b.at("data-value"), "") << b.at("data-chart");
+    }
+  }
+}
+
+// Precise against discrete, grasp by grasp: four grasps succeeded in both modes in the handmade
+// run, all at different times (lemon 1.0 / 1.1 and 3.0 / 1.3, cracker box 1.2 / 1.5, custom
+// 0.8 / 0.9): the largest difference is 1.3 - 3.0 = -1.7 s.
+TEST(ExperimentReportTest, PreciseAndDiscreteTimesAreComparedGraspByGrasp) {
+  const std::string html = html_report(handmade_run(), paper(), nullptr);
+  EXPECT_NE(html.find("id=\"mode-times\""), std::string::npos);
+  EXPECT_NE(html.find("same simulated person in both modes"), std::string::npos);
+  EXPECT_NE(html.find("Of the 4 grasps made in both modes (same group, participant, object and trial), 0 have the same "
+                      "time to grasp and 4 differ, by at most 1.700 s"),
+            std::string::npos);
+  EXPECT_NE(html.find("<td>3.000</td><td>1.300</td><td>-1.700</td>"), std::string::npos);
+}
+
+// The hand of a grasp as a participant records it: the palm 5 cm above the object's origin and
+// each phalanx 1 cm further along x than the one before (a picture needs poses, not a real hand).
+void give_hand(Record& r, const sim::HandRig& rig) {
+  r.grasp_tick_X_WorldObject = Eigen::Isometry3d(Eigen::Translation3d(0.45, 0, 0.03));
+  r.grasp_tick_hand.push_back({"palm", Eigen::Isometry3d(Eigen::Translation3d(0, 0, 0.05))});
+  for (std::size_t i = 0; i < rig.phalanges().size(); ++i)
+    r.grasp_tick_hand.push_back(
+        {rig.phalanges()[i].name, Eigen::Isometry3d(Eigen::Translation3d(0.01 * static_cast<double>(i), 0.02, 0.03))});
+}
+
+// The drawn grasp: held before merely grasped, precise before discrete, experienced before
+// inexperienced, then the lowest participant; records without the hand never.
+TEST(ExperimentReportTest, RepresentativeGraspFollowsTheStatedOrder) {
+  const sim::HandRig rig = sim::HandRig::load(sim::HandRig::builtin_path("human_right"));
+  ExperimentRun run;
+  run.objects = {"014_lemon"};
+  auto add = [&](const std::string& mode, const std::string& group, int participant, bool held, bool hand) {
+    Record r = grasp(mode, group, participant, "014_lemon", 0, 1.0, 1.0, {1.0});
+    r.held_after_lift = held;
+    if (hand) give_hand(r, rig);
+    run.records.push_back(r);
+  };
+  add("precise", "experienced", 1, true, false);   // no hand: never drawn
+  add("precise", "experienced", 1, false, true);   // not held
+  add("discrete", "experienced", 2, true, true);   // not precise
+  add("precise", "inexperienced", 5, true, true);  // not experienced
+  add("precise", "experienced", 3, true, true);    // the one
+  add("precise", "experienced", 4, true, true);    // a later participant
+  const Record* r = representative_grasp(run, "014_lemon");
+  ASSERT_NE(r, nullptr);
+  EXPECT_EQ(r, &run.records[4]);
+  EXPECT_EQ(representative_grasp(run, "003_cracker_box"), nullptr);
+}
+
+// With the models and the rig, the page has one picture per object that has a record with the
+// hand, an explanation for the others, and still nothing to fetch.
+TEST(ExperimentReportTest, HtmlDrawsOneGraspPerObjectWithoutUrls) {
+  ExperimentRun run = handmade_run();
+  GraspPictureInputs pictures;
+  pictures.rig = std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")));
+  pictures.models["014_lemon"] = sim::make_object_model("014_lemon", sim::testing::uv_sphere_mesh(0.027, 24, 24), 0.05, "test");
+  pictures.models["003_cracker_box"] =
+      sim::make_object_model("003_cracker_box", sim::testing::box_mesh(Eigen::Vector3d(0.08, 0.03, 0.105)), 0.4, "test");
+  for (Record& r : run.records)
+    if (r.object != "999_custom" && r.grasped) give_hand(r, *pictures.rig);
+  const std::string html = html_report(run, paper(), nullptr, &pictures);
+
+  EXPECT_NE(html.find("id=\"pictures\""), std::string::npos);
+  EXPECT_EQ(count_substr(html, "<figure data-object="), 3);
+  EXPECT_EQ(count_substr(html, "<svg class=\"grasp\""), 2);
+  // The lemon's drawn grasp is the first experienced participant's, precise, held (trial 0).
+  const auto lemon = html.find("<figure data-object=\"014_lemon\">");
+  ASSERT_NE(lemon, std::string::npos);
+  const std::string lemon_figure = html.substr(lemon, html.find("</figure>", lemon) - lemon);
+  EXPECT_NE(lemon_figure.find("precise, experienced participant 1, held; 1.00 s"), std::string::npos) << lemon_figure;
+  // Capsules of the rig: ten, every one drawn (in front of or behind the object).
+  EXPECT_EQ(count_substr(lemon_figure, "<path class=\"capsule"), 10);
+  // The custom object has no hand recorded: said, not drawn.
+  EXPECT_NE(html.find("no picture: no record has the hand at the grasp tick"), std::string::npos);
+  EXPECT_EQ(html.find("http"), std::string::npos);
+  EXPECT_EQ(html.find("xmlns"), std::string::npos);
+  EXPECT_EQ(html.find("<img"), std::string::npos);
 }
 
 TEST(ExperimentReportTest, HtmlIsSelfContainedAndStatesTheCaveat) {
@@ -363,10 +519,27 @@ TEST(GraspRecordJsonTest, RoundTrips) {
   r.group = "experienced";
   r.participant = 4;
   r.contacts = {{"palm", {0.1, 0.2, 0.3}, {0, 0, 1}, {-0.01, 0.02, 0.03}, {1, 0, 0}}};
+  // The hand at the grasp tick, in the object's frame (written rounded to 1e-6).
+  r.grasp_tick_X_WorldObject = Eigen::Translation3d(0.45, -0.05, 0.027) * Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ());
+  r.grasp_tick_hand = {{"palm", Eigen::Translation3d(0.01, 0.02, 0.06) * Eigen::AngleAxisd(-2.0, Eigen::Vector3d(1, 1, 0).normalized())},
+                       {"index_dist", Eigen::Isometry3d(Eigen::Translation3d(0.03, 0.0, 0.01))}};
   const Record back = record_from_json(record_json(r));
   EXPECT_EQ(record_json(back), record_json(r));
   EXPECT_EQ(back.participant, 4);
-  EXPECT_EQ(back.contacts.at(0).p_object, Eigen::Vector3d(-0.01, 0.02, 0.03));
+  EXPECT_EQ(back.contacts.at(0).p_ObjectContact, Eigen::Vector3d(-0.01, 0.02, 0.03));
+  ASSERT_EQ(back.grasp_tick_hand.size(), 2u);
+  EXPECT_EQ(back.grasp_tick_hand[0].frame, "palm");
+  constexpr double kRounding = 2e-6;  // 1e-6 per written number
+  EXPECT_TRUE(back.grasp_tick_hand[0].X_ObjectFrame.isApprox(r.grasp_tick_hand[0].X_ObjectFrame, kRounding));
+  EXPECT_TRUE(back.grasp_tick_X_WorldObject.isApprox(r.grasp_tick_X_WorldObject, kRounding));
+
+  // A record without the hand writes no "grasp_tick_hand", and an in-process record (no group)
+  // never does.
+  r.grasp_tick_hand.clear();
+  EXPECT_FALSE(record_json(r).contains("grasp_tick_hand"));
+  Record in_process = back;
+  in_process.group.clear();
+  EXPECT_FALSE(record_json(in_process).contains("grasp_tick_hand"));
 }
 
 }  // namespace

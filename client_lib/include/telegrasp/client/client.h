@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -22,7 +23,8 @@ enum Topics : unsigned {
   kGraspEvents = 1u << 3,
   kSceneStates = 1u << 4,
   kServerStatuses = 1u << 5,
-  kAllTopics = (1u << 6) - 1,
+  kObjectGeometries = 1u << 6,         ///< Each model's mesh and mass, once per model (late joiners too).
+  kAllTopics = (1u << 7) - 1,
 };
 
 struct ClientOptions {
@@ -64,6 +66,8 @@ class Client {
   void on_grasp_event(std::function<void(const GraspEvent&)> callback);
   void on_scene_state(std::function<void(const SceneState&)> callback);
   void on_server_status(std::function<void(const ServerStatus&)> callback);
+  /// Each model's geometry as it arrives; the caught-up snapshot is every model's newest one.
+  void on_object_geometry(std::function<void(const std::shared_ptr<const ObjectGeometry>&)> callback);
 
   /// Polling: the newest sample of each output (per hand for per-hand outputs).
   std::optional<SceneState> latest_scene_state() const;
@@ -71,6 +75,14 @@ class Client {
   std::vector<HandSkeleton> latest_hand_skeletons() const;
   std::optional<GraspState> latest_grasp_state(const HandKey& hand) const;
   std::optional<ContactSet> latest_contact_set(const HandKey& hand) const;
+  /// The newest geometry of `model`, or null if none has arrived. A geometry is checked on arrival
+  /// (whole vertices and triangles, indices in range, finite coordinates, content hash) and
+  /// dropped, with one line on stderr per model and reason, if it fails. Geometries are cached by
+  /// content hash: the same geometry arriving again (e.g. from a restarted server) is not rebuilt
+  /// and yields the same pointer; the same mesh under another name reuses the cached mesh.
+  std::shared_ptr<const ObjectGeometry> object_geometry(const std::string& model) const;
+  /// Every model's newest geometry, by model name.
+  std::map<std::string, std::shared_ptr<const ObjectGeometry>> object_geometries() const;
   /// Every grasp event received since the last call, in arrival order.
   std::vector<GraspEvent> take_grasp_events();
 

@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 
+#include <array>
 #include <compare>
 #include <cstdint>
 #include <map>
@@ -81,7 +82,9 @@ struct ContactSet {
   std::vector<ContactPoint> contacts;
 };
 
-struct CapsuleReport {
+/// One capsule's metrics on the grasp tick: sim::CapsuleMetric as the server publishes it, with the
+/// phalanx's rig name (lengths in metres).
+struct CapsuleMetric {
   int phalanx = -1;
   std::string phalanx_name;
   bool hit = false;                    ///< False: "no hit", kept apart from nd = 0.
@@ -89,6 +92,9 @@ struct CapsuleReport {
   double signed_distance = 0;          ///< m
   bool blocked = false;
 };
+
+/// The name of the previous release; goes in the next.
+using CapsuleReport [[deprecated("use CapsuleMetric")]] = CapsuleMetric;
 
 struct GraspEvent {
   enum class Kind { kGrasp, kRelease };
@@ -104,7 +110,7 @@ struct GraspEvent {
   std::uint64_t input_sequence = 0;
   double hand_error_mm = 0;            ///< Grasp events.
   int capsules_without_hit = 0;        ///< Grasp events.
-  std::vector<CapsuleReport> capsules; ///< Grasp events.
+  std::vector<CapsuleMetric> capsules; ///< Grasp events.
   std::vector<ContactPoint> contacts;  ///< Grasp events.
   Eigen::Vector3d v_WorldObject{0, 0, 0};  ///< Release events: velocity handed to physics.
   Eigen::Vector3d w_WorldObject{0, 0, 0};
@@ -147,6 +153,25 @@ struct ServerStatus {
   std::map<std::string, std::uint64_t> rejected;  ///< Per reason, since the server started.
   std::uint64_t commands_accepted = 0, commands_rejected = 0;
   std::vector<std::string> models;     ///< Model names a spawn command accepts.
+};
+
+/// One model's shape and mass as the server publishes it (ObjectGeometry), so a client needs no
+/// mesh files. The frame is the model's own: origin at its centre of mass, the frame of
+/// ObjectState::X_WorldObject and ContactPoint::p_ObjectContact. Client::object_geometry shares
+/// one immutable copy per mesh.
+struct ObjectGeometry {
+  std::string model;                   ///< The model name, as in ObjectState::name.
+  std::uint64_t content_hash = 0;      ///< FNV-1a 64 of the mesh as published (see telegrasp.idl); checked on arrival.
+  std::vector<Eigen::Vector3f> vertices;                 ///< m, model frame.
+  std::vector<std::array<std::uint32_t, 3>> triangles;   ///< Vertex indices, counter-clockwise seen from outside.
+  std::uint32_t vertex_count = 0;      ///< Of the whole mesh, also when it is omitted.
+  std::uint32_t triangle_count = 0;
+  bool mesh_omitted = false;           ///< Over the server's size limit: vertices and triangles are empty.
+  Eigen::Vector3d p_ObjectMin{0, 0, 0}, p_ObjectMax{0, 0, 0};  ///< Bounds of the mesh, model frame.
+  double mass_kg = 0;
+  double volume_m3 = 0;                ///< Enclosed by the mesh.
+  Eigen::Vector3d inertia_diagonal{0, 0, 0};  ///< kg m^2, about the centre of mass along the model axes.
+  Eigen::Vector3d p_ObjectSourceOrigin{0, 0, 0};  ///< Where the source mesh file's origin lies, model frame.
 };
 
 }  // namespace telegrasp::client

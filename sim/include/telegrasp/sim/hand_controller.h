@@ -1,4 +1,5 @@
-// HandController: the grasp system of GRASPING.md for one hand, advanced one tick at a time.
+// HandController: the grasp system of ../shared/docs/GRASPING.md for one hand, advanced one tick
+// at a time.
 #pragma once
 
 #include "telegrasp/sim/hand_rig.h"
@@ -12,6 +13,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace telegrasp::sim {
@@ -21,6 +23,12 @@ enum class ClosingMode {
   kPrecise,   ///< Conservative advancement within each step: contact within the tolerance, no tunnelling.
   kDiscrete,  ///< The paper's: move a whole step, then test overlap (may sink by up to one step).
 };
+
+/// The mode named "precise" or "discrete" (as configuration files, flags and records write it);
+/// nothing for any other name.
+std::optional<ClosingMode> parse_closing_mode(std::string_view name);
+/// The name parse_closing_mode reads: "precise" or "discrete".
+const char* closing_mode_name(ClosingMode mode);
 
 /// How "nearest object" is measured for object selection.
 enum class SelectionMetric {
@@ -142,8 +150,24 @@ class HandController {
   Capsule capsule_in_object(PhalanxId id, const Eigen::Isometry3d& X_ObjectPalm) const;
   // Recomputes X_PalmPhalanx along one finger from state_.q.
   void update_finger_poses(int finger);
+  // The phases of tick(), in order (interaction manager and finger movement in step_finger).
+  const ObjectView* choose_object(std::span<const ObjectView> objects, ObjectView& held_view, HandTickEvents& events);
   void select_object(std::span<const ObjectView> objects);
+  void carry_gap_bounds(const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm);
   void step_finger(int finger, double u, double dt, const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm);
+  void apply_grasp_rule(const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm, HandTickEvents& events);
+  // The phases of step_finger(), on one finger's FingerStep.
+  struct FingerStep;
+  enum class Probe { kFree, kBlocked, kDepenetrated };  // what probe_capsule found
+  bool unblock_phalanges(const FingerStep& step);
+  bool plan_motion(const FingerStep& step, double dt, int held, bool& closing);
+  void block_at_rest(const FingerStep& step);
+  void close_discrete(const FingerStep& step);
+  void close_precise(const FingerStep& step);
+  Probe probe_capsule(const FingerStep& step, std::size_t m, double s, double rate, double& ds);
+  void set_fraction(const FingerStep& step, double s);
+  void forget_bounds(const FingerStep& step);
+  void block(int id);
   void refresh_contacts() const;
   // Exact closest pair between capsule `id`'s segment [a, b] (object frame) and the object's mesh:
   // the cached one while the capsule has not moved since, else searched within `reach` first (a
@@ -168,41 +192,28 @@ class HandController {
   mutable std::vector<double> hold_metrics_key_;
   // reach_[k][m]: bound on the distance from joint k to any point of capsule m's segment.
   std::vector<std::vector<double>> reach_;
-  // Where each capsule was last checked (object frame) and whether it touched; an identical pose
-  // gives the same answer without a query.
-  struct TouchCache {
-    ObjectId object;
-    Eigen::Vector3d a{0, 0, 0}, b{0, 0, 0};
-    bool touching = false;
-    bool matches(ObjectId o, const Capsule& c, bool touch) const;
-  };
-  std::vector<TouchCache> touch_cache_;
-  // Per phalanx, the last exact closest pair found for its capsule and where the capsule was: the
-  // contact search, the grasp tick's signed distances and the contacts all ask about the same
-  // resting capsules, and a bit-identical pose has the identical answer (the one a new search
-  // would give: the contact search makes the pair's triangle the capsule's hint).
-  struct ClosestCache {
-    ObjectId object;
-    const MeshDistance* mesh = nullptr;
-    Eigen::Vector3d a{0, 0, 0}, b{0, 0, 0};
-    SegmentQuery pair;  // found
-    bool matches(ObjectId o, const MeshDistance& m, const Eigen::Vector3d& pa, const Eigen::Vector3d& pb) const;
-  };
-  mutable std::vector<ClosestCache> closest_;
   // Per phalanx, the triangle last found nearest to its capsule: a search hint (speed only).
   std::vector<std::uint32_t> hint_;
   // Per phalanx, a lower bound on its capsule's gap to bound_object_ (-inf: unknown), kept
   // across ticks and shrunk by every motion, so far-away capsules need no query.
   std::vector<double> gap_bound_;
   std::vector<double> palm_reach_;  // bound on |p| over the capsule's segment, palm frame
-  // step_finger's work space, kept between ticks so that a tick allocates nothing.
-  struct StepWork {
-    std::vector<double> q0, delta, rate;  // per position along the finger
-    std::vector<std::size_t> affected;
-  };
-  StepWork work_;
   ObjectId bound_object_;
   Eigen::Isometry3d bound_X_ObjectPalm_ = Eigen::Isometry3d::Identity();
+  // The query caches and step_finger's work space (hand_controller.cc), written by const
+  // methods too. A copy of the controller copies them: it ticks exactly as the original would.
+  struct Scratch;
+  struct ScratchHolder {
+    ScratchHolder();
+    ScratchHolder(const ScratchHolder& other);
+    ScratchHolder& operator=(const ScratchHolder& other);
+    ScratchHolder(ScratchHolder&& other) noexcept;
+    ScratchHolder& operator=(ScratchHolder&& other) noexcept;
+    ~ScratchHolder();
+    Scratch* operator->() const { return scratch.get(); }
+    std::unique_ptr<Scratch> scratch;
+  };
+  ScratchHolder scratch_;
 };
 
 }  // namespace telegrasp::sim

@@ -38,7 +38,9 @@ struct SegmentQuery {
 struct SweepHit {
   bool hit = false;                 ///< False when no contact within max_length.
   bool started_inside = false;      ///< The sweep origin lies inside the closed mesh.
-  double t = 0;                     ///< Travel of the sphere centre at first contact, in [0, max_length].
+  /// Travel of the sphere centre along the direction at first contact: in [0, max_length], or,
+  /// when started_inside, <= 0 (the entry lies behind the origin, at any distance).
+  double t = 0;
   Eigen::Vector3d point{0, 0, 0};   ///< Contact point on the mesh surface.
   Eigen::Vector3d normal{0, 0, 0};  ///< Outward surface normal at the contact point.
 };
@@ -80,7 +82,7 @@ class MeshDistance {
   /// Sweeps a sphere of `radius` from `origin` along unit `direction` for at most `max_length`
   /// and returns the first contact with the surface. If `origin` starts inside the solid, the
   /// result has started_inside set and reports the surface found by sweeping backwards instead
-  /// (t is then negative: the entry point lies behind the origin).
+  /// (t is then <= 0: the entry point lies behind the origin).
   [[nodiscard]] SweepHit sphere_cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                                      double radius, double max_length) const;
 
@@ -110,6 +112,11 @@ class MeshDistance {
     std::uint32_t slot = 0;  // triangle slot in BVH order
     bool found = false;
   };
+
+  // Construction phases, in the constructor's order.
+  [[nodiscard]] std::vector<std::uint32_t> build_bvh(const TriangleMesh& mesh);
+  void store_in_leaf_order(const TriangleMesh& mesh, const std::vector<std::uint32_t>& order);
+  void build_pseudo_normals();
 
   template <class Reach, class Leaf>
   void traverse(Reach&& reach, Leaf&& leaf) const;

@@ -3,9 +3,9 @@
 
 #include "telegrasp/sim/mass_properties.h"
 #include "telegrasp/sim/mesh_distance.h"
-#include "telegrasp/sim/standin_objects.h"
 #include "telegrasp/sim/triangle_mesh.h"
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -36,15 +36,26 @@ using ObjectModelPtr = std::shared_ptr<const ObjectModel>;
 ObjectModelPtr make_object_model(const std::string& name, const TriangleMesh& mesh, double mass_kg,
                                  const std::string& source);
 
-/// Loads a mesh file as an object named after the file stem; a protocol object's name gives
-/// its real mass. Throws MeshLoadError naming the file.
-ObjectModelPtr load_object_model(const std::string& path);
+/// Builds a model from a mesh that is already in its model frame (origin at its centre of mass),
+/// such as the geometry a telegrasp server publishes: it is not recentred, so poses and contact
+/// points given in that frame apply unchanged. Computes the mass properties, bounds and distance
+/// structure; `mass_kg` is kept as given (if > 0, else volume x 500 kg/m^3) and
+/// `p_OriginalCenterOfMass` is stored as is. Throws MeshLoadError naming `source` if the mesh has
+/// no triangle, an index past its vertices, a non-finite coordinate, or encloses no volume.
+ObjectModelPtr make_object_model_in_model_frame(const std::string& name, TriangleMesh mesh, double mass_kg,
+                                                const std::string& source,
+                                                const Eigen::Vector3d& p_OriginalCenterOfMass = Eigen::Vector3d::Zero());
 
-/// Every mesh file in `dir` (sorted by name); throws MeshLoadError if `dir` is not a folder,
-/// holds no mesh file, or a file fails to load.
-std::vector<ObjectModelPtr> load_object_dir(const std::string& dir);
+/// Loads a mesh file as an object named after the file stem, of mass `mass_kg` (<= 0: volume x
+/// 500 kg/m^3, as make_object_model). Throws MeshLoadError naming the file.
+ObjectModelPtr load_object_model(const std::string& path, double mass_kg);
 
-/// The built-in procedural stand-in of a protocol object.
-ObjectModelPtr make_standin_model(const ProtocolObject& object);
+/// The mass in kg of the object a file stem names (<= 0: unknown, taken from its volume).
+using MassLookup = std::function<double(const std::string& stem)>;
+
+/// Every mesh file in `dir` (sorted by name), each of the mass `mass_kg_of` gives its stem (null:
+/// all from their volumes); throws MeshLoadError if `dir` is not a folder, holds no mesh file, or
+/// a file fails to load.
+std::vector<ObjectModelPtr> load_object_dir(const std::string& dir, const MassLookup& mass_kg_of);
 
 }  // namespace telegrasp::sim

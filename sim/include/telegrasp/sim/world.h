@@ -46,7 +46,8 @@ class World {
   World(const World&) = delete;
   World& operator=(const World&) = delete;
 
-  /// Adds a dynamic object at `X_WorldObject`; the model must outlive nothing (it is shared).
+  /// Adds a dynamic object at `X_WorldObject`. The world shares ownership of `model`, so the model
+  /// outlives the object and any hand's grasp of it: the caller need not keep it.
   ObjectId add_object(ObjectModelPtr model, const Eigen::Isometry3d& X_WorldObject);
   /// Removes an object; a hand holding it lets go. Unknown ids are ignored.
   void remove_object(ObjectId id);

@@ -1,0 +1,144 @@
+// Tests server/src/replay_export_mcap (telegrasp-replay --export-mcap) on a recorded session:
+// what it reads and writes is counted against the recording, a damaged recording is exported up
+// to the damage, the step rate sets the number of view updates, and missing schemas or an
+// unwritable file fail naming the file. The MCAP file itself is read by the reference reader in
+// server.replay_mcap.reference_reader (tests/js/mcap_export_check.mjs).
+#include "recorded_session.h"
+#include "recording.h"
+#include "replay_export_mcap.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+namespace telegrasp::server {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path& scratch() {
+  static const fs::path dir = [] {
+    fs::path d = fs::temp_directory_path() / ("telegrasp-replay-mcap-test-" + std::to_string(::getpid()));
+    fs::create_directories(d);
+    return d;
+  }();
+  return dir;
+}
+struct RemoveScratch : ::testing::Environment {
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(scratch(), ec);
+  }
+};
+const auto* const kRemoveScratch = ::testing::AddGlobalTestEnvironment(new RemoveScratch);
+
+// The recording's outputs and the server time of the first and last, counted here.
+struct Outputs {
+  std::uint64_t all = 0;
+  double first_s = INFINITY, last_s = -INFINITY;
+};
+Outputs count_outputs(const Recording& rec) {
+  Outputs o;
+  for (const proto::Record& r : rec.records) {
+    if (!r.has_output()) continue;
+    ++o.all;
+    double t = NAN;
+    if (msg::HandSkeleton m; r.output().type() == proto::OUTPUT_HAND_SKELETON && from_cdr(r.output().cdr(), m)) t = m.time();
+    if (msg::SceneState m; r.output().type() == proto::OUTPUT_SCENE_STATE && from_cdr(r.output().cdr(), m)) t = m.time();
+    if (std::isfinite(t)) {
+      o.first_s = std::min(o.first_s, t);
+      o.last_s = std::max(o.last_s, t);
+    }
+  }
+  return o;
+}
+
+class ReplayExportMcapTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { session_ = new RecordedSession(record_session((scratch() / "session.tgrec").string())); }
+  static void TearDownTestSuite() {
+    delete session_;
+    session_ = nullptr;
+  }
+  static const RecordedSession& session() { return *session_; }
+
+ private:
+  static RecordedSession* session_;
+};
+RecordedSession* ReplayExportMcapTest::session_ = nullptr;
+
+TEST_F(ReplayExportMcapTest, ReadsEveryOutputAndSpansTheRecordingsTime) {
+  const Recording rec = read_recording(session().path);
+  const Outputs expected = count_outputs(rec);
+  const std::string path = (scratch() / "all.mcap").string();
+  const McapExport e = export_mcap(session().path, path);
+  EXPECT_FALSE(e.damage);
+  EXPECT_EQ(e.outputs, expected.all);
+  // Log time: the recording's start plus the server time; the file ends with a keyframe at the
+  // last output's time.
+  const std::int64_t created = rec.header.created_unix_ns();
+  EXPECT_EQ(e.start_time_ns, static_cast<std::uint64_t>(created + std::llround(expected.first_s * 1e9)));
+  EXPECT_EQ(e.end_time_ns, static_cast<std::uint64_t>(created + std::llround(expected.last_s * 1e9)));
+  EXPECT_EQ(e.bytes, fs::file_size(path));
+  // At least one message per grasp event, and at most 5 per update plus the closing keyframe, as
+  // the model sends at most /scene, /tf, a grasp state per hand, the events and the status.
+  EXPECT_GE(e.messages, session().events.size());
+  EXPECT_LE(e.messages, 5 * e.steps + session().events.size() + 2);
+}
+
+TEST_F(ReplayExportMcapTest, TheRateSetsTheViewUpdatesPerSecondOfServerTime) {
+  const Recording rec = read_recording(session().path);
+  const Outputs o = count_outputs(rec);
+  const double seconds = o.last_s - o.first_s;
+  for (double rate : {10.0, 30.0, 90.0}) {
+    SCOPED_TRACE("rate " + std::to_string(rate));
+    const McapExport e = export_mcap(session().path, (scratch() / "rate.mcap").string(), {.rate_hz = rate, .schema_dir = ""});
+    // One update per period of server time (ticks are 1/90 s, so at most 90 Hz), plus the last.
+    const double per_second = std::min(rate, 90.0);
+    EXPECT_GE(static_cast<double>(e.steps), std::floor(seconds * per_second * 0.99));
+    EXPECT_LE(static_cast<double>(e.steps), std::ceil(seconds * per_second) + 2);
+  }
+}
+
+TEST_F(ReplayExportMcapTest, ADamagedRecordingIsExportedUpToTheDamage) {
+  std::ifstream in(session().path, std::ios::binary);
+  const std::string bytes(std::istreambuf_iterator<char>(in), {});
+  const std::string cut = (scratch() / "cut.tgrec").string();
+  std::ofstream(cut, std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  const Recording rec = read_recording(cut);
+  ASSERT_TRUE(rec.damage);
+  const McapExport e = export_mcap(cut, (scratch() / "cut.mcap").string());
+  ASSERT_TRUE(e.damage);
+  EXPECT_EQ(e.damage->record, rec.damage->record);
+  EXPECT_TRUE(e.damage->truncated);
+  EXPECT_EQ(e.outputs, count_outputs(rec).all);
+  EXPECT_GT(e.messages, 0u);
+}
+
+TEST_F(ReplayExportMcapTest, MissingSchemasFailNamingTheFile) {
+  const std::string missing = (scratch() / "no-schemas").string();
+  try {
+    export_mcap(session().path, (scratch() / "x.mcap").string(), {.schema_dir = missing});
+    FAIL() << "no error";
+  } catch (const RecordingError& e) {
+    EXPECT_NE(std::string(e.what()).find(missing + "/foxglove.SceneUpdate.json"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("deploy/install-deps.sh"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(ReplayExportMcapTest, AnUnwritableFileFailsNamingIt) {
+  const std::string path = (scratch() / "no-such-dir" / "x.mcap").string();
+  try {
+    export_mcap(session().path, path);
+    FAIL() << "no error";
+  } catch (const RecordingError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace telegrasp::server
