@@ -4,6 +4,7 @@
 // Field names follow the client types (types.h) with the unit of every quantity appended: lengths
 // of positions in metres (_m), the grasp metrics in millimetres (nd_mm, signed_distance_mm,
 // hand_error_mm), times in seconds (_s); the format is printed by --help (kUsage).
+#include "client_json.h"
 #include "telegrasp/client/client.h"
 
 #include "cli.h"
@@ -100,162 +101,22 @@ not start, e.g. an unknown --profile), 2 a usage error (a bad or missing option 
 // ---------------------------------------------------------------------------------------------
 // JSON for the client types: their field names, with the unit of every quantity appended.
 
-constexpr double kMmPerM = 1000.0;
+namespace form = telegrasp::tools::json_form;
 
-Json to_json(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); }
-
-Json to_json(const Eigen::Isometry3d& X) {
-  const Eigen::Quaterniond q(X.linear());
-  return Json{{"p_m", to_json(Eigen::Vector3d(X.translation()))},
-              {"q_wxyz", Json::array({q.w(), q.x(), q.y(), q.z()})}};
-}
-
-Json to_json(const tc::HandKey& hand) {
-  return Json{{"client_id", hand.client_id}, {"side", tc::to_string(hand.side)}};
-}
-
-Json to_json(const tc::ContactPoint& c) {
-  return Json{{"phalanx", c.phalanx},
-              {"p_WorldContact_m", to_json(c.p_WorldContact)},
-              {"n_World", to_json(c.n_World)},
-              {"p_ObjectContact_m", to_json(c.p_ObjectContact)},
-              {"n_Object", to_json(c.n_Object)},
-              {"nd_mm", c.nd_hit ? Json(kMmPerM * c.nd) : Json()},
-              {"nd_hit", c.nd_hit}};
-}
-
-Json to_json(const tc::CapsuleMetric& r) {
-  return Json{{"phalanx", r.phalanx},
-              {"phalanx_name", r.phalanx_name},
-              {"hit", r.hit},
-              {"nd_mm", r.hit ? Json(kMmPerM * r.nd) : Json()},
-              {"signed_distance_mm", kMmPerM * r.signed_distance},
-              {"blocked", r.blocked}};
-}
-
-Json to_json(const tc::ObjectState& o) {
-  Json j{{"id", o.id},
-         {"name", o.name},
-         {"X_WorldObject", to_json(o.X_WorldObject)},
-         {"v_WorldObject_m_per_s", to_json(o.v_WorldObject)},
-         {"held", o.held}};
-  if (o.held) j["holder"] = to_json(o.holder);
-  j["spawn_time_s"] = o.spawn_time;
+// One line: the topic first, then the sample's JSON form (common/client_json.h).
+Json with_topic(const char* topic, Json body) {
+  Json j{{"topic", topic}};
+  j.update(body);
   return j;
 }
 
-template <class T>
-Json to_json_array(const std::vector<T>& items) {
-  Json out = Json::array();
-  for (const T& item : items) out.push_back(to_json(item));
-  return out;
-}
-
-Json to_json(const tc::HandSkeleton& s) {
-  return Json{{"topic", "HandSkeleton"},
-              {"hand", to_json(s.hand)},
-              {"rig", s.rig},
-              {"tick", s.tick},
-              {"time_s", s.time},
-              {"input_sequence", s.input_sequence},
-              {"input_client_time_ns", s.input_client_time_ns},
-              {"late_latched", s.late_latched},
-              {"frozen", s.frozen},
-              {"X_WorldPalm", to_json(s.X_WorldPalm)},
-              {"X_WorldPhalanx", to_json_array(s.X_WorldPhalanx)},
-              {"joint_angles_rad", s.joint_angles}};
-}
-
-Json to_json(const tc::GraspState& s) {
-  return Json{{"topic", "GraspState"},
-              {"hand", to_json(s.hand)},
-              {"tick", s.tick},
-              {"time_s", s.time},
-              {"selected_object", s.selected_object},
-              {"grasped_object", s.grasped_object},
-              {"trigger", s.trigger},
-              {"blocked", s.blocked},
-              {"palm_contact", s.palm_contact}};
-}
-
-Json to_json(const tc::ContactSet& s) {
-  return Json{{"topic", "ContactSet"},
-              {"hand", to_json(s.hand)},
-              {"tick", s.tick},
-              {"time_s", s.time},
-              {"object_id", s.object_id},
-              {"X_WorldObject", to_json(s.X_WorldObject)},
-              {"contacts", to_json_array(s.contacts)}};
-}
-
-Json to_json(const tc::GraspEvent& e) {
-  using Kind = tc::GraspEvent::Kind;
-  Json j{{"topic", "GraspEvent"},
-         {"event_id", e.event_id},
-         {"kind", e.kind == Kind::kGrasp     ? "grasp"
-                  : e.kind == Kind::kRelease ? "release"
-                                             : "unknown"},
-         {"hand", to_json(e.hand)},
-         {"object_id", e.object_id},
-         {"object_name", e.object_name},
-         {"tick", e.tick},
-         {"time_s", e.time},
-         {"object_spawn_time_s", e.object_spawn_time},
-         {"X_WorldObject", to_json(e.X_WorldObject)},
-         {"input_sequence", e.input_sequence}};
-  if (e.kind == Kind::kRelease) {
-    j["v_WorldObject_m_per_s"] = to_json(e.v_WorldObject);
-    j["w_WorldObject_rad_per_s"] = to_json(e.w_WorldObject);
-  } else {
-    j["hand_error_mm"] = e.hand_error_mm;
-    j["capsules_without_hit"] = e.capsules_without_hit;
-    j["capsules"] = to_json_array(e.capsules);
-    j["contacts"] = to_json_array(e.contacts);
-  }
-  return j;
-}
-
-Json to_json(const tc::SceneState& s) {
-  return Json{{"topic", "SceneState"}, {"tick", s.tick}, {"time_s", s.time}, {"objects", to_json_array(s.objects)}};
-}
-
-Json to_json(const tc::ServerStatus& s) {
-  Json rejected = Json::object();
-  for (const auto& [reason, count] : s.rejected) rejected[reason] = count;
-  return Json{{"topic", "ServerStatus"},
-              {"tick", s.tick},
-              {"time_s", s.time},
-              {"tick_rate_hz", s.tick_rate_hz},
-              {"clients", s.clients},
-              {"hands", s.hands},
-              {"objects", s.objects},
-              {"tick_us_p50", s.tick_us_p50},
-              {"tick_us_max", s.tick_us_max},
-              {"missed_ticks", s.missed_ticks},
-              {"inputs_accepted", s.inputs_accepted},
-              {"inputs_rejected", s.inputs_rejected},
-              {"rejected", rejected},
-              {"commands_accepted", s.commands_accepted},
-              {"commands_rejected", s.commands_rejected},
-              {"models", s.models}};
-}
-
-// A summary: the mesh itself is too large for a line.
-Json to_json(const tc::ObjectGeometry& g) {
-  char hash[19];
-  std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(g.content_hash));
-  return Json{{"topic", "ObjectGeometry"},
-              {"model", g.model},
-              {"content_hash", hash},
-              {"vertex_count", g.vertex_count},
-              {"triangle_count", g.triangle_count},
-              {"mesh_omitted", g.mesh_omitted},
-              {"p_ObjectMin_m", to_json(g.p_ObjectMin)},
-              {"p_ObjectMax_m", to_json(g.p_ObjectMax)},
-              {"mass_kg", g.mass_kg},
-              {"volume_m3", g.volume_m3},
-              {"inertia_diagonal_kg_m2", to_json(g.inertia_diagonal)}};
-}
+Json to_json(const tc::HandSkeleton& s) { return with_topic("HandSkeleton", form::hand_skeleton<Json>(s)); }
+Json to_json(const tc::GraspState& s) { return with_topic("GraspState", form::grasp_state<Json>(s)); }
+Json to_json(const tc::ContactSet& s) { return with_topic("ContactSet", form::contact_set<Json>(s)); }
+Json to_json(const tc::GraspEvent& e) { return with_topic("GraspEvent", form::grasp_event<Json>(e)); }
+Json to_json(const tc::SceneState& s) { return with_topic("SceneState", form::scene_state<Json>(s)); }
+Json to_json(const tc::ServerStatus& s) { return with_topic("ServerStatus", form::server_status<Json>(s)); }
+Json to_json(const tc::ObjectGeometry& g) { return with_topic("ObjectGeometry", form::object_geometry<Json>(g)); }
 
 // ---------------------------------------------------------------------------------------------
 // Command line.

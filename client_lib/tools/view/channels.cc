@@ -73,7 +73,13 @@ Json grasp_event_schema() {
                                                                        {"nd_mm", Json{{"type", {"number", "null"}}}},
                                                                        {"signed_distance_mm", number()},
                                                                        {"blocked", boolean()}}))},
-              {"contacts", integer()},
+              {"contacts", array_of(object("telegrasp.ContactPoint", {{"phalanx", integer()},
+                                                                     {"p_WorldContact_m", vec3()},
+                                                                     {"n_World", vec3()},
+                                                                     {"p_ObjectContact_m", vec3()},
+                                                                     {"n_Object", vec3()},
+                                                                     {"nd_mm", Json{{"type", {"number", "null"}}}},
+                                                                     {"nd_hit", boolean()}}))},
               {"v_WorldObject_m_per_s", vec3()},
               {"w_WorldObject_rad_per_s", vec3()}});
   s["description"] = "A grasp or release (GraspEvent topic); grasps carry the paper's metrics (nd_mm null: no hit)";
@@ -95,7 +101,8 @@ Json server_status_schema() {
                                         {"inputs_rejected", integer()},
                                         {"rejected", Json{{"type", "object"}, {"additionalProperties", integer()}}},
                                         {"commands_accepted", integer()},
-                                        {"commands_rejected", integer()}});
+                                        {"commands_rejected", integer()},
+                                        {"models", array_of(string())}});
   s["description"] = "The server's status, once a second (ServerStatus topic)";
   return s;
 }

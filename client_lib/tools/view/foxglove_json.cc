@@ -1,5 +1,7 @@
 #include "foxglove_json.h"
 
+#include "client_json.h"
+
 #include <array>
 #include <cmath>
 
@@ -9,17 +11,6 @@ namespace {
 Json vec3(const Eigen::Vector3d& v) { return Json{{"x", v.x()}, {"y", v.y()}, {"z", v.z()}}; }
 
 Json colour(const Rgba& c) { return Json{{"r", c.r}, {"g", c.g}, {"b", c.b}, {"a", c.a}}; }
-
-// telegrasp-echo's pose and vector forms and field names (the unit of every quantity in its
-// name), for the telegrasp.* messages.
-Json echo_vec(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); }
-Json echo_pose(const Eigen::Isometry3d& X) {
-  const Eigen::Quaterniond q(X.linear());
-  return Json{{"p_m", echo_vec(X.translation())}, {"q_wxyz", Json::array({q.w(), q.x(), q.y(), q.z()})}};
-}
-Json echo_hand(const client::HandKey& hand) {
-  return Json{{"client_id", hand.client_id}, {"side", client::to_string(hand.side)}};
-}
 
 std::string hand_prefix(const client::HandKey& hand) { return hand.client_id + "/" + client::to_string(hand.side); }
 
@@ -162,7 +153,7 @@ Json grasp_state_message(const client::GraspState& s, const std::vector<std::str
   for (std::size_t i = 0; i < s.blocked.size(); ++i)
     phalanges.push_back(Json{{"name", i < phalanx_names.size() ? phalanx_names[i] : "phalanx " + std::to_string(i)},
                              {"blocked", static_cast<bool>(s.blocked[i])}});
-  return Json{{"hand", echo_hand(s.hand)},
+  return Json{{"hand", tools::json_form::hand<Json>(s.hand)},
               {"tick", s.tick},
               {"time_s", s.time},
               {"selected_object", s.selected_object},
@@ -172,55 +163,8 @@ Json grasp_state_message(const client::GraspState& s, const std::vector<std::str
               {"phalanges", std::move(phalanges)}};
 }
 
-Json grasp_event_message(const client::GraspEvent& e) {
-  const bool grasp = e.kind == client::GraspEvent::Kind::kGrasp;
-  Json j{{"event_id", e.event_id},
-         {"kind", grasp ? "grasp" : "release"},
-         {"hand", echo_hand(e.hand)},
-         {"object_id", e.object_id},
-         {"object_name", e.object_name},
-         {"tick", e.tick},
-         {"time_s", e.time},
-         {"object_spawn_time_s", e.object_spawn_time},
-         {"X_WorldObject", echo_pose(e.X_WorldObject)},
-         {"input_sequence", e.input_sequence}};
-  if (grasp) {
-    j["hand_error_mm"] = e.hand_error_mm;
-    j["capsules_without_hit"] = e.capsules_without_hit;
-    Json capsules = Json::array();
-    for (const client::CapsuleMetric& c : e.capsules)
-      capsules.push_back(Json{{"phalanx", c.phalanx},
-                              {"phalanx_name", c.phalanx_name},
-                              {"hit", c.hit},
-                              {"nd_mm", c.hit ? Json(c.nd * 1e3) : Json(nullptr)},  // "no hit" is not 0
-                              {"signed_distance_mm", c.signed_distance * 1e3},
-                              {"blocked", c.blocked}});
-    j["capsules"] = std::move(capsules);
-    j["contacts"] = e.contacts.size();
-  } else {
-    j["v_WorldObject_m_per_s"] = echo_vec(e.v_WorldObject);
-    j["w_WorldObject_rad_per_s"] = echo_vec(e.w_WorldObject);
-  }
-  return j;
-}
+Json grasp_event_message(const client::GraspEvent& e) { return tools::json_form::grasp_event<Json>(e); }
 
-Json server_status_message(const client::ServerStatus& s) {
-  Json rejected = Json::object();
-  for (const auto& [reason, count] : s.rejected) rejected[reason] = count;
-  return Json{{"tick", s.tick},
-              {"time_s", s.time},
-              {"tick_rate_hz", s.tick_rate_hz},
-              {"clients", s.clients},
-              {"hands", s.hands},
-              {"objects", s.objects},
-              {"tick_us_p50", s.tick_us_p50},
-              {"tick_us_max", s.tick_us_max},
-              {"missed_ticks", s.missed_ticks},
-              {"inputs_accepted", s.inputs_accepted},
-              {"inputs_rejected", s.inputs_rejected},
-              {"rejected", std::move(rejected)},
-              {"commands_accepted", s.commands_accepted},
-              {"commands_rejected", s.commands_rejected}};
-}
+Json server_status_message(const client::ServerStatus& s) { return tools::json_form::server_status<Json>(s); }
 
 }  // namespace telegrasp::view
