@@ -5,12 +5,14 @@
 
 #include "child_process.h"
 #include "cli.h"
+#include "test_domain.h"
 
 #include "telegrasp/idl/dds_participant.h"
 #include "telegrasp/idl/telegrasp.h"
 
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
 
+#include <iostream>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -55,6 +57,24 @@ struct CommonOptions {
   std::string server_log;
   bool late_latch = true;
 };
+
+/// Runs `run(o)` on o.domain, or, when none was given (-1), on a domain leased for the run, which
+/// no test run or other benchmark uses meanwhile (the server and the children hold it too).
+/// Prints what `run` throws, naming `tool`, and returns cli::kExitFailure then; else what it returns.
+template <class Options, class Run>
+int run_on_domain(const char* tool, Options& o, Run run) {
+  try {
+    std::optional<telegrasp::testing::DomainLease> lease;
+    if (o.domain < 0) {
+      lease.emplace();
+      o.domain = lease->domain();
+    }
+    return run(o);
+  } catch (const std::exception& e) {
+    std::cerr << tool << ": " << e.what() << "\n";
+    return cli::kExitFailure;
+  }
+}
 
 /// Takes flag `f` into `o` if it is one of CommonOptions' (--sample-hz, --hz, --tick-hz, --json,
 /// --profile, --profiles, --domain, --server, --server-arg, --server-log, --no-late-latch);

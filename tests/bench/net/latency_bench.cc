@@ -666,18 +666,6 @@ int main(int argc, char** argv) {
         return 1;
       }
     }
-  Options o = parse(argc, argv);  // the domain may still be leased below
-  try {
-    // Unless told otherwise, a domain that no test run or other benchmark uses meanwhile (the
-    // server and the children started hold it too).
-    std::optional<telegrasp::testing::DomainLease> lease;
-    if (o.domain < 0) {
-      lease.emplace();
-      o.domain = lease->domain();
-    }
-    return run(o);
-  } catch (const std::exception& e) {
-    std::cerr << "telegrasp-bench-latency: " << e.what() << "\n";
-    return cli::kExitFailure;
-  }
+  Options o = parse(argc, argv);
+  return run_on_domain(kTool, o, run);
 }
