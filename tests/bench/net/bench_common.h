@@ -12,12 +12,12 @@
 
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
 
-#include <iostream>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
+#include <iostream>
 #include <map>
 #include <memory>
 #include <mutex>
