@@ -409,7 +409,9 @@ TEST(ClientLoopbackTest, ANewCallbackIsCaughtUpWithWhatArrivedBefore) {
   dds::DataWriter* event_writer = server.writer<msg::GraspEventPubSubType>(idl::kGraspEventTopic);
   Client client(options("late", domain, kServerStatuses | kGraspEvents));
 
-  // A status and two events arrive while no callback is set (seen by polling).
+  // A status and two events arrive while no callback is set (seen by polling). Written once the
+  // client's reader has matched, so the test does not depend on how fast discovery is.
+  ASSERT_TRUE(eventually([&] { return matched(status_writer); }));
   msg::ServerStatus status;
   status.tick(42);
   ASSERT_TRUE(status_writer->write(&status));
