@@ -31,10 +31,10 @@ using client_lib::to_msg;
 
 namespace {
 
-constexpr std::size_t kMaxClientIdChars = 64;   // string<64> in the IDL
-constexpr int kMaxDomain = 232;                 // the highest domain whose UDP ports fit in 16 bits
-constexpr std::size_t kMaxCurls = 5;            // sequence<double, 5>
-constexpr std::size_t kMaxModelChars = 128;     // string<128>
+constexpr std::size_t kMaxClientIdChars = 64;  // string<64> in the IDL
+constexpr int kMaxDomain = 232;  // the highest domain whose UDP ports fit in 16 bits
+constexpr std::size_t kMaxCurls = 5;  // sequence<double, 5>
+constexpr std::size_t kMaxModelChars = 128;  // string<128>
 constexpr std::size_t kMaxQueuedGraspEvents = 4096;
 constexpr std::chrono::milliseconds kServerPollPeriod{10};
 
@@ -49,7 +49,8 @@ void validate(const ClientOptions& o) {
     throw std::runtime_error("ClientOptions.domain is " + std::to_string(o.domain) + "; expected 0.." +
                              std::to_string(kMaxDomain));
   if (o.profile.empty())
-    throw std::runtime_error("ClientOptions.profile is empty; expected a participant profile name (loopback, lan, wan)");
+    throw std::runtime_error(
+        "ClientOptions.profile is empty; expected a participant profile name (loopback, lan, wan)");
   if ((o.topics & ~static_cast<unsigned>(kAllTopics)) != 0)
     throw std::runtime_error("ClientOptions.topics has bits outside kAllTopics");
 }
@@ -117,7 +118,8 @@ struct Client::Impl {
   template <class T>
   void call(Channel<T>& channel, const T& value, const char* what);
   template <class T, class Snapshot>
-  void set_callback(Channel<T>& channel, std::function<void(const T&)> callback, const Snapshot& snapshot, const char* what);
+  void set_callback(Channel<T>& channel, std::function<void(const T&)> callback, const Snapshot& snapshot,
+                    const char* what);
 
   const ClientOptions options;
   std::vector<std::unique_ptr<dds::DataReaderListener>> listeners;  // outlive their readers
@@ -138,9 +140,9 @@ struct Client::Impl {
   std::optional<SceneState> scene;
   std::optional<ServerStatus> status;
   std::vector<GraspEvent> events;  // for take_grasp_events
-  std::map<std::string, std::shared_ptr<const ObjectGeometry>> geometries;         // newest per model
+  std::map<std::string, std::shared_ptr<const ObjectGeometry>> geometries;  // newest per model
   std::multimap<std::uint64_t, std::weak_ptr<const ObjectGeometry>> geometry_by_hash;  // cache of those in use
-  std::set<std::string> geometry_rejections_logged;                               // model and reason
+  std::set<std::string> geometry_rejections_logged;  // model and reason
 
   // User callbacks, one channel per output.
   Channel<HandSkeleton> skeleton_channel;
@@ -228,7 +230,8 @@ bool Client::Impl::server_ready() const {
   // Both writers: a command sent right after wait_for_server must not go to an unmatched reader.
   for (dds::DataWriter* w : {controller_writer, command_writer}) {
     dds::PublicationMatchedStatus matched;
-    if (w->get_publication_matched_status(matched) != ReturnCode_t::RETCODE_OK || matched.current_count <= 0) return false;
+    if (w->get_publication_matched_status(matched) != ReturnCode_t::RETCODE_OK || matched.current_count <= 0)
+      return false;
   }
   if ((options.topics & kServerStatuses) == 0) return true;
   std::lock_guard lock(data_mutex);
@@ -258,7 +261,8 @@ void Client::Impl::call(Channel<T>& channel, const T& value, const char* what) {
   try {
     channel.callback(value);
   } catch (const std::exception& e) {
-    if (!callback_threw.exchange(true)) std::cerr << "telegrasp client: the " << what << " callback threw: " << e.what() << "\n";
+    if (!callback_threw.exchange(true))
+      std::cerr << "telegrasp client: the " << what << " callback threw: " << e.what() << "\n";
   } catch (...) {
     if (!callback_threw.exchange(true)) std::cerr << "telegrasp client: the " << what << " callback threw\n";
   }
@@ -334,12 +338,13 @@ void Client::Impl::received(const msg::ServerStatus& m, const dds::InstanceHandl
 std::shared_ptr<const ObjectGeometry> Client::Impl::cached_geometry(const msg::ObjectGeometry& m) {
   const ObjectGeometry header = client_lib::from_msg_without_mesh(m);
   auto same_mesh = [&](const ObjectGeometry& c) {
-    return c.vertex_count == header.vertex_count && c.triangle_count == header.triangle_count && c.mesh_omitted == header.mesh_omitted;
+    return c.vertex_count == header.vertex_count && c.triangle_count == header.triangle_count &&
+           c.mesh_omitted == header.mesh_omitted;
   };
   auto same_rest = [&](const ObjectGeometry& c) {
     return c.model == header.model && c.p_ObjectMin == header.p_ObjectMin && c.p_ObjectMax == header.p_ObjectMax &&
-           c.mass_kg == header.mass_kg && c.volume_m3 == header.volume_m3 && c.inertia_diagonal == header.inertia_diagonal &&
-           c.p_ObjectSourceOrigin == header.p_ObjectSourceOrigin;
+           c.mass_kg == header.mass_kg && c.volume_m3 == header.volume_m3 &&
+           c.inertia_diagonal == header.inertia_diagonal && c.p_ObjectSourceOrigin == header.p_ObjectSourceOrigin;
   };
   std::shared_ptr<const ObjectGeometry> mesh_donor;
   {
@@ -443,45 +448,58 @@ std::vector<T> values_of(const std::map<HandKey, T>& by_hand) {
 }  // namespace
 
 void Client::on_hand_skeleton(std::function<void(const HandSkeleton&)> callback) {
-  impl_->set_callback(impl_->skeleton_channel, std::move(callback), [&] { return latest_hand_skeletons(); }, "HandSkeleton");
+  impl_->set_callback(
+      impl_->skeleton_channel, std::move(callback), [&] { return latest_hand_skeletons(); }, "HandSkeleton");
 }
 
 void Client::on_grasp_state(std::function<void(const GraspState&)> callback) {
-  impl_->set_callback(impl_->grasp_state_channel, std::move(callback), [&] {
-    std::lock_guard lock(impl_->data_mutex);
-    return values_of(impl_->grasp_states.latest);
-  }, "GraspState");
+  impl_->set_callback(
+      impl_->grasp_state_channel, std::move(callback),
+      [&] {
+        std::lock_guard lock(impl_->data_mutex);
+        return values_of(impl_->grasp_states.latest);
+      },
+      "GraspState");
 }
 
 void Client::on_contact_set(std::function<void(const ContactSet&)> callback) {
-  impl_->set_callback(impl_->contact_set_channel, std::move(callback), [&] {
-    std::lock_guard lock(impl_->data_mutex);
-    return values_of(impl_->contact_sets.latest);
-  }, "ContactSet");
+  impl_->set_callback(
+      impl_->contact_set_channel, std::move(callback),
+      [&] {
+        std::lock_guard lock(impl_->data_mutex);
+        return values_of(impl_->contact_sets.latest);
+      },
+      "ContactSet");
 }
 
 void Client::on_grasp_event(std::function<void(const GraspEvent&)> callback) {
   // Events are delivered once: only those no callback has seen are caught up.
-  impl_->set_callback(impl_->grasp_event_channel, std::move(callback), [&] { return std::exchange(impl_->unseen_events, {}); },
-                      "GraspEvent");
+  impl_->set_callback(
+      impl_->grasp_event_channel, std::move(callback), [&] { return std::exchange(impl_->unseen_events, {}); },
+      "GraspEvent");
 }
 
 void Client::on_scene_state(std::function<void(const SceneState&)> callback) {
-  impl_->set_callback(impl_->scene_state_channel, std::move(callback), [&] { return optional_as_vector(latest_scene_state()); },
-                      "SceneState");
+  impl_->set_callback(
+      impl_->scene_state_channel, std::move(callback), [&] { return optional_as_vector(latest_scene_state()); },
+      "SceneState");
 }
 
 void Client::on_server_status(std::function<void(const ServerStatus&)> callback) {
-  impl_->set_callback(impl_->server_status_channel, std::move(callback),
-                      [&] { return optional_as_vector(latest_server_status()); }, "ServerStatus");
+  impl_->set_callback(
+      impl_->server_status_channel, std::move(callback), [&] { return optional_as_vector(latest_server_status()); },
+      "ServerStatus");
 }
 
 void Client::on_object_geometry(std::function<void(const std::shared_ptr<const ObjectGeometry>&)> callback) {
-  impl_->set_callback(impl_->geometry_channel, std::move(callback), [&] {
-    std::vector<std::shared_ptr<const ObjectGeometry>> all;
-    for (auto& [model, g] : object_geometries()) all.push_back(std::move(g));
-    return all;
-  }, "ObjectGeometry");
+  impl_->set_callback(
+      impl_->geometry_channel, std::move(callback),
+      [&] {
+        std::vector<std::shared_ptr<const ObjectGeometry>> all;
+        for (auto& [model, g] : object_geometries()) all.push_back(std::move(g));
+        return all;
+      },
+      "ObjectGeometry");
 }
 
 std::shared_ptr<const ObjectGeometry> Client::object_geometry(const std::string& model) const {

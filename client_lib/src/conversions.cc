@@ -200,16 +200,20 @@ client::CapsuleMetric from_msg(const msg::CapsuleReport& m) {
 
 msg::GraspEventKind to_msg(client::GraspEvent::Kind kind) {
   switch (kind) {
-    case client::GraspEvent::Kind::kGrasp: return msg::GRASP_EVENT_GRASP;
-    case client::GraspEvent::Kind::kRelease: return msg::GRASP_EVENT_RELEASE;
+    case client::GraspEvent::Kind::kGrasp:
+      return msg::GRASP_EVENT_GRASP;
+    case client::GraspEvent::Kind::kRelease:
+      return msg::GRASP_EVENT_RELEASE;
   }
   return static_cast<msg::GraspEventKind>(kind);  // not a kind: sent unchanged
 }
 
 client::GraspEvent::Kind from_msg(msg::GraspEventKind kind) {
   switch (kind) {
-    case msg::GRASP_EVENT_GRASP: return client::GraspEvent::Kind::kGrasp;
-    case msg::GRASP_EVENT_RELEASE: return client::GraspEvent::Kind::kRelease;
+    case msg::GRASP_EVENT_GRASP:
+      return client::GraspEvent::Kind::kGrasp;
+    case msg::GRASP_EVENT_RELEASE:
+      return client::GraspEvent::Kind::kRelease;
   }
   return static_cast<client::GraspEvent::Kind>(kind);  // not a kind: kept unchanged
 }
@@ -300,18 +304,24 @@ client::SceneState from_msg(const msg::SceneState& m) {
 
 msg::SceneCommandKind to_msg(client::SceneCommand::Kind kind) {
   switch (kind) {
-    case client::SceneCommand::Kind::kSpawn: return msg::SCENE_SPAWN;
-    case client::SceneCommand::Kind::kRemove: return msg::SCENE_REMOVE;
-    case client::SceneCommand::Kind::kReset: return msg::SCENE_RESET;
+    case client::SceneCommand::Kind::kSpawn:
+      return msg::SCENE_SPAWN;
+    case client::SceneCommand::Kind::kRemove:
+      return msg::SCENE_REMOVE;
+    case client::SceneCommand::Kind::kReset:
+      return msg::SCENE_RESET;
   }
   return static_cast<msg::SceneCommandKind>(kind);  // not a kind: sent unchanged
 }
 
 client::SceneCommand::Kind from_msg(msg::SceneCommandKind kind) {
   switch (kind) {
-    case msg::SCENE_SPAWN: return client::SceneCommand::Kind::kSpawn;
-    case msg::SCENE_REMOVE: return client::SceneCommand::Kind::kRemove;
-    case msg::SCENE_RESET: return client::SceneCommand::Kind::kReset;
+    case msg::SCENE_SPAWN:
+      return client::SceneCommand::Kind::kSpawn;
+    case msg::SCENE_REMOVE:
+      return client::SceneCommand::Kind::kRemove;
+    case msg::SCENE_RESET:
+      return client::SceneCommand::Kind::kReset;
   }
   return static_cast<client::SceneCommand::Kind>(kind);  // not a kind: kept unchanged
 }
@@ -449,7 +459,8 @@ std::string check_object_geometry(const msg::ObjectGeometry& m) {
   for (float c : xyz)
     if (!std::isfinite(c)) return "a non-finite vertex coordinate";
   for (std::uint32_t i : idx)
-    if (i >= m.vertex_count()) return "triangle index " + std::to_string(i) + " past the " + std::to_string(m.vertex_count()) + " vertices";
+    if (i >= m.vertex_count())
+      return "triangle index " + std::to_string(i) + " past the " + std::to_string(m.vertex_count()) + " vertices";
   if (idl::geometry_content_hash(xyz.data(), m.vertex_count(), idx.data(), m.triangle_count()) != m.content_hash())
     return "content_hash does not match the mesh";
   return "";

@@ -87,8 +87,7 @@ msg::SceneCommandKind to_msg(client::SceneCommand::Kind kind);
 client::SceneCommand::Kind from_msg(msg::SceneCommandKind kind);
 
 /// A scene command from `client_id`, numbered `command_id`, as the IDL message.
-msg::SceneCommand to_msg(const client::SceneCommand& command, const std::string& client_id,
-                         std::uint64_t command_id);
+msg::SceneCommand to_msg(const client::SceneCommand& command, const std::string& client_id, std::uint64_t command_id);
 /// An IDL scene command as the client type (client and command id are the message's).
 client::SceneCommand from_msg(const msg::SceneCommand& command);
 

@@ -4,8 +4,10 @@ namespace telegrasp::client {
 
 std::string to_string(HandSide side) {
   switch (side) {
-    case HandSide::kLeft: return "left";
-    case HandSide::kRight: return "right";
+    case HandSide::kLeft:
+      return "left";
+    case HandSide::kRight:
+      return "right";
   }
   return "side" + std::to_string(static_cast<unsigned>(side));
 }

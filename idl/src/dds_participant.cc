@@ -21,8 +21,8 @@ DdsParticipant::DdsParticipant(int domain, const std::string& profile, const std
   load_profiles(profiles_file_, profile_);
   participant_ = dds::DomainParticipantFactory::get_instance()->create_participant_with_profile(domain, profile_);
   if (participant_ == nullptr)
-    throw std::runtime_error("cannot join DDS domain " + std::to_string(domain) + " with participant profile '" + profile_ +
-                             "' of " + profiles_file_);
+    throw std::runtime_error("cannot join DDS domain " + std::to_string(domain) + " with participant profile '" +
+                             profile_ + "' of " + profiles_file_);
   publisher_ = participant_->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
   subscriber_ = participant_->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
   if (publisher_ == nullptr || subscriber_ == nullptr) {
@@ -70,8 +70,8 @@ dds::DataWriter* DdsParticipant::make_writer(const std::string& name, TypeFactor
   return w;
 }
 
-dds::DataReader* DdsParticipant::make_reader(const std::string& name, TypeFactory type, dds::DataReaderListener* listener,
-                                             const std::string& qos_of) {
+dds::DataReader* DdsParticipant::make_reader(const std::string& name, TypeFactory type,
+                                             dds::DataReaderListener* listener, const std::string& qos_of) {
   const std::string profile = (qos_of.empty() ? name : qos_of) + kReaderSuffix;
   dds::DataReader* r = subscriber_->create_datareader_with_profile(topic(name, type), profile, listener);
   if (r == nullptr)

@@ -27,7 +27,8 @@ void load_profiles(const std::string& path_in, const std::string& participant_pr
   std::lock_guard lock(mutex);
   if (!loaded.count(path)) {
     if (!std::filesystem::is_regular_file(path))
-      throw std::runtime_error("Fast DDS profiles file " + path + " does not exist (set --profiles or TELEGRASP_PROFILES)");
+      throw std::runtime_error("Fast DDS profiles file " + path +
+                               " does not exist (set --profiles or TELEGRASP_PROFILES)");
     if (DomainParticipantFactory::get_instance()->load_XML_profiles_file(path) != ReturnCode_t::RETCODE_OK)
       throw std::runtime_error("Fast DDS profiles file " + path + " is not valid Fast DDS XML");
     loaded.insert(path);

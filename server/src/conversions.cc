@@ -30,12 +30,14 @@ msg::HandSkeleton make_hand_skeleton(const HandAddress& address, const sim::Hand
   m.frozen(frozen);
   m.palm(to_msg(X_WorldPalm));
   m.phalanges().reserve(s.X_PalmPhalanx.size());
-  for (const Eigen::Isometry3d& X_PalmPhalanx : s.X_PalmPhalanx) m.phalanges().push_back(to_msg(X_WorldPalm * X_PalmPhalanx));
+  for (const Eigen::Isometry3d& X_PalmPhalanx : s.X_PalmPhalanx)
+    m.phalanges().push_back(to_msg(X_WorldPalm * X_PalmPhalanx));
   m.joint_angles(s.q);
   return m;
 }
 
-msg::GraspState make_grasp_state(const HandAddress& address, const sim::HandController& hand, std::uint64_t tick, double time) {
+msg::GraspState make_grasp_state(const HandAddress& address, const sim::HandController& hand, std::uint64_t tick,
+                                 double time) {
   const sim::HandState& s = hand.state();
   msg::GraspState m;
   m.client_id(address.client_id);

@@ -41,7 +41,8 @@ struct InputStamp {
 msg::HandSkeleton make_hand_skeleton(const HandAddress& address, const sim::HandController& hand, std::uint64_t tick,
                                      double time, const InputStamp& input, bool frozen,
                                      const Eigen::Isometry3d* X_WorldPalm_override = nullptr);
-msg::GraspState make_grasp_state(const HandAddress& address, const sim::HandController& hand, std::uint64_t tick, double time);
+msg::GraspState make_grasp_state(const HandAddress& address, const sim::HandController& hand, std::uint64_t tick,
+                                 double time);
 msg::ContactPoint to_msg(const sim::Contact& contact);
 sim::Contact to_sim(const msg::ContactPoint& contact);
 /// Contacts of the grasp `hand` holds, with the object's pose at this tick.

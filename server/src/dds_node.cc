@@ -19,7 +19,8 @@ namespace dds = eprosima::fastdds::dds;
 namespace {
 
 std::int64_t steady_now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
 }
 
 // Controller states go straight to the mailbox, with the writing participant's GUID prefix.
@@ -73,8 +74,8 @@ struct DdsNode::Impl {
   ControllerStateListener input_listener;
   SceneCommandListener command_listener;
   idl::DdsParticipant participant;
-  dds::DataWriter *skeleton = nullptr, *grasp_state = nullptr, *contacts = nullptr, *events = nullptr,
-                  *scene = nullptr, *status = nullptr, *geometry = nullptr;
+  dds::DataWriter *skeleton = nullptr, *grasp_state = nullptr, *contacts = nullptr, *events = nullptr, *scene = nullptr,
+                  *status = nullptr, *geometry = nullptr;
 };
 
 DdsNode::DdsNode(int domain, const std::string& profile, const std::string& profiles_file, InputMailbox& mailbox)
@@ -100,7 +101,8 @@ void DdsNode::publish_geometries(const std::vector<sim::ObjectModelPtr>& models)
     if (m.mesh_omitted())
       std::cerr << "telegrasp-server: model " << model->name << " has " << m.triangle_count() << " triangles, over the "
                 << msg::OBJECT_GEOMETRY_MAX_TRIANGLES << " ObjectGeometry carries: published without its mesh\n";
-    if (!impl_->geometry->write(&m)) std::cerr << "telegrasp-server: could not publish the geometry of model " << model->name << "\n";
+    if (!impl_->geometry->write(&m))
+      std::cerr << "telegrasp-server: could not publish the geometry of model " << model->name << "\n";
   }
 }
 

@@ -4,7 +4,8 @@
 
 namespace telegrasp::server {
 
-InputMailbox::InputMailbox(std::array<std::size_t, 2> fingers, int max_hands, std::function<void(const std::string&)> log)
+InputMailbox::InputMailbox(std::array<std::size_t, 2> fingers, int max_hands,
+                           std::function<void(const std::string&)> log)
     : fingers_(fingers), max_hands_(max_hands), log_(std::move(log)) {
   if (!log_) log_ = [](const std::string& line) { std::cerr << line << std::endl; };
 }

@@ -31,7 +31,8 @@ bool validate_controller_state(const msg::ControllerState& s, const std::array<s
     return false;
   };
   if (s.client_id().size() == 0) return reject(RejectReason::kEmptyClientId);
-  if (s.hand_side() != idl::kHandLeft && s.hand_side() != idl::kHandRight) return reject(RejectReason::kUnknownHandSide);
+  if (s.hand_side() != idl::kHandLeft && s.hand_side() != idl::kHandRight)
+    return reject(RejectReason::kUnknownHandSide);
   if (!finite(s.palm()) || !std::isfinite(s.trigger())) return reject(RejectReason::kNonFinite);
   for (double c : s.curls())
     if (!std::isfinite(c)) return reject(RejectReason::kNonFinite);

@@ -18,7 +18,8 @@ std::int64_t call_time(const proto::Record& r) {
 
 }  // namespace
 
-RecordedFeed::RecordedFeed(RecordingReader& reader, OutputCapture& capture, std::function<void(const RecordingReader&)> progress)
+RecordedFeed::RecordedFeed(RecordingReader& reader, OutputCapture& capture,
+                           std::function<void(const RecordingReader&)> progress)
     : reader_(reader), capture_(capture), progress_(std::move(progress)) {}
 
 LoopClock::time_point RecordedFeed::now() {
@@ -78,7 +79,8 @@ bool RecordedFeed::add(const proto::Record& call, Divergence& undecodable) {
       if (!from_cdr(p.controller_state_cdr(), s.state)) {
         undecodable.type = "ControllerState";
         undecodable.key = hand_text(s.hand.client_id, s.hand.side);
-        undecodable.message = "the recorded ControllerState of the " + undecodable.key + " does not decode with this build's IDL";
+        undecodable.message =
+            "the recorded ControllerState of the " + undecodable.key + " does not decode with this build's IDL";
         current_.inputs.clear();
         return false;
       }

@@ -45,7 +45,8 @@ class OutputCapture final : public OutputSink {
 class RecordedFeed final : public LoopClock, public LoopSource, public SceneCallObserver {
  public:
   /// `capture` must be the replayed scene's sink; `progress` is called every few thousand records.
-  RecordedFeed(RecordingReader& reader, OutputCapture& capture, std::function<void(const RecordingReader&)> progress = {});
+  RecordedFeed(RecordingReader& reader, OutputCapture& capture,
+               std::function<void(const RecordingReader&)> progress = {});
 
   time_point now() override;
   void wait_until(time_point deadline) override;

@@ -112,7 +112,8 @@ proto::RecordingHeader make_recording_header(const ServerSettings& settings, con
   h.set_format_version(kRecordingFormatVersion);
   h.set_telegrasp_version(TELEGRASP_VERSION);
   h.set_created_unix_ns(
-      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count());
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+          .count());
   *h.mutable_config() = to_proto(settings);
   h.mutable_right_rig()->set_path(assets.right_rig_path);
   h.mutable_right_rig()->set_text(assets.right_rig_text);
@@ -194,7 +195,9 @@ void RecordingWriter::close(bool end_record) {
 // Recorder
 
 Recorder::Recorder(const std::string& path, const ServerSettings& settings, const SceneAssets& assets, OutputSink& next)
-    : writer_(path, make_recording_header(settings, assets)), next_(next), last_flush_(std::chrono::steady_clock::now()) {}
+    : writer_(path, make_recording_header(settings, assets)),
+      next_(next),
+      last_flush_(std::chrono::steady_clock::now()) {}
 
 void Recorder::write(const proto::Record& record) {
   writer_.write(record);
@@ -203,7 +206,8 @@ void Recorder::write(const proto::Record& record) {
 
 void Recorder::log_error_once() {
   if (!writer_.error().empty() && !error_logged_) {
-    std::cerr << "telegrasp-server: " << writer_.error() << ": recording stopped after " << writer_.records() << " records\n";
+    std::cerr << "telegrasp-server: " << writer_.error() << ": recording stopped after " << writer_.records()
+              << " records\n";
     error_logged_ = true;
   }
 }
@@ -295,13 +299,16 @@ RecordingReader::RecordingReader(const std::string& path) : path_(path), in_(pat
   in_.seekg(0);
   char magic[kRecordingMagicSize];
   in_.read(magic, kRecordingMagicSize);
-  if (static_cast<std::size_t>(in_.gcount()) != kRecordingMagicSize || std::memcmp(magic, kRecordingMagic, kRecordingMagicSize) != 0)
-    throw RecordingError("recording " + path + ": not a telegrasp recording (it does not start with \"telegrasp-recording\")");
+  if (static_cast<std::size_t>(in_.gcount()) != kRecordingMagicSize ||
+      std::memcmp(magic, kRecordingMagic, kRecordingMagicSize) != 0)
+    throw RecordingError("recording " + path +
+                         ": not a telegrasp recording (it does not start with \"telegrasp-recording\")");
   offset_ = kRecordingMagicSize;
   std::string payload, why;
   const Frame f = read_frame(payload, why);
   auto header_error = [&](const char* what, const std::string& detail) {
-    return RecordingError("recording " + path + ": header at byte " + std::to_string(frame_start_) + " is " + what + " (" + detail + ")");
+    return RecordingError("recording " + path + ": header at byte " + std::to_string(frame_start_) + " is " + what +
+                          " (" + detail + ")");
   };
   if (f == Frame::kEndOfFile) throw header_error("missing", "the file ends after the magic");
   if (f == Frame::kTruncated) throw header_error("truncated", why);
@@ -354,7 +361,8 @@ RecordingReader::Frame RecordingReader::read_frame(std::string& payload, std::st
     return Frame::kTruncated;
   }
   const std::uint32_t expected = static_cast<std::uint32_t>(stored[0]) | static_cast<std::uint32_t>(stored[1]) << 8 |
-                                 static_cast<std::uint32_t>(stored[2]) << 16 | static_cast<std::uint32_t>(stored[3]) << 24;
+                                 static_cast<std::uint32_t>(stored[2]) << 16 |
+                                 static_cast<std::uint32_t>(stored[3]) << 24;
   const std::uint32_t actual = crc32(payload.data(), payload.size(), crc32(length_bytes, n));
   if (actual != expected) {
     why = "checksum mismatch";
@@ -368,8 +376,9 @@ bool RecordingReader::fail(bool truncated, const std::string& why) {
   d.record = records_;
   d.byte = frame_start_;
   d.truncated = truncated;
-  d.message = "recording " + path_ + ": record " + std::to_string(records_) + " at byte " + std::to_string(frame_start_) + " is " +
-              (truncated ? "truncated" : "corrupt") + " (" + why + "); the " + plural(records_, "record") + " before it are kept";
+  d.message = "recording " + path_ + ": record " + std::to_string(records_) + " at byte " +
+              std::to_string(frame_start_) + " is " + (truncated ? "truncated" : "corrupt") + " (" + why + "); the " +
+              plural(records_, "record") + " before it are kept";
   damage_ = std::move(d);
   finished_ = true;
   return false;
@@ -396,7 +405,8 @@ bool RecordingReader::next(proto::Record& record) {
     return true;
   }
   if (record.end().records() != records_)
-    return fail(false, "its End record counts " + plural(record.end().records(), "record") + ", the file has " + std::to_string(records_));
+    return fail(false, "its End record counts " + plural(record.end().records(), "record") + ", the file has " +
+                           std::to_string(records_));
   complete_ = true;
   frame_start_ = offset_;
   if (in_.peek() != std::char_traits<char>::eof()) return fail(false, "bytes follow the End record");
@@ -415,8 +425,8 @@ Recording read_recording(const std::string& path) {
   return r;
 }
 
-void write_recording(const std::string& path, const proto::RecordingHeader& header, const std::vector<proto::Record>& records,
-                     bool complete) {
+void write_recording(const std::string& path, const proto::RecordingHeader& header,
+                     const std::vector<proto::Record>& records, bool complete) {
   RecordingWriter w(path, header);
   for (const auto& r : records) w.write(r);
   w.close(complete);

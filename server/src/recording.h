@@ -142,9 +142,9 @@ class Recorder : public OutputSink, public SceneCallObserver {
 /// Where a recording is damaged: its first bad frame.
 struct RecordingDamage {
   std::uint64_t record = 0;  ///< Index of the first damaged record = the records kept before it.
-  std::uint64_t byte = 0;    ///< Offset of its frame in the file.
-  bool truncated = false;    ///< The file ends inside (or, with no End record, at) this frame; else corrupt.
-  std::string message;       ///< "recording F: record K at byte B is truncated (...); the K records before it are kept".
+  std::uint64_t byte = 0;  ///< Offset of its frame in the file.
+  bool truncated = false;  ///< The file ends inside (or, with no End record, at) this frame; else corrupt.
+  std::string message;  ///< "recording F: record K at byte B is truncated (...); the K records before it are kept".
 };
 
 /// Reads a recording one record at a time. The magic and header are read on construction; every

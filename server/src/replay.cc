@@ -28,13 +28,14 @@ std::string hex64(std::uint64_t v) {
 }
 
 // A rig from its embedded text, never from the file it names: that file may have changed since.
-std::shared_ptr<const sim::HandRig> recorded_rig(const proto::RigText& r, const std::string& origin, const char* field, std::string& path,
-                                                 std::string& text) {
+std::shared_ptr<const sim::HandRig> recorded_rig(const proto::RigText& r, const std::string& origin, const char* field,
+                                                 std::string& path, std::string& text) {
   if (r.text().empty()) throw RecordingError(origin + ": header." + field + " holds no rig text");
   path = r.path();
   text = r.text();
   try {
-    return std::make_shared<const sim::HandRig>(sim::HandRig::parse(r.text(), origin + ": header." + field + " (" + r.path() + ")"));
+    return std::make_shared<const sim::HandRig>(
+        sim::HandRig::parse(r.text(), origin + ": header." + field + " (" + r.path() + ")"));
   } catch (const sim::RigError& e) {
     throw RecordingError(e.what());
   }
@@ -42,7 +43,8 @@ std::shared_ptr<const sim::HandRig> recorded_rig(const proto::RigText& r, const 
 
 // Loads the recorded mesh files from `dir` into `a`. Every file is checked against its recorded
 // size and hash before any is loaded, so one message names all that are missing or changed.
-void load_recorded_meshes(const proto::ModelSource& ms, const std::string& dir, const std::string& origin, SceneAssets& a) {
+void load_recorded_meshes(const proto::ModelSource& ms, const std::string& dir, const std::string& origin,
+                          SceneAssets& a) {
   namespace fs = std::filesystem;
   a.model_source.objects_dir = dir;
   std::vector<std::string> problems, paths;
@@ -56,8 +58,8 @@ void load_recorded_meshes(const proto::ModelSource& ms, const std::string& dir, 
       continue;
     }
     if (info.size != f.size() || info.fnv1a64 != f.fnv1a64()) {
-      problems.push_back(path + " changed (" + std::to_string(info.size) + " bytes, FNV-1a " + hex64(info.fnv1a64) + "; recorded " +
-                         std::to_string(f.size()) + " bytes, " + hex64(f.fnv1a64()) + ")");
+      problems.push_back(path + " changed (" + std::to_string(info.size) + " bytes, FNV-1a " + hex64(info.fnv1a64) +
+                         "; recorded " + std::to_string(f.size()) + " bytes, " + hex64(f.fnv1a64()) + ")");
       continue;
     }
     a.model_source.files.push_back(info);
@@ -79,7 +81,8 @@ void add_recorded_standins(const proto::ModelSource& ms, const std::string& orig
   for (const std::string& name : ms.standin_names()) {
     const auto& all = sim::protocol_objects();
     auto it = std::find_if(all.begin(), all.end(), [&](const sim::ProtocolObject& o) { return o.name == name; });
-    if (it == all.end()) throw RecordingError(origin + ": header.models.standin_names: '" + name + "' is not a protocol object");
+    if (it == all.end())
+      throw RecordingError(origin + ": header.models.standin_names: '" + name + "' is not a protocol object");
     a.models.push_back(sim::make_standin_model(*it));
     a.model_source.standins.push_back(name);
   }
@@ -90,10 +93,11 @@ void check_model_order(const proto::ModelSource& ms, const SceneAssets& a, const
   const auto& names = ms.model_names();
   for (std::size_t i = 0; i < std::max<std::size_t>(a.models.size(), names.size()); ++i) {
     const std::string rebuilt = i < a.models.size() ? "'" + a.models[i]->name + "'" : "none";
-    const std::string recorded = i < static_cast<std::size_t>(names.size()) ? "'" + names[static_cast<int>(i)] + "'" : "none";
+    const std::string recorded =
+        i < static_cast<std::size_t>(names.size()) ? "'" + names[static_cast<int>(i)] + "'" : "none";
     if (rebuilt != recorded)
-      throw RecordingError(origin + ": header.models.model_names[" + std::to_string(i) + "] is " + recorded + ", the rebuilt model is " +
-                           rebuilt);
+      throw RecordingError(origin + ": header.models.model_names[" + std::to_string(i) + "] is " + recorded +
+                           ", the rebuilt model is " + rebuilt);
   }
 }
 
@@ -101,8 +105,8 @@ void check_model_order(const proto::ModelSource& ms, const SceneAssets& a, const
 std::vector<std::string> version_warnings(const proto::RecordingHeader& header) {
   std::vector<std::string> w;
   if (header.idl_sha256() != idl_sha256())
-    w.push_back("recorded with another idl/telegrasp.idl (SHA-256 " + header.idl_sha256() + ", this build's is " + idl_sha256() +
-                "): messages may not decode or compare");
+    w.push_back("recorded with another idl/telegrasp.idl (SHA-256 " + header.idl_sha256() + ", this build's is " +
+                idl_sha256() + "): messages may not decode or compare");
   if (header.telegrasp_version() != telegrasp_version())
     w.push_back("recorded by telegrasp " + header.telegrasp_version() + ", replayed by " + telegrasp_version() +
                 ": the simulation may differ");
@@ -119,7 +123,8 @@ ServerSettings recorded_settings(const proto::RecordingHeader& header, const std
 
 }  // namespace
 
-SceneAssets load_recorded_assets(const proto::RecordingHeader& header, const std::string& recording_path, const std::string& objects_dir) {
+SceneAssets load_recorded_assets(const proto::RecordingHeader& header, const std::string& recording_path,
+                                 const std::string& objects_dir) {
   const std::string origin = "recording " + recording_path;
   SceneAssets a;
   a.right_rig = recorded_rig(header.right_rig(), origin, "right_rig", a.right_rig_path, a.right_rig_text);

@@ -29,13 +29,13 @@ struct ReplayOptions {
 };
 
 struct ReplayResult {
-  std::uint64_t records = 0;           ///< Records read.
-  std::uint64_t ticks = 0;             ///< Ticks replayed.
+  std::uint64_t records = 0;  ///< Records read.
+  std::uint64_t ticks = 0;  ///< Ticks replayed.
   std::uint64_t outputs_compared = 0;  ///< Outputs found identical (ServerStatus is not compared).
   std::uint64_t statuses_skipped = 0;  ///< Recorded ServerStatus messages.
   std::optional<Divergence> divergence;
   std::optional<RecordingDamage> damage;  ///< The recording was damaged; everything before was replayed.
-  std::vector<std::string> warnings;      ///< e.g. recorded with another IDL.
+  std::vector<std::string> warnings;  ///< e.g. recorded with another IDL.
 
   /// "identical: N outputs over T ticks" or the divergence, then the damage, one per line.
   std::string summary() const;

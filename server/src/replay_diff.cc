@@ -13,10 +13,13 @@ std::string text(double v) { return shortest_number(v); }
 std::string text(bool v) { return v ? "true" : "false"; }
 std::string text(const std::string& v) { return "'" + v + "'"; }
 template <std::size_t N>
-std::string text(const eprosima::fastrtps::fixed_string<N>& v) { return text(v.to_string()); }
+std::string text(const eprosima::fastrtps::fixed_string<N>& v) {
+  return text(v.to_string());
+}
 template <class T>
-  requires std::is_integral_v<T> || std::is_enum_v<T>
-std::string text(T v) { return std::to_string(static_cast<long long>(v)); }
+requires std::is_integral_v<T> || std::is_enum_v<T> std::string text(T v) {
+  return std::to_string(static_cast<long long>(v));
+}
 std::string text(std::uint64_t v) { return std::to_string(v); }
 
 // The first field in which two decoded messages differ, with both values; later calls do nothing
@@ -36,16 +39,19 @@ struct FieldDiff {
   void sequence(const std::string& name, const std::vector<T>& a, const std::vector<T>& b, F&& element) {
     if (found()) return;
     value(name + ".size", static_cast<std::uint64_t>(a.size()), static_cast<std::uint64_t>(b.size()));
-    for (std::size_t i = 0; i < a.size() && i < b.size() && !found(); ++i) element(name + "[" + std::to_string(i) + "]", a[i], b[i]);
+    for (std::size_t i = 0; i < a.size() && i < b.size() && !found(); ++i)
+      element(name + "[" + std::to_string(i) + "]", a[i], b[i]);
   }
   template <class T>
   void values(const std::string& name, const std::vector<T>& a, const std::vector<T>& b) {
-    sequence(name, a, b, [this](const std::string& n, const T& x, const T& y) { value(n, static_cast<T>(x), static_cast<T>(y)); });
+    sequence(name, a, b,
+             [this](const std::string& n, const T& x, const T& y) { value(n, static_cast<T>(x), static_cast<T>(y)); });
   }
   void values(const std::string& name, const std::vector<bool>& a, const std::vector<bool>& b) {
     if (found()) return;
     value(name + ".size", static_cast<std::uint64_t>(a.size()), static_cast<std::uint64_t>(b.size()));
-    for (std::size_t i = 0; i < a.size() && i < b.size(); ++i) value(name + "[" + std::to_string(i) + "]", bool(a[i]), bool(b[i]));
+    for (std::size_t i = 0; i < a.size() && i < b.size(); ++i)
+      value(name + "[" + std::to_string(i) + "]", bool(a[i]), bool(b[i]));
   }
 
   void vec3(const std::string& n, const msg::Vec3& a, const msg::Vec3& b) {
@@ -81,7 +87,8 @@ struct FieldDiff {
     value("late_latched", a.late_latched(), b.late_latched());
     value("frozen", a.frozen(), b.frozen());
     pose("palm", a.palm(), b.palm());
-    sequence("phalanges", a.phalanges(), b.phalanges(), [this](const std::string& n, const auto& x, const auto& y) { pose(n, x, y); });
+    sequence("phalanges", a.phalanges(), b.phalanges(),
+             [this](const std::string& n, const auto& x, const auto& y) { pose(n, x, y); });
     values("joint_angles", a.joint_angles(), b.joint_angles());
   }
   void fields(const msg::GraspState& a, const msg::GraspState& b) {
@@ -102,7 +109,8 @@ struct FieldDiff {
     value("time", a.time(), b.time());
     value("object_id", a.object_id(), b.object_id());
     pose("object_pose", a.object_pose(), b.object_pose());
-    sequence("contacts", a.contacts(), b.contacts(), [this](const std::string& n, const auto& x, const auto& y) { contact(n, x, y); });
+    sequence("contacts", a.contacts(), b.contacts(),
+             [this](const std::string& n, const auto& x, const auto& y) { contact(n, x, y); });
   }
   void fields(const msg::GraspEvent& a, const msg::GraspEvent& b) {
     value("event_id", a.event_id(), b.event_id());
@@ -118,31 +126,34 @@ struct FieldDiff {
     value("input_sequence", a.input_sequence(), b.input_sequence());
     value("hand_error_mm", a.hand_error_mm(), b.hand_error_mm());
     value("capsules_without_hit", a.capsules_without_hit(), b.capsules_without_hit());
-    sequence("capsules", a.capsules(), b.capsules(), [this](const std::string& n, const msg::CapsuleReport& x, const msg::CapsuleReport& y) {
-      value(n + ".phalanx", x.phalanx(), y.phalanx());
-      value(n + ".phalanx_name", x.phalanx_name(), y.phalanx_name());
-      value(n + ".hit", x.hit(), y.hit());
-      value(n + ".nd", x.nd(), y.nd());
-      value(n + ".signed_distance", x.signed_distance(), y.signed_distance());
-      value(n + ".blocked", x.blocked(), y.blocked());
-    });
-    sequence("contacts", a.contacts(), b.contacts(), [this](const std::string& n, const auto& x, const auto& y) { contact(n, x, y); });
+    sequence("capsules", a.capsules(), b.capsules(),
+             [this](const std::string& n, const msg::CapsuleReport& x, const msg::CapsuleReport& y) {
+               value(n + ".phalanx", x.phalanx(), y.phalanx());
+               value(n + ".phalanx_name", x.phalanx_name(), y.phalanx_name());
+               value(n + ".hit", x.hit(), y.hit());
+               value(n + ".nd", x.nd(), y.nd());
+               value(n + ".signed_distance", x.signed_distance(), y.signed_distance());
+               value(n + ".blocked", x.blocked(), y.blocked());
+             });
+    sequence("contacts", a.contacts(), b.contacts(),
+             [this](const std::string& n, const auto& x, const auto& y) { contact(n, x, y); });
     vec3("release_velocity", a.release_velocity(), b.release_velocity());
     vec3("release_angular_velocity", a.release_angular_velocity(), b.release_angular_velocity());
   }
   void fields(const msg::SceneState& a, const msg::SceneState& b) {
     value("tick", a.tick(), b.tick());
     value("time", a.time(), b.time());
-    sequence("objects", a.objects(), b.objects(), [this](const std::string& n, const msg::ObjectState& x, const msg::ObjectState& y) {
-      value(n + ".id", x.id(), y.id());
-      value(n + ".name", x.name(), y.name());
-      pose(n + ".pose", x.pose(), y.pose());
-      vec3(n + ".linear_velocity", x.linear_velocity(), y.linear_velocity());
-      value(n + ".held", x.held(), y.held());
-      value(n + ".holder_client", x.holder_client(), y.holder_client());
-      value(n + ".holder_hand", x.holder_hand(), y.holder_hand());
-      value(n + ".spawn_time", x.spawn_time(), y.spawn_time());
-    });
+    sequence("objects", a.objects(), b.objects(),
+             [this](const std::string& n, const msg::ObjectState& x, const msg::ObjectState& y) {
+               value(n + ".id", x.id(), y.id());
+               value(n + ".name", x.name(), y.name());
+               pose(n + ".pose", x.pose(), y.pose());
+               vec3(n + ".linear_velocity", x.linear_velocity(), y.linear_velocity());
+               value(n + ".held", x.held(), y.held());
+               value(n + ".holder_client", x.holder_client(), y.holder_client());
+               value(n + ".holder_hand", x.holder_hand(), y.holder_hand());
+               value(n + ".spawn_time", x.spawn_time(), y.spawn_time());
+             });
   }
 };
 
@@ -153,9 +164,9 @@ std::string key_of(const msg::ContactSet& m) {
   return hand_text(m.client_id().to_string(), m.hand_side()) + ", object " + std::to_string(m.object_id());
 }
 std::string key_of(const msg::GraspEvent& m) {
-  return "event " + std::to_string(m.event_id()) + " (" + (m.kind() == msg::GRASP_EVENT_GRASP ? "grasp" : "release") + ", " +
-         hand_text(m.client_id().to_string(), m.hand_side()) + "), object " + std::to_string(m.object_id()) + " '" +
-         m.object_name().to_string() + "'";
+  return "event " + std::to_string(m.event_id()) + " (" + (m.kind() == msg::GRASP_EVENT_GRASP ? "grasp" : "release") +
+         ", " + hand_text(m.client_id().to_string(), m.hand_side()) + "), object " + std::to_string(m.object_id()) +
+         " '" + m.object_name().to_string() + "'";
 }
 std::string key_of(const msg::SceneState& m) { return "scene at tick " + std::to_string(m.tick()); }
 
@@ -168,7 +179,8 @@ std::string key_of_cdr(const std::string& cdr) {
 // Decodes both: true if the messages are equal, else names the first differing field in `diff`
 // (or says in `why` that one does not decode).
 template <class T>
-bool diff_cdr(const std::string& recorded, const std::string& replayed, FieldDiff& diff, std::string& key, std::string& why) {
+bool diff_cdr(const std::string& recorded, const std::string& replayed, FieldDiff& diff, std::string& key,
+              std::string& why) {
   T a, b;
   if (!from_cdr(recorded, a)) {
     why = "the recorded bytes do not decode with this build's IDL";
@@ -195,7 +207,10 @@ std::string shortest_number(double v) {
 }
 
 std::string hand_text(const std::string& client_id, unsigned side) {
-  return "client '" + client_id + "' " + (side == idl::kHandLeft ? "left" : side == idl::kHandRight ? "right" : "side " + std::to_string(side)) +
+  return "client '" + client_id + "' " +
+         (side == idl::kHandLeft    ? "left"
+          : side == idl::kHandRight ? "right"
+                                    : "side " + std::to_string(side)) +
          " hand";
 }
 
@@ -203,26 +218,41 @@ HandAddress hand_address(const proto::HandAddress& a) { return {a.client_id(), s
 
 std::string key_of_output(proto::OutputType type, const std::string& cdr, const HandAddress& removed) {
   switch (type) {
-    case proto::OUTPUT_HAND_SKELETON: return key_of_cdr<msg::HandSkeleton>(cdr);
-    case proto::OUTPUT_GRASP_STATE: return key_of_cdr<msg::GraspState>(cdr);
-    case proto::OUTPUT_CONTACT_SET: return key_of_cdr<msg::ContactSet>(cdr);
-    case proto::OUTPUT_GRASP_EVENT: return key_of_cdr<msg::GraspEvent>(cdr);
-    case proto::OUTPUT_SCENE_STATE: return key_of_cdr<msg::SceneState>(cdr);
-    case proto::OUTPUT_HAND_REMOVED: return hand_text(removed.client_id, removed.side);
-    default: return "";
+    case proto::OUTPUT_HAND_SKELETON:
+      return key_of_cdr<msg::HandSkeleton>(cdr);
+    case proto::OUTPUT_GRASP_STATE:
+      return key_of_cdr<msg::GraspState>(cdr);
+    case proto::OUTPUT_CONTACT_SET:
+      return key_of_cdr<msg::ContactSet>(cdr);
+    case proto::OUTPUT_GRASP_EVENT:
+      return key_of_cdr<msg::GraspEvent>(cdr);
+    case proto::OUTPUT_SCENE_STATE:
+      return key_of_cdr<msg::SceneState>(cdr);
+    case proto::OUTPUT_HAND_REMOVED:
+      return hand_text(removed.client_id, removed.side);
+    default:
+      return "";
   }
 }
 
 std::string output_type_name(proto::OutputType type) {
   switch (type) {
-    case proto::OUTPUT_HAND_SKELETON: return "HandSkeleton";
-    case proto::OUTPUT_GRASP_STATE: return "GraspState";
-    case proto::OUTPUT_CONTACT_SET: return "ContactSet";
-    case proto::OUTPUT_GRASP_EVENT: return "GraspEvent";
-    case proto::OUTPUT_SCENE_STATE: return "SceneState";
-    case proto::OUTPUT_SERVER_STATUS: return "ServerStatus";
-    case proto::OUTPUT_HAND_REMOVED: return "hand removal";
-    default: return "output type " + std::to_string(static_cast<int>(type));
+    case proto::OUTPUT_HAND_SKELETON:
+      return "HandSkeleton";
+    case proto::OUTPUT_GRASP_STATE:
+      return "GraspState";
+    case proto::OUTPUT_CONTACT_SET:
+      return "ContactSet";
+    case proto::OUTPUT_GRASP_EVENT:
+      return "GraspEvent";
+    case proto::OUTPUT_SCENE_STATE:
+      return "SceneState";
+    case proto::OUTPUT_SERVER_STATUS:
+      return "ServerStatus";
+    case proto::OUTPUT_HAND_REMOVED:
+      return "hand removal";
+    default:
+      return "output type " + std::to_string(static_cast<int>(type));
   }
 }
 
@@ -230,8 +260,9 @@ bool same_output(const proto::Output& recorded, const ReplayedOutput& replayed, 
   d.type = output_type_name(recorded.type());
   if (recorded.type() != replayed.type) {
     d.key = key_of_output(recorded.type(), recorded.cdr(), hand_address(recorded.removed()));
-    d.message = "the recording has a " + d.type + " (" + d.key + ") where the replay published a " + output_type_name(replayed.type) +
-                " (" + key_of_output(replayed.type, replayed.cdr, replayed.removed) + ")";
+    d.message = "the recording has a " + d.type + " (" + d.key + ") where the replay published a " +
+                output_type_name(replayed.type) + " (" + key_of_output(replayed.type, replayed.cdr, replayed.removed) +
+                ")";
     return false;
   }
   if (recorded.type() == proto::OUTPUT_HAND_REMOVED) {
@@ -239,7 +270,8 @@ bool same_output(const proto::Output& recorded, const ReplayedOutput& replayed, 
     if (a == replayed.removed) return true;
     d.key = hand_text(a.client_id, a.side);
     d.field = "removed";
-    d.message = "the recording removes the " + d.key + ", the replay the " + hand_text(replayed.removed.client_id, replayed.removed.side);
+    d.message = "the recording removes the " + d.key + ", the replay the " +
+                hand_text(replayed.removed.client_id, replayed.removed.side);
     return false;
   }
   if (recorded.cdr() == replayed.cdr) return true;
@@ -247,17 +279,30 @@ bool same_output(const proto::Output& recorded, const ReplayedOutput& replayed, 
   std::string why;
   bool same = false;
   switch (recorded.type()) {
-    case proto::OUTPUT_HAND_SKELETON: same = diff_cdr<msg::HandSkeleton>(recorded.cdr(), replayed.cdr, diff, d.key, why); break;
-    case proto::OUTPUT_GRASP_STATE: same = diff_cdr<msg::GraspState>(recorded.cdr(), replayed.cdr, diff, d.key, why); break;
-    case proto::OUTPUT_CONTACT_SET: same = diff_cdr<msg::ContactSet>(recorded.cdr(), replayed.cdr, diff, d.key, why); break;
-    case proto::OUTPUT_GRASP_EVENT: same = diff_cdr<msg::GraspEvent>(recorded.cdr(), replayed.cdr, diff, d.key, why); break;
-    case proto::OUTPUT_SCENE_STATE: same = diff_cdr<msg::SceneState>(recorded.cdr(), replayed.cdr, diff, d.key, why); break;
-    default: why = "unknown output type " + std::to_string(recorded.type());
+    case proto::OUTPUT_HAND_SKELETON:
+      same = diff_cdr<msg::HandSkeleton>(recorded.cdr(), replayed.cdr, diff, d.key, why);
+      break;
+    case proto::OUTPUT_GRASP_STATE:
+      same = diff_cdr<msg::GraspState>(recorded.cdr(), replayed.cdr, diff, d.key, why);
+      break;
+    case proto::OUTPUT_CONTACT_SET:
+      same = diff_cdr<msg::ContactSet>(recorded.cdr(), replayed.cdr, diff, d.key, why);
+      break;
+    case proto::OUTPUT_GRASP_EVENT:
+      same = diff_cdr<msg::GraspEvent>(recorded.cdr(), replayed.cdr, diff, d.key, why);
+      break;
+    case proto::OUTPUT_SCENE_STATE:
+      same = diff_cdr<msg::SceneState>(recorded.cdr(), replayed.cdr, diff, d.key, why);
+      break;
+    default:
+      why = "unknown output type " + std::to_string(recorded.type());
   }
   if (same) return true;
   d.field = diff.field;
-  d.message = d.type + (d.key.empty() ? "" : " of " + d.key) + " differs: " +
-              (diff.found() ? diff.field + " is " + diff.recorded + " in the recording, " + diff.replayed + " in the replay" : why);
+  d.message =
+      d.type + (d.key.empty() ? "" : " of " + d.key) + " differs: " +
+      (diff.found() ? diff.field + " is " + diff.recorded + " in the recording, " + diff.replayed + " in the replay"
+                    : why);
   return false;
 }
 

@@ -13,11 +13,11 @@ namespace telegrasp::server {
 /// The first output that differs from the recording.
 struct Divergence {
   std::uint64_t record = 0;  ///< Index of the recorded output (or, for an extra output, of the next recorded call).
-  std::uint64_t tick = 0;    ///< Ticks replayed before it (the world tick it belongs to).
-  std::string type;          ///< e.g. "GraspEvent".
-  std::string key;           ///< e.g. "client 'alice' right hand", "event 3, object 0 '005_tomato_soup_can'".
-  std::string field;         ///< The first differing field, e.g. "contacts[2].p_world.x" ("" if not named).
-  std::string message;       ///< All of it in one sentence.
+  std::uint64_t tick = 0;  ///< Ticks replayed before it (the world tick it belongs to).
+  std::string type;  ///< e.g. "GraspEvent".
+  std::string key;  ///< e.g. "client 'alice' right hand", "event 3, object 0 '005_tomato_soup_can'".
+  std::string field;  ///< The first differing field, e.g. "contacts[2].p_world.x" ("" if not named).
+  std::string message;  ///< All of it in one sentence.
 };
 
 /// An output the replayed scene published, as the Recorder would have recorded it.

@@ -21,26 +21,33 @@ std::vector<std::string> phalanx_names(const proto::RigText& r) {
   try {
     const sim::HandRig rig = sim::HandRig::parse(r.text(), r.path());
     for (const auto& p : rig.phalanges()) names.push_back(p.name);
-  } catch (const sim::RigError&) {
-  }
+  } catch (const sim::RigError&) {}
   return names;
 }
 
-std::string csv_vec3(const msg::Vec3& p) { return shortest_number(p.x()) + "," + shortest_number(p.y()) + "," + shortest_number(p.z()); }
+std::string csv_vec3(const msg::Vec3& p) {
+  return shortest_number(p.x()) + "," + shortest_number(p.y()) + "," + shortest_number(p.z());
+}
 
 // Writes a row per contact of grasp event `ev`; `names`: the phalanx names by side. Returns the rows.
-std::uint64_t write_contact_rows(std::ostream& out, const msg::GraspEvent& ev, const std::vector<std::string> (&names)[2]) {
+std::uint64_t write_contact_rows(std::ostream& out, const msg::GraspEvent& ev,
+                                 const std::vector<std::string> (&names)[2]) {
   const unsigned side = ev.hand_side();
   const std::string prefix = std::to_string(ev.event_id()) + "," + csv::field(ev.client_id().to_string()) + "," +
-                             (side == idl::kHandLeft ? "left" : side == idl::kHandRight ? "right" : std::to_string(side)) + "," +
-                             std::to_string(ev.object_id()) + "," + csv::field(ev.object_name().to_string()) + "," +
-                             std::to_string(ev.tick()) + "," + shortest_number(ev.time()) + ",";
+                             (side == idl::kHandLeft    ? "left"
+                              : side == idl::kHandRight ? "right"
+                                                        : std::to_string(side)) +
+                             "," + std::to_string(ev.object_id()) + "," + csv::field(ev.object_name().to_string()) +
+                             "," + std::to_string(ev.tick()) + "," + shortest_number(ev.time()) + ",";
   for (const msg::ContactPoint& c : ev.contacts()) {
     std::string name;
-    if (c.phalanx() < 0) name = "palm";
-    else if (side < 2 && static_cast<std::size_t>(c.phalanx()) < names[side].size()) name = names[side][c.phalanx()];
-    out << prefix << c.phalanx() << "," << csv::field(name) << "," << csv_vec3(c.p_world()) << "," << csv_vec3(c.n_world()) << ","
-        << csv_vec3(c.p_object()) << "," << csv_vec3(c.n_object()) << "," << shortest_number(c.nd()) << "," << (c.nd_hit() ? 1 : 0) << "\n";
+    if (c.phalanx() < 0)
+      name = "palm";
+    else if (side < 2 && static_cast<std::size_t>(c.phalanx()) < names[side].size())
+      name = names[side][c.phalanx()];
+    out << prefix << c.phalanx() << "," << csv::field(name) << "," << csv_vec3(c.p_world()) << ","
+        << csv_vec3(c.n_world()) << "," << csv_vec3(c.p_object()) << "," << csv_vec3(c.n_object()) << ","
+        << shortest_number(c.nd()) << "," << (c.nd_hit() ? 1 : 0) << "\n";
   }
   return ev.contacts().size();
 }
@@ -80,4 +87,3 @@ ContactExport export_contacts_csv(const std::string& recording_path, const std::
 }
 
 }  // namespace telegrasp::server
-

@@ -12,7 +12,7 @@ namespace telegrasp::server {
 /// What export_contacts_csv wrote.
 struct ContactExport {
   std::uint64_t events = 0;  ///< Grasp events (release events carry no contacts).
-  std::uint64_t rows = 0;    ///< Contacts.
+  std::uint64_t rows = 0;  ///< Contacts.
   std::optional<RecordingDamage> damage;
 };
 

@@ -37,8 +37,7 @@ class RecordedRigs {
     if (added) {
       try {
         it->second = std::make_unique<sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path(name)));
-      } catch (const std::exception&) {
-      }
+      } catch (const std::exception&) {}
     }
     return it->second.get();
   }
@@ -58,7 +57,8 @@ Msg decode(const proto::Output& output, const RecordingReader& reader) {
 
 }  // namespace
 
-McapExport export_mcap(const std::string& recording_path, const std::string& mcap_path, const McapExportOptions& options) {
+McapExport export_mcap(const std::string& recording_path, const std::string& mcap_path,
+                       const McapExportOptions& options) {
   if (!(options.rate_hz > 0 && options.rate_hz <= 1000))
     throw std::invalid_argument("export_mcap: rate_hz must be in (0, 1000]");
   RecordingReader reader(recording_path);
@@ -91,7 +91,7 @@ McapExport export_mcap(const std::string& recording_path, const std::string& mca
   McapExport out;
   double newest_s = -std::numeric_limits<double>::infinity();  // server time of the newest output taken in
   double next_step_s = newest_s;  // the first tick at or after this ends a step
-  bool pending = false;           // outputs taken in since the last step
+  bool pending = false;  // outputs taken in since the last step
   const auto step = [&] {
     const std::uint64_t t = log_time(newest_s);
     const view::ViewUpdate update = model.update(feed.snapshot(), t);
@@ -121,13 +121,26 @@ McapExport export_mcap(const std::string& recording_path, const std::string& mca
         pending = true;
       };
       switch (o.type()) {
-        case proto::OUTPUT_HAND_SKELETON: take(decode<msg::HandSkeleton>(o, reader)); break;
-        case proto::OUTPUT_GRASP_STATE: take(decode<msg::GraspState>(o, reader)); break;
-        case proto::OUTPUT_CONTACT_SET: take(decode<msg::ContactSet>(o, reader)); break;
-        case proto::OUTPUT_GRASP_EVENT: take(decode<msg::GraspEvent>(o, reader)); break;
-        case proto::OUTPUT_SCENE_STATE: take(decode<msg::SceneState>(o, reader)); break;
-        case proto::OUTPUT_SERVER_STATUS: take(decode<msg::ServerStatus>(o, reader)); break;
-        default: break;  // a type this build does not know: nothing to draw
+        case proto::OUTPUT_HAND_SKELETON:
+          take(decode<msg::HandSkeleton>(o, reader));
+          break;
+        case proto::OUTPUT_GRASP_STATE:
+          take(decode<msg::GraspState>(o, reader));
+          break;
+        case proto::OUTPUT_CONTACT_SET:
+          take(decode<msg::ContactSet>(o, reader));
+          break;
+        case proto::OUTPUT_GRASP_EVENT:
+          take(decode<msg::GraspEvent>(o, reader));
+          break;
+        case proto::OUTPUT_SCENE_STATE:
+          take(decode<msg::SceneState>(o, reader));
+          break;
+        case proto::OUTPUT_SERVER_STATUS:
+          take(decode<msg::ServerStatus>(o, reader));
+          break;
+        default:
+          break;  // a type this build does not know: nothing to draw
       }
     }
     if (pending && std::isfinite(newest_s)) step();

@@ -23,10 +23,10 @@ struct McapExportOptions {
 
 /// What export_mcap wrote.
 struct McapExport {
-  std::uint64_t outputs = 0;   ///< Recorded outputs read (every type, hand removals included).
-  std::uint64_t steps = 0;     ///< View model updates.
+  std::uint64_t outputs = 0;  ///< Recorded outputs read (every type, hand removals included).
+  std::uint64_t steps = 0;  ///< View model updates.
   std::uint64_t messages = 0;  ///< MCAP messages written.
-  std::uint64_t bytes = 0;     ///< The MCAP file's size.
+  std::uint64_t bytes = 0;  ///< The MCAP file's size.
   /// Log times of the first and last message, ns since the Unix epoch (0 when none).
   std::uint64_t start_time_ns = 0, end_time_ns = 0;
   std::optional<RecordingDamage> damage;

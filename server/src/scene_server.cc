@@ -64,10 +64,12 @@ void SceneServer::spawn_initial_scene() {
     for (const auto& n : model_names_) all.push_back(models_.at(n));
     specs = default_layout(all, 0.15, kTableHalfExtent);
   }
-  if (specs.size() > kMaxObjects) throw std::runtime_error("scene: at most " + std::to_string(kMaxObjects) + " objects");
+  if (specs.size() > kMaxObjects)
+    throw std::runtime_error("scene: at most " + std::to_string(kMaxObjects) + " objects");
   for (const auto& s : specs) {
     auto it = models_.find(s.model);
-    if (it == models_.end()) throw std::runtime_error("scene object '" + s.model + "': no such model (see --list-models)");
+    if (it == models_.end())
+      throw std::runtime_error("scene object '" + s.model + "': no such model (see --list-models)");
     spawn(it->second, sim::World::resting_pose(*it->second, s.x, s.y, s.yaw));
   }
 }
@@ -108,7 +110,8 @@ void SceneServer::on_inputs(std::vector<InputSample> samples, std::int64_t now_n
     const sim::ControllerInput input = to_sim_input(s.state);
     if (const std::string why = world_->set_input(h.id, input); !why.empty()) {
       // validate_controller_state admits only what the sim accepts; this is a broken invariant.
-      std::cerr << "telegrasp-server: internal: sim rejected a validated input of " << s.hand.client_id << ": " << why << "\n";
+      std::cerr << "telegrasp-server: internal: sim rejected a validated input of " << s.hand.client_id << ": " << why
+                << "\n";
       continue;
     }
     h.stamp = {s.state.sequence_number(), s.state.client_time_ns()};
@@ -137,8 +140,9 @@ void SceneServer::tick(std::int64_t now_ns) {
     Hand& h = it->second;
     const double silent = static_cast<double>(now_ns - h.last_received_ns) * 1e-9;
     if (silent > settings_.remove_after_s) {
-      std::cerr << "telegrasp-server: client '" << it->first.client_id << "' " << (it->first.side == idl::kHandLeft ? "left" : "right")
-                << " hand silent for " << silent << " s: removed\n";
+      std::cerr << "telegrasp-server: client '" << it->first.client_id << "' "
+                << (it->first.side == idl::kHandLeft ? "left" : "right") << " hand silent for " << silent
+                << " s: removed\n";
       remove_hand(it++);
       continue;
     }
@@ -154,8 +158,10 @@ void SceneServer::tick(std::int64_t now_ns) {
   retired_objects_.clear();
 
   for (auto& [id, o] : objects_)
-    if (world_->object_pose(sim::ObjectId(id)).translation().z() < kFallenHeight && world_->place_object(sim::ObjectId(id), o.X_WorldSpawn))
-      std::cerr << "telegrasp-server: " << o.name << " (object " << id << ") fell off the table: put back where it was spawned\n";
+    if (world_->object_pose(sim::ObjectId(id)).translation().z() < kFallenHeight &&
+        world_->place_object(sim::ObjectId(id), o.X_WorldSpawn))
+      std::cerr << "telegrasp-server: " << o.name << " (object " << id
+                << ") fell off the table: put back where it was spawned\n";
 
   const std::uint64_t tick = world_->tick();
   const double time = world_->time();
@@ -175,7 +181,8 @@ void SceneServer::tick(std::int64_t now_ns) {
       sink_.publish(gs);
       h.published_state = std::move(gs);
     }
-    if (const auto X_WorldObject = hand.grasped_object_pose()) sink_.publish(make_contact_set(addr, hand, tick, time, *X_WorldObject));
+    if (const auto X_WorldObject = hand.grasped_object_pose())
+      sink_.publish(make_contact_set(addr, hand, tick, time, *X_WorldObject));
   }
   sink_.publish(scene_state());
 }
@@ -192,7 +199,8 @@ void SceneServer::publish_events() {
       ctx.object_spawn_time = o->second.spawn_time;
     }
     const auto objects = world_->objects();
-    if (std::find(objects.begin(), objects.end(), e.object) != objects.end()) ctx.X_WorldObject = world_->object_pose(e.object);
+    if (std::find(objects.begin(), objects.end(), e.object) != objects.end())
+      ctx.X_WorldObject = world_->object_pose(e.object);
     if (auto h = hands_.find(ctx.hand); h != hands_.end()) ctx.input_sequence = h->second.stamp.sequence;
     sink_.publish(make_grasp_event(e, *rigs_[ctx.hand.side], ctx));
   }
@@ -246,8 +254,10 @@ std::string SceneServer::apply_command(const msg::SceneCommand& c) {
         why = "the scene is full (" + std::to_string(kMaxObjects) + " objects)";
       } else if (c.on_table()) {
         const double lim = kTableHalfExtent - 0.05;
-        if (!std::isfinite(c.x()) || !std::isfinite(c.y()) || !std::isfinite(c.yaw()) || std::abs(c.x()) > lim || std::abs(c.y()) > lim)
-          why = "spawn on the table needs finite x, y in [-" + std::to_string(lim) + ", " + std::to_string(lim) + "] and a finite yaw";
+        if (!std::isfinite(c.x()) || !std::isfinite(c.y()) || !std::isfinite(c.yaw()) || std::abs(c.x()) > lim ||
+            std::abs(c.y()) > lim)
+          why = "spawn on the table needs finite x, y in [-" + std::to_string(lim) + ", " + std::to_string(lim) +
+                "] and a finite yaw";
         else
           spawn(it->second, sim::World::resting_pose(*it->second, c.x(), c.y(), c.yaw()));
       } else if (!finite_unit_pose(c.pose())) {
@@ -276,7 +286,8 @@ std::string SceneServer::apply_command(const msg::SceneCommand& c) {
     ++commands_accepted_;
   } else {
     ++commands_rejected_;
-    std::cerr << "telegrasp-server: rejected scene command " << c.command_id() << " from '" << c.client_id().to_string() << "': " << why << "\n";
+    std::cerr << "telegrasp-server: rejected scene command " << c.command_id() << " from '" << c.client_id().to_string()
+              << "': " << why << "\n";
   }
   return why;
 }

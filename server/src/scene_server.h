@@ -64,8 +64,8 @@ class SceneServer {
     InputStamp stamp;
     std::int64_t last_received_ns = 0;
     bool frozen = false;
-    std::uint64_t answered_tick = 0;   // lockstep: ControllerState.lockstep_tick of the newest sample
-    std::uint32_t commands_sent = 0;   // ... and its commands_sent
+    std::uint64_t answered_tick = 0;  // lockstep: ControllerState.lockstep_tick of the newest sample
+    std::uint32_t commands_sent = 0;  // ... and its commands_sent
     std::optional<msg::GraspState> published_state;  // last GraspState sent (on change only)
   };
   struct Object {
@@ -89,7 +89,7 @@ class SceneServer {
   std::unique_ptr<sim::World> world_;
   std::map<HandAddress, Hand> hands_;
   std::map<int, HandAddress> address_of_;  // by HandId; kept one tick after removal for its events
-  std::map<int, Object> objects_;          // by ObjectId; likewise
+  std::map<int, Object> objects_;  // by ObjectId; likewise
   std::vector<int> retired_hands_, retired_objects_;  // removed since the last tick's events
   std::uint64_t next_event_id_ = 1;
   std::uint64_t commands_accepted_ = 0, commands_rejected_ = 0;

@@ -15,7 +15,7 @@ namespace telegrasp::server {
 
 /// One mesh file a model was loaded from.
 struct MeshFileInfo {
-  std::string name;        ///< File name inside the objects folder.
+  std::string name;  ///< File name inside the objects folder.
   std::uint64_t size = 0;  ///< Bytes.
   std::uint64_t fnv1a64 = 0;  ///< content_hash() of the file.
 };

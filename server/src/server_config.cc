@@ -46,7 +46,8 @@ void apply_config(const proto::ServerConfig& c, ServerSettings& s, const std::st
   if (has("left_rig")) s.left_rig = c.left_rig();
   if (has("closing_mode")) {
     const std::optional<sim::ClosingMode> mode = sim::parse_closing_mode(c.closing_mode());
-    if (!mode) throw std::runtime_error(origin + ": closing_mode must be precise or discrete, got '" + c.closing_mode() + "'");
+    if (!mode)
+      throw std::runtime_error(origin + ": closing_mode must be precise or discrete, got '" + c.closing_mode() + "'");
     s.closing_mode = *mode;
   }
   if (has("freeze_after_s")) s.freeze_after_s = c.freeze_after_s();
@@ -82,14 +83,15 @@ void validate_settings(const ServerSettings& s, const std::string& origin) {
     fail("tick_hz must be in [1, 2000], got " + cli::format_number(s.tick_hz));
   if (!(s.freeze_after_s > 0)) fail("freeze_after_s must be > 0");
   if (!(s.remove_after_s >= s.freeze_after_s)) fail("remove_after_s must be >= freeze_after_s");
-  if (!(s.remove_after_s <= 0.9)) fail("remove_after_s must be <= 0.9 (a silent client's object is released within 1 s)");
+  if (!(s.remove_after_s <= 0.9))
+    fail("remove_after_s must be <= 0.9 (a silent client's object is released within 1 s)");
   if (!(s.status_period_s > 0)) fail("status_period_s must be > 0");
   if (s.max_hands < 1 || s.max_hands > 4096) fail("max_hands must be in [1, 4096]");
   for (const auto& o : s.objects)
-    if (!std::isfinite(o.x) || !std::isfinite(o.y) || !std::isfinite(o.yaw)) fail("objects '" + o.model + "': x, y, yaw must be finite");
+    if (!std::isfinite(o.x) || !std::isfinite(o.y) || !std::isfinite(o.yaw))
+      fail("objects '" + o.model + "': x, y, yaw must be finite");
   if (s.empty_scene && !s.objects.empty()) fail("empty_scene and objects exclude each other");
 }
-
 
 proto::ServerConfig to_proto(const ServerSettings& s) {
   proto::ServerConfig c;

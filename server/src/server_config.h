@@ -30,7 +30,7 @@ struct ServerSettings {
   bool fill_standins = false;
   std::vector<SceneObjectSpec> objects;  ///< Empty and !empty_scene: every model in a grid.
   bool empty_scene = false;
-  std::string right_rig, left_rig;       ///< "": the built-in human rigs.
+  std::string right_rig, left_rig;  ///< "": the built-in human rigs.
   sim::ClosingMode closing_mode = sim::ClosingMode::kPrecise;
   double freeze_after_s = 0.25;
   double remove_after_s = 0.5;

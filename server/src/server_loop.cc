@@ -37,8 +37,8 @@ LoopSettings loop_settings(const ServerSettings& settings) {
   return s;
 }
 
-ServerLoop::ServerLoop(const LoopSettings& settings, SceneServer& scene, LoopClock& clock, LoopSource& source, OutputSink& status_sink,
-                       SceneCallObserver* observer)
+ServerLoop::ServerLoop(const LoopSettings& settings, SceneServer& scene, LoopClock& clock, LoopSource& source,
+                       OutputSink& status_sink, SceneCallObserver* observer)
     : settings_(settings),
       period_(seconds(1.0 / settings.tick_hz)),
       status_period_(seconds(settings.status_period_s)),
@@ -70,10 +70,12 @@ void ServerLoop::stop() {
 
 LoopClock::time_point ServerLoop::wake_deadline() const {
   switch (settings_.schedule) {
-    case TickSchedule::kClock: return std::min(next_tick_, next_status_);
+    case TickSchedule::kClock:
+      return std::min(next_tick_, next_status_);
     case TickSchedule::kLockstep:  // with no hands there is no stall tick to wait for
       return scene_.hand_count() > 0 ? std::min(last_activity_ + stall_after_, next_status_) : next_status_;
-    case TickSchedule::kSource: break;
+    case TickSchedule::kSource:
+      break;
   }
   return next_status_;
 }
@@ -96,10 +98,12 @@ void ServerLoop::step(time_point now) {
 
 bool ServerLoop::tick_due(time_point now) {
   switch (settings_.schedule) {
-    case TickSchedule::kClock: return now >= next_tick_;
+    case TickSchedule::kClock:
+      return now >= next_tick_;
     case TickSchedule::kLockstep:
       return scene_.lockstep_ready() || (scene_.hand_count() > 0 && now - last_activity_ >= stall_after_);
-    case TickSchedule::kSource: return source_.tick_due();
+    case TickSchedule::kSource:
+      return source_.tick_due();
   }
   return false;
 }

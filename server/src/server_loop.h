@@ -48,9 +48,9 @@ class LoopSource {
 
 /// When the loop ticks.
 enum class TickSchedule {
-  kClock,     ///< At fixed due times 1 / tick_hz apart (a tick late by a whole period or more skips the due times passed).
+  kClock,  ///< At fixed due times 1 / tick_hz apart (a tick late by a whole period or more skips the due times passed).
   kLockstep,  ///< When SceneServer::lockstep_ready(), or when hands are present and nothing happened for stall_after_s.
-  kSource,    ///< When LoopSource::tick_due() says so: replay ticks where the recording did.
+  kSource,  ///< When LoopSource::tick_due() says so: replay ticks where the recording did.
 };
 
 struct LoopSettings {
@@ -71,8 +71,8 @@ class ServerLoop {
   /// `status_sink` receives ServerStatus (the scene's own sink, so a Recorder records it too);
   /// `observer` (may be null) is told of every scene call before it is made. All must outlive
   /// the loop.
-  ServerLoop(const LoopSettings& settings, SceneServer& scene, LoopClock& clock, LoopSource& source, OutputSink& status_sink,
-             SceneCallObserver* observer = nullptr);
+  ServerLoop(const LoopSettings& settings, SceneServer& scene, LoopClock& clock, LoopSource& source,
+             OutputSink& status_sink, SceneCallObserver* observer = nullptr);
 
   /// Loops until stop() is called or the source is finished. Each iteration: waits (until the
   /// next tick, status or, in lockstep with hands, stall is due, or until woken), then hands the scene the

@@ -72,18 +72,30 @@ struct Flags {
 void apply_flags(int argc, char** argv, Flags& f, std::vector<std::string>& configs) {
   ServerSettings& s = f.settings;
   cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
-    if (a == "--config") configs.push_back(value());
-    else if (a == "--domain") s.domain = cli::parse_domain(a, value(), usage_error);
-    else if (a == "--profile") s.profile = cli::parse_profile(a, value(), usage_error);
-    else if (a == "--profiles") s.profiles_file = value();
-    else if (a == "--objects") s.objects_dir = value(), f.objects_flag = true;
-    else if (a == "--empty-scene") s.empty_scene = true, s.objects.clear();
-    else if (a == "--tick-hz") s.tick_hz = cli::parse_number(a, value(), 1, 2000, usage_error);
-    else if (a == "--no-late-latch") s.late_latch = false;
-    else if (a == "--lockstep") s.lockstep = true;
-    else if (a == "--list-models") f.list_models = true;
-    else if (a == "--fill-standins") s.fill_standins = true;
-    else if (a == "--record") s.record_path = value();
+    if (a == "--config")
+      configs.push_back(value());
+    else if (a == "--domain")
+      s.domain = cli::parse_domain(a, value(), usage_error);
+    else if (a == "--profile")
+      s.profile = cli::parse_profile(a, value(), usage_error);
+    else if (a == "--profiles")
+      s.profiles_file = value();
+    else if (a == "--objects")
+      s.objects_dir = value(), f.objects_flag = true;
+    else if (a == "--empty-scene")
+      s.empty_scene = true, s.objects.clear();
+    else if (a == "--tick-hz")
+      s.tick_hz = cli::parse_number(a, value(), 1, 2000, usage_error);
+    else if (a == "--no-late-latch")
+      s.late_latch = false;
+    else if (a == "--lockstep")
+      s.lockstep = true;
+    else if (a == "--list-models")
+      f.list_models = true;
+    else if (a == "--fill-standins")
+      s.fill_standins = true;
+    else if (a == "--record")
+      s.record_path = value();
     else if (a == "--mode") {
       const std::string m = value();
       const std::optional<sim::ClosingMode> mode = sim::parse_closing_mode(m);
@@ -157,7 +169,8 @@ int main(int argc, char** argv) {
   const ServerSettings& settings = flags.settings;
   SceneAssets assets;
   try {
-    if (!settings.objects_dir.empty()) std::cerr << "telegrasp-server: loading meshes from " << settings.objects_dir << " ...\n";
+    if (!settings.objects_dir.empty())
+      std::cerr << "telegrasp-server: loading meshes from " << settings.objects_dir << " ...\n";
     assets = load_scene_assets(settings);
     if (flags.list_models) {
       for (const auto& m : assets.models) std::cout << m->name << "\n";
@@ -187,7 +200,10 @@ int main(int argc, char** argv) {
     const StopOnSignal stop_on_signal(loop, stop_signals);
     std::cerr << "telegrasp-server: domain " << settings.domain << ", profile " << settings.profile << ", "
               << scene.world().objects().size() << " objects, " << settings.tick_hz << " Hz"
-              << (settings.lockstep ? " in lockstep" : settings.late_latch ? ", late-latched skeletons" : "") << "; Ctrl-C to stop\n";
+              << (settings.lockstep     ? " in lockstep"
+                  : settings.late_latch ? ", late-latched skeletons"
+                                        : "")
+              << "; Ctrl-C to stop\n";
     loop.run();
     std::cerr << "telegrasp-server: stopping after " << scene.world().tick() << " ticks, " << mailbox.accepted()
               << " inputs accepted, " << loop.missed_ticks() << " ticks missed\n";

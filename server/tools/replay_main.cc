@@ -64,8 +64,10 @@ class Progress {
     std::snprintf(text, sizeof text, "telegrasp-replay: %3.0f%% (%llu records)",
                   100.0 * static_cast<double>(r.offset()) / static_cast<double>(r.file_size()),
                   static_cast<unsigned long long>(r.records()));
-    if (last) line_.finish(text);
-    else line_.show(text);
+    if (last)
+      line_.finish(text);
+    else
+      line_.show(text);
   }
 
  private:
@@ -93,17 +95,23 @@ int main(int argc, char** argv) {
   McapExportOptions mcap_options;
   bool mcap_rate_given = false;
   telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
-    if (a == "--objects") objects_dir = value();
-    else if (a == "--export-contacts") csv_path = value();
-    else if (a == "--export-mcap") mcap_path = value();
+    if (a == "--objects")
+      objects_dir = value();
+    else if (a == "--export-contacts")
+      csv_path = value();
+    else if (a == "--export-mcap")
+      mcap_path = value();
     else if (a == "--mcap-rate") {
       mcap_options.rate_hz = telegrasp::cli::parse_number(a, value(), 1, 240, usage_error);
       mcap_rate_given = true;
-    }
-    else if (a == "--json") json_path = value();
-    else if (telegrasp::cli::is_option(a)) return false;
-    else if (recording.empty()) recording = a;
-    else usage_error("one recording at a time (got '" + recording + "' and '" + a + "')");
+    } else if (a == "--json")
+      json_path = value();
+    else if (telegrasp::cli::is_option(a))
+      return false;
+    else if (recording.empty())
+      recording = a;
+    else
+      usage_error("one recording at a time (got '" + recording + "' and '" + a + "')");
     return true;
   });
   if (recording.empty()) usage_error("no recording given");
@@ -117,8 +125,12 @@ int main(int argc, char** argv) {
       std::cout << "exported " << e.rows << " contacts of " << e.events << " grasps to " << csv_path << "\n";
       if (e.damage) std::cout << e.damage->message << "\n";
       if (!json_path.empty())
-        write_json(json_path, {{"recording", recording}, {"csv", csv_path}, {"grasps", e.events}, {"contacts", e.rows},
-                               {"damage", damage_json(e.damage)}, {"exit_code", e.damage ? 3 : 0}});
+        write_json(json_path, {{"recording", recording},
+                               {"csv", csv_path},
+                               {"grasps", e.events},
+                               {"contacts", e.rows},
+                               {"damage", damage_json(e.damage)},
+                               {"exit_code", e.damage ? 3 : 0}});
       return e.damage ? 3 : 0;
     }
     if (!mcap_path.empty()) {
@@ -130,10 +142,16 @@ int main(int argc, char** argv) {
                 << mcap_path << "\n";
       if (e.damage) std::cout << e.damage->message << "\n";
       if (!json_path.empty())
-        write_json(json_path, {{"recording", recording}, {"mcap", mcap_path}, {"outputs", e.outputs},
-                               {"view_updates", e.steps}, {"messages", e.messages}, {"bytes", e.bytes},
-                               {"start_time_ns", e.start_time_ns}, {"end_time_ns", e.end_time_ns},
-                               {"damage", damage_json(e.damage)}, {"exit_code", e.damage ? 3 : 0}});
+        write_json(json_path, {{"recording", recording},
+                               {"mcap", mcap_path},
+                               {"outputs", e.outputs},
+                               {"view_updates", e.steps},
+                               {"messages", e.messages},
+                               {"bytes", e.bytes},
+                               {"start_time_ns", e.start_time_ns},
+                               {"end_time_ns", e.end_time_ns},
+                               {"damage", damage_json(e.damage)},
+                               {"exit_code", e.damage ? 3 : 0}});
       return e.damage ? 3 : 0;
     }
     ReplayOptions options;
@@ -144,11 +162,17 @@ int main(int argc, char** argv) {
     if (!json_path.empty()) {
       nlohmann::json d = nullptr;
       if (r.divergence)
-        d = {{"record", r.divergence->record}, {"tick", r.divergence->tick}, {"type", r.divergence->type},
-             {"key", r.divergence->key}, {"field", r.divergence->field}, {"message", r.divergence->message}};
-      write_json(json_path, {{"recording", recording}, {"identical", !r.divergence}, {"records", r.records}, {"ticks", r.ticks},
-                             {"outputs_compared", r.outputs_compared}, {"statuses_skipped", r.statuses_skipped},
-                             {"divergence", d}, {"damage", damage_json(r.damage)}, {"warnings", r.warnings},
+        d = {{"record", r.divergence->record}, {"tick", r.divergence->tick},   {"type", r.divergence->type},
+             {"key", r.divergence->key},       {"field", r.divergence->field}, {"message", r.divergence->message}};
+      write_json(json_path, {{"recording", recording},
+                             {"identical", !r.divergence},
+                             {"records", r.records},
+                             {"ticks", r.ticks},
+                             {"outputs_compared", r.outputs_compared},
+                             {"statuses_skipped", r.statuses_skipped},
+                             {"divergence", d},
+                             {"damage", damage_json(r.damage)},
+                             {"warnings", r.warnings},
                              {"exit_code", r.exit_code()}});
     }
     return r.exit_code();

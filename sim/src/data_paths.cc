@@ -52,8 +52,9 @@ fs::path data_file(const std::string& relative) {
   const fs::path p = data_dir() / relative;
   std::error_code ec;
   if (!fs::exists(p, ec))
-    throw std::runtime_error("telegrasp data file " + p.string() +
-                             " not found (installed under <prefix>/share/telegrasp; set TELEGRASP_DATA_DIR to its folder)");
+    throw std::runtime_error(
+        "telegrasp data file " + p.string() +
+        " not found (installed under <prefix>/share/telegrasp; set TELEGRASP_DATA_DIR to its folder)");
   return p;
 }
 

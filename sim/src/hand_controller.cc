@@ -45,7 +45,8 @@ std::string validate_input(const ControllerInput& input, const HandRig& rig) {
       return "curls: expected " + std::to_string(rig.fingers().size()) + " values (one per finger), got " +
              std::to_string(input.curls.size());
     for (std::size_t i = 0; i < input.curls.size(); ++i)
-      if (!in_unit_interval(input.curls[i])) return "curls[" + std::to_string(i) + "]: must be a finite value in [0, 1]";
+      if (!in_unit_interval(input.curls[i]))
+        return "curls[" + std::to_string(i) + "]: must be a finite value in [0, 1]";
   }
   return "";
 }
@@ -85,7 +86,7 @@ struct HandController::Scratch {
     std::vector<std::size_t> affected;
   };
 
-  std::vector<TouchCache> touch;      // per phalanx
+  std::vector<TouchCache> touch;  // per phalanx
   std::vector<ClosestCache> closest;  // per phalanx
   StepWork work;
 };
@@ -136,7 +137,8 @@ HandController::HandController(std::shared_ptr<const HandRig> rig, GraspSettings
 void HandController::update_finger_poses(int finger) {
   for (PhalanxId id : rig_->fingers()[finger].phalanges) {
     const PhalanxSpec& spec = rig_->phalanges()[id.value];
-    const Eigen::Isometry3d X_PalmParent = spec.parent < 0 ? Eigen::Isometry3d::Identity() : state_.X_PalmPhalanx[spec.parent];
+    const Eigen::Isometry3d X_PalmParent =
+        spec.parent < 0 ? Eigen::Isometry3d::Identity() : state_.X_PalmPhalanx[spec.parent];
     state_.X_PalmPhalanx[id.value] = phalanx_pose(spec, X_PalmParent, state_.q[id.value]);
   }
 }
@@ -171,9 +173,13 @@ void HandController::select_object(std::span<const ObjectView> objects) {
     return;
   }
   for (const Candidate& cand : candidates) {
-    const double key = settings_.selection == SelectionMetric::kOrigin ? cand.p_ObjectCenter.norm()
-                                                                       : cand.model->distance.signed_distance(cand.p_ObjectCenter);
-    if (key < best) { best = key; best_id = cand.id; }
+    const double key = settings_.selection == SelectionMetric::kOrigin
+                           ? cand.p_ObjectCenter.norm()
+                           : cand.model->distance.signed_distance(cand.p_ObjectCenter);
+    if (key < best) {
+      best = key;
+      best_id = cand.id;
+    }
   }
   state_.selected = best_id;
 }
@@ -392,7 +398,7 @@ HandController::Probe HandController::probe_capsule(const FingerStep& step, std:
   const double tol = step.tol;
   double& bound = gap_bound_[step.id(m)];
   const double horizon = rate * (1.0 - s) + tol;  // beyond it, no contact this step
-  if (bound > horizon) return Probe::kFree;      // free for the rest of the step
+  if (bound > horizon) return Probe::kFree;  // free for the rest of the step
   if (bound > tol) {
     ds = std::min(ds, (bound - 0.5 * tol) / rate);
     return Probe::kFree;
@@ -432,8 +438,13 @@ void HandController::step_finger(int finger, double u, double dt, const ObjectVi
   // A finger whose input is fully released holds nothing: it unblocks and opens without
   // touching anything (so a finger bent back past its open angle cannot keep a grasp).
   if (u <= 0.0) object = nullptr;
-  const FingerStep step{finger, rig_->fingers()[finger].phalanges, u, object, X_ObjectPalm,
-                        settings_.contact_tolerance, settings_.mode == ClosingMode::kPrecise};
+  const FingerStep step{finger,
+                        rig_->fingers()[finger].phalanges,
+                        u,
+                        object,
+                        X_ObjectPalm,
+                        settings_.contact_tolerance,
+                        settings_.mode == ClosingMode::kPrecise};
   const std::size_t n = step.size();
 
   if (unblock_phalanges(step) && depenetrate(finger, X_ObjectPalm, *object)) {
@@ -530,7 +541,8 @@ const ObjectView* HandController::choose_object(std::span<const ObjectView> obje
   if (!state_.grasped.valid()) {
     select_object(objects);
     if (state_.selected.valid())
-      object = &*std::find_if(objects.begin(), objects.end(), [&](const ObjectView& v) { return v.id == state_.selected; });
+      object =
+          &*std::find_if(objects.begin(), objects.end(), [&](const ObjectView& v) { return v.id == state_.selected; });
   }
   return object;
 }
@@ -558,7 +570,8 @@ void HandController::apply_grasp_rule(const ObjectView* object, const Eigen::Iso
     const PalmSphere& palm = rig_->palm_contact();
     const Eigen::Vector3d c = X_ObjectPalm * palm.p_PalmCenter;
     const ObjectModel& model = *object->model;
-    state_.palm_contact = distance_to_bounds(model, c) <= palm.radius && model.distance.capsule_overlaps(c, c, palm.radius);
+    state_.palm_contact =
+        distance_to_bounds(model, c) <= palm.radius && model.distance.capsule_overlaps(c, c, palm.radius);
   }
   const bool rule = object && evaluate_grasp_rule(rig_->grasp_rule(), state_.blocked, state_.palm_contact);
   if (rule && !state_.grasped.valid()) {
@@ -592,8 +605,9 @@ HandTickEvents HandController::tick(const ControllerInput& raw_input, double dt,
   ObjectView held_view;
   const ObjectView* object = choose_object(objects, held_view, events);
   const Eigen::Isometry3d X_ObjectPalm = !object ? Eigen::Isometry3d::Identity()
-      : state_.grasped.valid() ? state_.X_PalmObject.inverse()
-      : object->X_WorldObject.inverse() * state_.X_WorldPalm;
+                                         : state_.grasped.valid()
+                                             ? state_.X_PalmObject.inverse()
+                                             : object->X_WorldObject.inverse() * state_.X_WorldPalm;
   carry_gap_bounds(object, X_ObjectPalm);
 
   // 2 + 3. Interaction manager and finger movement, finger by finger.
@@ -710,7 +724,10 @@ void HandController::refresh_contacts() const {
     c.n_Object = n_Object;
     if (metrics && id.valid())
       for (const CapsuleMetric& m : metrics->capsules)
-        if (m.phalanx == id) { c.nd = m.nd; c.nd_hit = m.hit; }
+        if (m.phalanx == id) {
+          c.nd = m.nd;
+          c.nd_hit = m.hit;
+        }
     contacts_.push_back(c);
   };
   for (PhalanxId id : rig_->capsule_phalanges()) {

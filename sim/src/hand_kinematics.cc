@@ -19,8 +19,7 @@ void forward_kinematics(const HandRig& rig, const std::vector<double>& q,
   X_PalmPhalanx->resize(phalanges.size());
   for (std::size_t i = 0; i < phalanges.size(); ++i) {
     const int parent = phalanges[i].parent;
-    const Eigen::Isometry3d X_PalmParent =
-        parent < 0 ? Eigen::Isometry3d::Identity() : (*X_PalmPhalanx)[parent];
+    const Eigen::Isometry3d X_PalmParent = parent < 0 ? Eigen::Isometry3d::Identity() : (*X_PalmPhalanx)[parent];
     (*X_PalmPhalanx)[i] = phalanx_pose(phalanges[i], X_PalmParent, q[i]);
   }
 }

@@ -53,7 +53,8 @@ Eigen::Isometry3d to_isometry(const proto::Transform& t, const std::string& sour
 PalmSphere to_sphere(const proto::Sphere& s, const std::string& source, const std::string& field, bool required) {
   PalmSphere out{to_eigen(s.center()), s.radius()};
   if (!finite(out.p_PalmCenter)) fail(source, field + ".center", "must be finite");
-  if (required && !(out.radius > 0) ) fail(source, field + ".radius", "must be > 0 (got " + std::to_string(s.radius()) + ")");
+  if (required && !(out.radius > 0))
+    fail(source, field + ".radius", "must be > 0 (got " + std::to_string(s.radius()) + ")");
   return out;
 }
 
@@ -76,21 +77,26 @@ HandRig HandRig::parse(const std::string& text, const std::string& source) {
   google::protobuf::TextFormat::Parser parser;
   CollectErrors errors;
   parser.RecordErrorsTo(&errors);
-  if (!parser.ParseFromString(text, &msg)) throw RigError(source + ": " + (errors.text.empty() ? "not a HandRig text file" : errors.text));
+  if (!parser.ParseFromString(text, &msg))
+    throw RigError(source + ": " + (errors.text.empty() ? "not a HandRig text file" : errors.text));
 
   HandRig rig;
   rig.name_ = msg.name();
   if (rig.name_.empty()) fail(source, "name", "must not be empty");
-  rig.side_ = msg.side() == proto::HAND_SIDE_LEFT ? HandSide::kLeft
-            : msg.side() == proto::HAND_SIDE_RIGHT ? HandSide::kRight : HandSide::kUnspecified;
+  rig.side_ = msg.side() == proto::HAND_SIDE_LEFT    ? HandSide::kLeft
+              : msg.side() == proto::HAND_SIDE_RIGHT ? HandSide::kRight
+                                                     : HandSide::kUnspecified;
   rig.selection_sphere_ = to_sphere(msg.palm_selection_sphere(), source, "palm_selection_sphere", true);
   rig.palm_contact_ = to_sphere(msg.palm_contact_volume(), source, "palm_contact_volume", true);
   rig.nd_sweep_radius_ = msg.nd_sweep_radius();
-  if (!(rig.nd_sweep_radius_ >= 0) || !std::isfinite(rig.nd_sweep_radius_)) fail(source, "nd_sweep_radius", "must be >= 0");
+  if (!(rig.nd_sweep_radius_ >= 0) || !std::isfinite(rig.nd_sweep_radius_))
+    fail(source, "nd_sweep_radius", "must be >= 0");
   rig.nd_sweep_beyond_ = msg.nd_sweep_beyond();
-  if (!(rig.nd_sweep_beyond_ > 0) || !std::isfinite(rig.nd_sweep_beyond_)) fail(source, "nd_sweep_beyond", "must be > 0");
+  if (!(rig.nd_sweep_beyond_ > 0) || !std::isfinite(rig.nd_sweep_beyond_))
+    fail(source, "nd_sweep_beyond", "must be > 0");
   rig.palm_half_extent_ = to_eigen(msg.palm_half_extent());
-  if (!finite(rig.palm_half_extent_) || rig.palm_half_extent_.minCoeff() <= 0) fail(source, "palm_half_extent", "must be positive in x, y and z");
+  if (!finite(rig.palm_half_extent_) || rig.palm_half_extent_.minCoeff() <= 0)
+    fail(source, "palm_half_extent", "must be positive in x, y and z");
   rig.p_PalmGraspCenter_ = to_eigen(msg.grasp_center());
   if (!finite(rig.p_PalmGraspCenter_)) fail(source, "grasp_center", "must be finite");
   const double default_speed = msg.default_max_speed_deg_s();
@@ -102,7 +108,8 @@ HandRig HandRig::parse(const std::string& text, const std::string& source) {
     const auto& finger = msg.fingers(f);
     const std::string ffield = "fingers[" + std::to_string(f) + "]";
     if (finger.name().empty()) fail(source, ffield + ".name", "must not be empty");
-    if (finger.phalanges().empty()) fail(source, ffield + ".phalanges", "finger '" + finger.name() + "' has no phalanx");
+    if (finger.phalanges().empty())
+      fail(source, ffield + ".phalanges", "finger '" + finger.name() + "' has no phalanx");
     FingerSpec fs{finger.name(), {}};
     for (int p = 0; p < finger.phalanges_size(); ++p) {
       const auto& ph = finger.phalanges(p);
@@ -124,7 +131,9 @@ HandRig HandRig::parse(const std::string& text, const std::string& source) {
       if (j.min_deg() > j.max_deg()) fail(source, field + ".joint.min_deg", "must be <= max_deg");
       for (auto [v, n] : {std::pair{j.open_deg(), "open_deg"}, std::pair{j.closed_deg(), "closed_deg"}})
         if (v < j.min_deg() || v > j.max_deg())
-          fail(source, field + ".joint." + n, "must lie within [min_deg, max_deg] = [" + std::to_string(j.min_deg()) + ", " + std::to_string(j.max_deg()) + "]");
+          fail(source, field + ".joint." + n,
+               "must lie within [min_deg, max_deg] = [" + std::to_string(j.min_deg()) + ", " +
+                   std::to_string(j.max_deg()) + "]");
       if (j.max_speed_deg_s() < 0) fail(source, field + ".joint.max_speed_deg_s", "must be >= 0");
       spec.open = j.open_deg() * kDeg;
       spec.closed = j.closed_deg() * kDeg;
@@ -137,10 +146,13 @@ HandRig HandRig::parse(const std::string& text, const std::string& source) {
         const auto& c = ph.capsule();
         CapsuleSpec cs{to_eigen(c.a()), to_eigen(c.b()), c.radius(), to_eigen(c.ctc()), to_eigen(c.sp())};
         if (!finite(cs.p_PhalanxA) || !finite(cs.p_PhalanxB)) fail(source, field + ".capsule.a/b", "must be finite");
-        if ((cs.p_PhalanxA - cs.p_PhalanxB).norm() < 1e-6) fail(source, field + ".capsule.b", "must differ from capsule.a");
+        if ((cs.p_PhalanxA - cs.p_PhalanxB).norm() < 1e-6)
+          fail(source, field + ".capsule.b", "must differ from capsule.a");
         if (!(cs.radius > 0) || !std::isfinite(cs.radius)) fail(source, field + ".capsule.radius", "must be > 0");
-        if (!finite(cs.p_PhalanxCTc) || !finite(cs.p_PhalanxSp)) fail(source, field + ".capsule.ctc/sp", "must be finite");
-        if ((cs.p_PhalanxCTc - cs.p_PhalanxSp).norm() < 1e-6) fail(source, field + ".capsule.sp", "must differ from ctc (Sp -> CTc gives the sweep direction)");
+        if (!finite(cs.p_PhalanxCTc) || !finite(cs.p_PhalanxSp))
+          fail(source, field + ".capsule.ctc/sp", "must be finite");
+        if ((cs.p_PhalanxCTc - cs.p_PhalanxSp).norm() < 1e-6)
+          fail(source, field + ".capsule.sp", "must differ from ctc (Sp -> CTc gives the sweep direction)");
         spec.capsule = cs;
       }
       fs.phalanges.push_back(PhalanxId(static_cast<int>(rig.phalanges_.size())));
@@ -155,10 +167,14 @@ HandRig HandRig::parse(const std::string& text, const std::string& source) {
     std::vector<GraspTerm> group;
     if (msg.grasp_rule(g).members().empty()) fail(source, field, "group is empty");
     for (const auto& member : msg.grasp_rule(g).members()) {
-      if (member == "palm") { group.push_back({true, {}}); continue; }
+      if (member == "palm") {
+        group.push_back({true, {}});
+        continue;
+      }
       const PhalanxId id = rig.find(member);
       if (!id.valid()) fail(source, field, "unknown phalanx '" + member + "'");
-      if (!rig.phalanges_[id.value].capsule) fail(source, field, "phalanx '" + member + "' has no capsule trigger, so it can never block");
+      if (!rig.phalanges_[id.value].capsule)
+        fail(source, field, "phalanx '" + member + "' has no capsule trigger, so it can never block");
       group.push_back({false, id});
     }
     rig.grasp_rule_.push_back(std::move(group));

@@ -19,7 +19,7 @@ MassProperties compute_mass_properties(const TriangleMesh& mesh) {
   if (mesh.vertices.empty() || mesh.triangles.empty()) return result;
 
   const Eigen::Vector3d reference = 0.5 * (mesh.min_corner() + mesh.max_corner());
-  double six_volume = 0;                                      // sum of det
+  double six_volume = 0;  // sum of det
   Eigen::Vector3d first_moment_24 = Eigen::Vector3d::Zero();  // sum of det * s
   Eigen::Matrix3d second_moment_120 = Eigen::Matrix3d::Zero();
 
@@ -31,8 +31,7 @@ MassProperties compute_mass_properties(const TriangleMesh& mesh) {
     const Eigen::Vector3d s = p + q + t;
     six_volume += det;
     first_moment_24 += det * s;
-    second_moment_120 +=
-        det * (p * p.transpose() + q * q.transpose() + t * t.transpose() + s * s.transpose());
+    second_moment_120 += det * (p * p.transpose() + q * q.transpose() + t * t.transpose() + s * s.transpose());
   }
 
   result.volume = six_volume / 6.0;
@@ -42,8 +41,7 @@ MassProperties compute_mass_properties(const TriangleMesh& mesh) {
 
   // Covariance (integral of x x^T) about the centroid, then I = tr(C) 1 - C.
   const Eigen::Matrix3d covariance_about_centroid =
-      second_moment_120 / 120.0 -
-      result.volume * centroid_from_reference * centroid_from_reference.transpose();
+      second_moment_120 / 120.0 - result.volume * centroid_from_reference * centroid_from_reference.transpose();
   result.inertia_per_density =
       covariance_about_centroid.trace() * Eigen::Matrix3d::Identity() - covariance_about_centroid;
   return result;

@@ -398,8 +398,8 @@ inline Vector3d safe_inverse(const Vector3d& d) {
 /// Slab test: does o + t d, t in [t0, t1], meet box [lo - e, hi + e]? Outputs the entry t.
 /// The box inflated by e in every axis contains every point within e of the box, so a miss
 /// proves the distance exceeds e (a conservative, never over-estimating bound).
-inline bool ray_hits_box(const Vector3d& o, const Vector3d& inv, const float* lo, const float* hi, double e,
-                         double t0, double t1, double& t_enter) {
+inline bool ray_hits_box(const Vector3d& o, const Vector3d& inv, const float* lo, const float* hi, double e, double t0,
+                         double t1, double& t_enter) {
   e = e * (1 + 1e-12) + 1e-15;  // absorb the rounding of the slab arithmetic
   for (int i = 0; i < 3; ++i) {
     if (std::isinf(inv[i])) {
@@ -579,7 +579,7 @@ float store_rounded_box(const Vector3d& lo, const Vector3d& hi, float* flo, floa
 struct CentroidBins {
   int axis;
   double origin;  // lowest centroid coordinate
-  double scale;   // kBins / extent
+  double scale;  // kBins / extent
   [[nodiscard]] int operator()(const Vector3d& centroid) const {
     return std::min(kBins - 1, static_cast<int>((centroid[axis] - origin) * scale));
   }
@@ -658,8 +658,9 @@ std::optional<std::uint32_t> split_point(const TriangleBounds& bounds, const Ran
   }
   if (mid == begin || mid == end) {
     mid = begin + count / 2;
-    std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end,
-                     [&](std::uint32_t x, std::uint32_t y) { return bounds.centroid[x][axis] < bounds.centroid[y][axis]; });
+    std::nth_element(
+        order.begin() + begin, order.begin() + mid, order.begin() + end,
+        [&](std::uint32_t x, std::uint32_t y) { return bounds.centroid[x][axis] < bounds.centroid[y][axis]; });
   }
   return mid;
 }
@@ -960,8 +961,8 @@ MeshDistance::Candidate MeshDistance::nearest_to_segment(const Eigen::Vector3d& 
   return best;
 }
 
-SegmentQuery MeshDistance::closest_to_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                              double max_distance, std::uint32_t hint) const {
+SegmentQuery MeshDistance::closest_to_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double max_distance,
+                                              std::uint32_t hint) const {
   SegmentQuery out;
   const Candidate c = nearest_to_segment(a, b, max_distance, hint);
   if (!c.found) return out;

@@ -101,8 +101,7 @@ struct TriangleHash {
 std::string describe(const std::string& path) { return "mesh file '" + path + "': "; }
 
 /// Appends the triangles of `node` and its children, in scene coordinates.
-void collect_node(const aiScene& scene, const aiNode& node, const aiMatrix4x4& parent_transform,
-                  TriangleMesh& out) {
+void collect_node(const aiScene& scene, const aiNode& node, const aiMatrix4x4& parent_transform, TriangleMesh& out) {
   const aiMatrix4x4 transform = parent_transform * node.mTransformation;
   for (unsigned m = 0; m < node.mNumMeshes; ++m) {
     const aiMesh& mesh = *scene.mMeshes[node.mMeshes[m]];
@@ -133,12 +132,11 @@ TriangleMesh clean_mesh(const TriangleMesh& mesh, double weld_tolerance, MeshCle
       weld_map(mesh.vertices, std::max(weld_tolerance, 0.0), &local.vertices_welded);
 
   std::vector<std::array<std::uint32_t, 3>> kept;  // In original vertex numbering.
-  std::vector<bool> alive;                         // False once cancelled by a back-to-back twin.
+  std::vector<bool> alive;  // False once cancelled by a back-to-back twin.
   kept.reserve(mesh.triangles.size());
   alive.reserve(mesh.triangles.size());
   std::unordered_set<std::array<std::uint32_t, 3>, TriangleHash> seen;  // Every winding met.
-  std::unordered_map<std::array<std::uint32_t, 3>, std::size_t, TriangleHash>
-      live;  // -> kept index
+  std::unordered_map<std::array<std::uint32_t, 3>, std::size_t, TriangleHash> live;  // -> kept index
   seen.reserve(mesh.triangles.size());
   live.reserve(mesh.triangles.size());
   for (const auto& original : mesh.triangles) {
@@ -196,8 +194,7 @@ TriangleMesh clean_mesh(const TriangleMesh& mesh, double weld_tolerance, MeshCle
     out.vertices.push_back(mesh.vertices[v]);
   }
   out.triangles.reserve(kept.size());
-  for (const auto& t : kept)
-    out.triangles.push_back({new_index[t[0]], new_index[t[1]], new_index[t[2]]});
+  for (const auto& t : kept) out.triangles.push_back({new_index[t[0]], new_index[t[1]], new_index[t[2]]});
 
   if (report != nullptr) *report = local;
   return out;
@@ -227,8 +224,7 @@ TriangleMesh load_mesh_file(const std::string& path) {
   }
   for (std::size_t v = 0; v < raw.vertices.size(); ++v) {
     if (referenced[v] && !raw.vertices[v].allFinite()) {
-      throw MeshLoadError(describe(path) + "non-finite vertex coordinate at vertex " +
-                          std::to_string(v));
+      throw MeshLoadError(describe(path) + "non-finite vertex coordinate at vertex " + std::to_string(v));
     }
   }
   TriangleMesh cleaned = clean_mesh(raw);

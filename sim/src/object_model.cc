@@ -34,7 +34,8 @@ ObjectModelPtr make_object_model(const std::string& name, const TriangleMesh& me
 }
 
 ObjectModelPtr make_object_model_in_model_frame(const std::string& name, TriangleMesh mesh, double mass_kg,
-                                                const std::string& source, const Eigen::Vector3d& p_OriginalCenterOfMass) {
+                                                const std::string& source,
+                                                const Eigen::Vector3d& p_OriginalCenterOfMass) {
   if (mesh.triangles.empty()) throw MeshLoadError(source + ": the mesh has no triangle");
   for (const Eigen::Vector3d& v : mesh.vertices)
     if (!v.allFinite()) throw MeshLoadError(source + ": the mesh has a non-finite vertex coordinate");

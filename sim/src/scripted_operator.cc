@@ -56,7 +56,8 @@ OfflineClosing close_offline(const std::shared_ptr<const HandRig>& rig, const Gr
   for (const CapsuleMetric& c : out.metrics.capsules) out.penetrating |= c.blocked && c.signed_distance < -0.1e-3;
   const std::vector<Contact> contacts = hand.contacts();
   for (std::size_t i = 0; i < contacts.size(); ++i)
-    for (std::size_t j = i + 1; j < contacts.size(); ++j) out.opposed |= contacts[i].n_World.dot(contacts[j].n_World) < -0.5;
+    for (std::size_t j = i + 1; j < contacts.size(); ++j)
+      out.opposed |= contacts[i].n_World.dot(contacts[j].n_World) < -0.5;
   for (PhalanxId id : rig->capsule_phalanges()) {
     const CapsuleSpec& c = *rig->phalanges()[id.value].capsule;
     const Eigen::Isometry3d X = X_WorldPalm * hand.state().X_PalmPhalanx[id.value];
@@ -73,7 +74,10 @@ std::pair<double, int> nd_mean_mm(const GraspMetrics& m) {
   double sum = 0;
   int hits = 0;
   for (const CapsuleMetric& c : m.capsules)
-    if (c.hit) { sum += 1000.0 * std::abs(c.nd); ++hits; }
+    if (c.hit) {
+      sum += 1000.0 * std::abs(c.nd);
+      ++hits;
+    }
   return {hits > 0 ? sum / hits : 0.0, hits};
 }
 
@@ -82,7 +86,8 @@ bool palm_clear(const HandRig& rig, const ObjectModel& model, const Eigen::Isome
   const Eigen::Vector3d& h = rig.palm_half_extent();
   for (int corner = 0; corner < 9; ++corner) {
     const Eigen::Vector3d p = corner == 8 ? Eigen::Vector3d::Zero()
-        : Eigen::Vector3d(corner & 1 ? h.x() : -h.x(), corner & 2 ? h.y() : -h.y(), corner & 4 ? h.z() : -h.z());
+                                          : Eigen::Vector3d(corner & 1 ? h.x() : -h.x(), corner & 2 ? h.y() : -h.y(),
+                                                            corner & 4 ? h.z() : -h.z());
     if (model.distance.signed_distance(X_ObjectPalm * p) < 0) return false;
   }
   return true;
@@ -186,22 +191,23 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
   // Side grasps: palm facing the object horizontally, fingers around it either way (the thumb
   // up for one hand, down for the other), at two heights.
   for (const Eigen::Vector3d& toward : {ax, ay, Eigen::Vector3d(-ax), Eigen::Vector3d(-ay)})
-  for (const Eigen::Vector3d& fingers : {Eigen::Vector3d(toward.cross(up).normalized()), Eigen::Vector3d(up.cross(toward).normalized())}) {
-    for (double height : {0.5, 0.7}) {
-      GraspPlan plan;
-      plan.X_WorldPalm = palm_frame(fingers, -toward);
-      plan.approach_World = toward.normalized();
-      const double half = std::abs(toward.normalized().dot(X_WorldObject.linear() * size)) * 0.5;
-      Eigen::Vector3d target = p_WorldCenter;
-      target.z() = (X_WorldObject * lo).z() + height * size.z();
-      plan.X_WorldPalm.translation() = target - plan.X_WorldPalm.linear() * gc;
-      // Keep the palm outside the object along the approach.
-      const double along = (plan.X_WorldPalm.translation() - p_WorldCenter).dot(-toward.normalized());
-      const double min_along = half + palm_half_thickness;
-      if (along < min_along) plan.X_WorldPalm.translation() += (min_along - along) * -toward.normalized();
-      candidates.push_back(plan);
+    for (const Eigen::Vector3d& fingers :
+         {Eigen::Vector3d(toward.cross(up).normalized()), Eigen::Vector3d(up.cross(toward).normalized())}) {
+      for (double height : {0.5, 0.7}) {
+        GraspPlan plan;
+        plan.X_WorldPalm = palm_frame(fingers, -toward);
+        plan.approach_World = toward.normalized();
+        const double half = std::abs(toward.normalized().dot(X_WorldObject.linear() * size)) * 0.5;
+        Eigen::Vector3d target = p_WorldCenter;
+        target.z() = (X_WorldObject * lo).z() + height * size.z();
+        plan.X_WorldPalm.translation() = target - plan.X_WorldPalm.linear() * gc;
+        // Keep the palm outside the object along the approach.
+        const double along = (plan.X_WorldPalm.translation() - p_WorldCenter).dot(-toward.normalized());
+        const double min_along = half + palm_half_thickness;
+        if (along < min_along) plan.X_WorldPalm.translation() += (min_along - along) * -toward.normalized();
+        candidates.push_back(plan);
+      }
     }
-  }
 
   GraspPlan best = candidates.front();
   double best_score = -1e300;
@@ -214,7 +220,10 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
     // the smallest HandError.
     const double score = (plan.predicted_grasp ? 1e6 : 0) + (t.opposed ? 1e5 : 0) + (t.penetrating ? 0 : 5e4) +
                          (t.below_table ? 0 : 1e4) + 100.0 * t.blocked - t.metrics.hand_error_mm;
-    if (score > best_score) { best_score = score; best = plan; }
+    if (score > best_score) {
+      best_score = score;
+      best = plan;
+    }
   }
   return best;
 }
@@ -272,7 +281,10 @@ ControllerInput ScriptedOperator::next(double t, bool grasped) {
         X_last_ = interpolate(X_start_, X_pre_, min_jerk((t - t_phase_) / (t_via_ - t_phase_)));
       } else {
         X_last_ = interpolate(X_pre_, X_goal_, min_jerk((t - t_via_) / (t_end_ - t_via_)));
-        if (t >= t_end_) { phase_ = OperatorPhase::kSqueeze; t_phase_ = t; }
+        if (t >= t_end_) {
+          phase_ = OperatorPhase::kSqueeze;
+          t_phase_ = t;
+        }
       }
       break;
     case OperatorPhase::kSqueeze:
@@ -286,22 +298,35 @@ ControllerInput ScriptedOperator::next(double t, bool grasped) {
       } else if (t - t_phase_ > skill_.squeeze_time + 0.3) {
         // Missed: open, back off and try again with a fresh attempt, or give up.
         trigger_ = 0;
-        if (attempts_ >= kMaxAttempts) phase_ = OperatorPhase::kDone;
-        else start_attempt(t);
+        if (attempts_ >= kMaxAttempts)
+          phase_ = OperatorPhase::kDone;
+        else
+          start_attempt(t);
       }
       break;
     case OperatorPhase::kLift: {
       trigger_ = std::min(1.0, trigger_ + dt_ / skill_.squeeze_time);  // firm up the grip
       const double duration = std::max(0.2, 1.5 * kLiftHeight / skill_.reach_speed);
       X_last_ = interpolate(X_start_, X_lifted_, min_jerk((t - t_phase_) / duration));
-      if (!grasped) { phase_ = OperatorPhase::kRelease; t_phase_ = t; }
-      else if (t - t_phase_ >= duration) { phase_ = OperatorPhase::kHold; t_phase_ = t; }
+      if (!grasped) {
+        phase_ = OperatorPhase::kRelease;
+        t_phase_ = t;
+      } else if (t - t_phase_ >= duration) {
+        phase_ = OperatorPhase::kHold;
+        t_phase_ = t;
+      }
       break;
     }
     case OperatorPhase::kHold:
       trigger_ = std::min(1.0, trigger_ + dt_ / skill_.squeeze_time);
-      if (!grasped) { phase_ = OperatorPhase::kRelease; t_phase_ = t; }
-      else if (t - t_phase_ >= kHoldTime) { held_after_lift_ = true; phase_ = OperatorPhase::kRelease; t_phase_ = t; }
+      if (!grasped) {
+        phase_ = OperatorPhase::kRelease;
+        t_phase_ = t;
+      } else if (t - t_phase_ >= kHoldTime) {
+        held_after_lift_ = true;
+        phase_ = OperatorPhase::kRelease;
+        t_phase_ = t;
+      }
       break;
     case OperatorPhase::kRelease:
       trigger_ = std::max(0.0, trigger_ - dt_ / 0.2);

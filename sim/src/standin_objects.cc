@@ -24,22 +24,20 @@ using Ring = std::vector<Vec3>;
 using Triangle = std::array<std::uint32_t, 3>;
 
 constexpr double kPi = std::numbers::pi;
-constexpr int kRingSegments = 48;      ///< Vertices per ring of round shapes (multiple of 4).
-constexpr double kBoxCell = 0.007;     ///< Box grid cell side, m (cell diagonal < 1 cm).
+constexpr int kRingSegments = 48;  ///< Vertices per ring of round shapes (multiple of 4).
+constexpr double kBoxCell = 0.007;  ///< Box grid cell side, m (cell diagonal < 1 cm).
 constexpr double kLayerHeight = 0.01;  ///< Max wall layer height of extrusions, m.
 
 // ---------------------------------------------------------------- generic shape helpers
 
 /// Closes a stack of equally sized rings (each counter-clockwise about the direction from the
 /// first ring to the last) with a fan to `start_cap` and a fan to `end_cap`; outward-facing.
-TriangleMesh ring_stack(const std::vector<Ring>& rings, const Vec3& start_cap,
-                        const Vec3& end_cap) {
+TriangleMesh ring_stack(const std::vector<Ring>& rings, const Vec3& start_cap, const Vec3& end_cap) {
   TriangleMesh mesh;
   const auto n = static_cast<std::uint32_t>(rings.front().size());
   const auto ring_count = static_cast<std::uint32_t>(rings.size());
   mesh.vertices.push_back(start_cap);
-  for (const Ring& ring : rings)
-    mesh.vertices.insert(mesh.vertices.end(), ring.begin(), ring.end());
+  for (const Ring& ring : rings) mesh.vertices.insert(mesh.vertices.end(), ring.begin(), ring.end());
   mesh.vertices.push_back(end_cap);
   const std::uint32_t end_index = 1 + ring_count * n;
   auto at = [n](std::uint32_t ring, std::uint32_t i) { return 1 + ring * n + i % n; };
@@ -67,8 +65,7 @@ TriangleMesh lathe(const std::vector<Vec2>& profile_radius_z) {
     }
     rings.push_back(std::move(ring));
   }
-  return ring_stack(rings, Vec3(0, 0, profile_radius_z.front().y()),
-                    Vec3(0, 0, profile_radius_z.back().y()));
+  return ring_stack(rings, Vec3(0, 0, profile_radius_z.front().y()), Vec3(0, 0, profile_radius_z.back().y()));
 }
 
 /// A tube of circular section swept along `centres`; an end of radius 0 becomes a pointed
@@ -80,8 +77,7 @@ TriangleMesh swept_tube(const std::vector<Vec3>& centres, const std::vector<doub
   const bool pointed_start = radii.front() == 0;
   const bool pointed_end = radii.back() == 0;
   for (std::size_t k = pointed_start ? 1 : 0; k < (pointed_end ? count - 1 : count); ++k) {
-    const Vec3 tangent =
-        (centres[std::min(k + 1, count - 1)] - centres[k > 0 ? k - 1 : 0]).normalized();
+    const Vec3 tangent = (centres[std::min(k + 1, count - 1)] - centres[k > 0 ? k - 1 : 0]).normalized();
     const Vec3 normal = (reference_normal - reference_normal.dot(tangent) * tangent).normalized();
     const Vec3 binormal = tangent.cross(normal);
     Ring ring;
@@ -97,11 +93,9 @@ TriangleMesh swept_tube(const std::vector<Vec3>& centres, const std::vector<doub
 /// Box [-x/2, x/2] x [-y/2, y/2] x [0, z] with every face gridded into cells of side <= kBoxCell.
 TriangleMesh subdivided_box(const Vec3& extent) {
   std::array<int, 3> divisions{};
-  for (int a = 0; a < 3; ++a)
-    divisions[a] = std::max(1, int(std::ceil(extent[a] / kBoxCell - 1e-9)));
+  for (int a = 0; a < 3; ++a) divisions[a] = std::max(1, int(std::ceil(extent[a] / kBoxCell - 1e-9)));
   const Vec3 lo(-extent.x() / 2, -extent.y() / 2, 0);
-  const Vec3 ex = Vec3::UnitX() * extent.x(), ey = Vec3::UnitY() * extent.y(),
-             ez = Vec3::UnitZ() * extent.z();
+  const Vec3 ex = Vec3::UnitX() * extent.x(), ey = Vec3::UnitY() * extent.y(), ez = Vec3::UnitZ() * extent.z();
   // Each face: origin and two edge vectors u, v with u x v pointing outward.
   const std::array<std::array<Vec3, 3>, 6> faces{{
       {lo + ex, ey, ez},
@@ -121,8 +115,7 @@ TriangleMesh subdivided_box(const Vec3& extent) {
     const int nu = divisions[axis_of(u)], nv = divisions[axis_of(v)];
     const auto base = static_cast<std::uint32_t>(soup.vertices.size());
     for (int j = 0; j <= nv; ++j) {
-      for (int i = 0; i <= nu; ++i)
-        soup.vertices.push_back(origin + u * (double(i) / nu) + v * (double(j) / nv));
+      for (int i = 0; i <= nu; ++i) soup.vertices.push_back(origin + u * (double(i) / nu) + v * (double(j) / nv));
     }
     auto at = [&](int i, int j) { return base + static_cast<std::uint32_t>(j * (nu + 1) + i); };
     for (int j = 0; j < nv; ++j) {
@@ -148,16 +141,14 @@ std::vector<Triangle> ear_clip(const std::vector<Vec2>& polygon) {
   // strict = reject ears touching another vertex even on their border (avoids T-junctions).
   auto is_ear = [&](std::size_t pos, bool strict) {
     const std::size_t m = remaining.size();
-    const std::uint32_t ia = remaining[(pos + m - 1) % m], ib = remaining[pos],
-                        ic = remaining[(pos + 1) % m];
+    const std::uint32_t ia = remaining[(pos + m - 1) % m], ib = remaining[pos], ic = remaining[(pos + 1) % m];
     const Vec2 &a = polygon[ia], &b = polygon[ib], &c = polygon[ic];
     if (cross2(b - a, c - b) <= kMinTwiceArea) return false;
     const double slack = strict ? 1e-15 : -1e-15;
     for (std::uint32_t iv : remaining) {
       if (iv == ia || iv == ib || iv == ic) continue;
       const Vec2& p = polygon[iv];
-      if (cross2(b - a, p - a) >= -slack && cross2(c - b, p - b) >= -slack &&
-          cross2(a - c, p - c) >= -slack) {
+      if (cross2(b - a, p - a) >= -slack && cross2(c - b, p - b) >= -slack && cross2(a - c, p - c) >= -slack) {
         return false;
       }
     }
@@ -174,8 +165,7 @@ std::vector<Triangle> ear_clip(const std::vector<Vec2>& polygon) {
       if (found != m) break;
     }
     if (found == m) found = pos % m;  // Not a simple polygon; clip anyway rather than loop.
-    triangles.push_back(
-        {remaining[(found + m - 1) % m], remaining[found], remaining[(found + 1) % m]});
+    triangles.push_back({remaining[(found + m - 1) % m], remaining[found], remaining[(found + 1) % m]});
     remaining.erase(remaining.begin() + static_cast<std::ptrdiff_t>(found));
     pos = found % remaining.size();
   }
@@ -188,8 +178,7 @@ std::vector<Triangle> ear_clip(const std::vector<Vec2>& polygon) {
 TriangleMesh extruded_polygon(const std::vector<Vec2>& outline, double height) {
   const int layers = std::clamp(int(std::ceil(height / kLayerHeight - 1e-9)), 1, 8);
   double perimeter = 0;
-  for (std::size_t i = 0; i < outline.size(); ++i)
-    perimeter += (outline[(i + 1) % outline.size()] - outline[i]).norm();
+  for (std::size_t i = 0; i < outline.size(); ++i) perimeter += (outline[(i + 1) % outline.size()] - outline[i]).norm();
   // Aim for 150..(8000 triangles) outline points: walls 2 n layers, caps 2 (n - 2).
   const double max_points = 8000.0 / (2 * layers + 2);
   const double target_points = std::clamp(perimeter / 0.003, 150.0, max_points - outline.size());
@@ -206,9 +195,7 @@ TriangleMesh extruded_polygon(const std::vector<Vec2>& outline, double height) {
   for (int l = 0; l <= layers; ++l) {
     for (const Vec2& p : ring) mesh.vertices.emplace_back(p.x(), p.y(), height * l / layers);
   }
-  auto at = [n](int layer, std::uint32_t i) {
-    return static_cast<std::uint32_t>(layer) * n + i % n;
-  };
+  auto at = [n](int layer, std::uint32_t i) { return static_cast<std::uint32_t>(layer) * n + i % n; };
   for (int l = 0; l < layers; ++l) {
     for (std::uint32_t i = 0; i < n; ++i) {
       mesh.triangles.push_back({at(l, i), at(l, i + 1), at(l + 1, i + 1)});
@@ -216,7 +203,7 @@ TriangleMesh extruded_polygon(const std::vector<Vec2>& outline, double height) {
     }
   }
   for (const Triangle& t : ear_clip(ring)) {
-    mesh.triangles.push_back({at(0, t[0]), at(0, t[2]), at(0, t[1])});                 // bottom, -z
+    mesh.triangles.push_back({at(0, t[0]), at(0, t[2]), at(0, t[1])});  // bottom, -z
     mesh.triangles.push_back({at(layers, t[0]), at(layers, t[1]), at(layers, t[2])});  // top, +z
   }
   return mesh;
@@ -225,8 +212,7 @@ TriangleMesh extruded_polygon(const std::vector<Vec2>& outline, double height) {
 /// Outline symmetric about the x axis from (x, half width) samples ordered by x; a sample of
 /// half width 0 at either end is a point. `tines` > 0 cuts that many prongs of `tine_length`
 /// beyond the last sample (fork tines, wrench jaws).
-std::vector<Vec2> symmetric_outline(const std::vector<Vec2>& x_half_width, int tines = 0,
-                                    double tine_length = 0) {
+std::vector<Vec2> symmetric_outline(const std::vector<Vec2>& x_half_width, int tines = 0, double tine_length = 0) {
   std::vector<Vec2> lower, upper;
   for (const Vec2& s : x_half_width) {
     lower.emplace_back(s.x(), -s.y());
@@ -294,8 +280,7 @@ std::vector<Vec2> cylinder_profile(double radius, double height) {
 }
 
 /// Profile (radius, z) of a solid of revolution with radius r(t), t in [0, 1] bottom to top.
-std::vector<Vec2> revolution_profile(const std::function<double(double)>& radius_of_t,
-                                     double height, int steps) {
+std::vector<Vec2> revolution_profile(const std::function<double(double)>& radius_of_t, double height, int steps) {
   std::vector<Vec2> p{{0, 0}};
   for (int i = 1; i < steps; ++i) {
     const double t = double(i) / steps;
@@ -316,14 +301,12 @@ std::vector<Vec2> sphere_profile(int steps) {
 }
 
 /// Bottle: bevelled flat bottom, straight body, rounded shoulder, neck and a bevelled cap.
-std::vector<Vec2> bottle_profile(double body_radius, double body_height, double neck_radius,
-                                 double total_height) {
+std::vector<Vec2> bottle_profile(double body_radius, double body_height, double neck_radius, double total_height) {
   const double bevel = 0.004;
   std::vector<Vec2> p{{0, 0}};
   for (int i = 1; i <= 3; ++i) p.emplace_back((body_radius - bevel) * i / 3, 0);
   const int sides = std::max(1, int(std::ceil((body_height - bevel) / 0.01)));
-  for (int i = 0; i <= sides; ++i)
-    p.emplace_back(body_radius, bevel + (body_height - bevel) * i / sides);
+  for (int i = 0; i <= sides; ++i) p.emplace_back(body_radius, bevel + (body_height - bevel) * i / sides);
   const double shoulder_top = body_height + 0.5 * (total_height - body_height);
   for (int i = 1; i <= 8; ++i) {  // Quarter ellipse from the body to the neck.
     const double a = 0.5 * kPi * i / 8;
@@ -342,9 +325,7 @@ std::vector<Vec2> bottle_profile(double body_radius, double body_height, double 
 // ---------------------------------------------------------------- per-object shapes
 
 /// Proper rotation taking +z to +y (about x by -90 degrees).
-Eigen::Matrix3d axis_z_to_y() {
-  return Eigen::AngleAxisd(-kPi / 2, Vec3::UnitX()).toRotationMatrix();
-}
+Eigen::Matrix3d axis_z_to_y() { return Eigen::AngleAxisd(-kPi / 2, Vec3::UnitX()).toRotationMatrix(); }
 
 /// A flat object: `outline` turned by `angle_rad`, extruded to the extent's height.
 TriangleMesh flat_tool(const std::vector<Vec2>& outline, double angle_rad, const Vec3& extent) {
@@ -363,8 +344,7 @@ TriangleMesh banana(const Vec3& extent) {
     const double angle = -half_angle + 2 * half_angle * s;
     centres.emplace_back(arc_radius * std::cos(angle), arc_radius * std::sin(angle), 0);
     const double bulge = std::sin(kPi * s);
-    radii.push_back(
-        k == 0 || k == samples - 1 ? 0.0 : 0.5 * extent.z() * (0.3 + 0.7 * std::pow(bulge, 0.5)));
+    radii.push_back(k == 0 || k == samples - 1 ? 0.0 : 0.5 * extent.z() * (0.3 + 0.7 * std::pow(bulge, 0.5)));
   }
   return swept_tube(centres, radii, Vec3::UnitZ(), 24);
 }
@@ -375,9 +355,7 @@ using ShapeBuilder = std::function<TriangleMesh(const Vec3& extent)>;
 const std::map<std::string, ShapeBuilder>& shape_builders() {
   static const std::map<std::string, ShapeBuilder> builders = [] {
     std::map<std::string, ShapeBuilder> b;
-    const ShapeBuilder can = [](const Vec3& e) {
-      return lathe(cylinder_profile(0.5 * e.x(), e.z()));
-    };
+    const ShapeBuilder can = [](const Vec3& e) { return lathe(cylinder_profile(0.5 * e.x(), e.z())); };
     const ShapeBuilder box = [](const Vec3& e) { return subdivided_box(e); };
     const ShapeBuilder ellipsoid = [](const Vec3&) { return lathe(sphere_profile(24)); };
     for (const char* id : {"002", "005", "007"}) b[id] = can;
@@ -387,9 +365,8 @@ const std::map<std::string, ShapeBuilder>& shape_builders() {
     b["021"] = [](const Vec3&) { return lathe(bottle_profile(0.05, 0.17, 0.017, 0.251)); };
     b["011"] = banana;
     b["012"] = [](const Vec3& e) {  // Cone-like berry, tip down, rounded top.
-      return lathe(revolution_profile(
-          [](double t) { return 0.5 * std::pow(t, 0.6) * std::sqrt(1 - std::pow(t, 6)); }, e.z(),
-          24));
+      return lathe(revolution_profile([](double t) { return 0.5 * std::pow(t, 0.6) * std::sqrt(1 - std::pow(t, 6)); },
+                                      e.z(), 24));
     };
     b["016"] = [](const Vec3& e) {  // Pear lying along y: wide bottom bulb, narrow top.
       auto radius = [](double t) { return std::sqrt(t * (1 - t)) * (1.25 - 0.6 * t); };
@@ -402,51 +379,37 @@ const std::map<std::string, ShapeBuilder>& shape_builders() {
       return rotated(lathe(p), axis_z_to_y());
     };
     b["030"] = [](const Vec3& e) {  // Fork: handle, narrow neck, head with four tines.
-      return flat_tool(symmetric_outline({{0, 0.004},
-                                          {0.005, 0.008},
-                                          {0.10, 0.009},
-                                          {0.13, 0.004},
-                                          {0.15, 0.005},
-                                          {0.16, 0.012},
-                                          {0.165, 0.0135}},
-                                         4, 0.033),
-                       0, e);
+      return flat_tool(
+          symmetric_outline(
+              {{0, 0.004}, {0.005, 0.008}, {0.10, 0.009}, {0.13, 0.004}, {0.15, 0.005}, {0.16, 0.012}, {0.165, 0.0135}},
+              4, 0.033),
+          0, e);
     };
     b["031"] = [](const Vec3& e) {  // Spoon: handle and an oval bowl, lying slightly diagonally.
       std::vector<Vec2> profile{{0, 0.005}, {0.01, 0.008}, {0.10, 0.006}, {0.12, 0.004}};
       for (int i = 0; i <= 12; ++i) {  // Elliptic bowl from x = 0.125 to 0.19.
         const double a = kPi * i / 12;
-        profile.emplace_back(0.1575 - 0.0325 * std::cos(a),
-                             i == 12 ? 0.0 : std::max(0.004, 0.022 * std::sin(a)));
+        profile.emplace_back(0.1575 - 0.0325 * std::cos(a), i == 12 ? 0.0 : std::max(0.004, 0.022 * std::sin(a)));
       }
       return flat_tool(symmetric_outline(profile), 0.21, e);
     };
     b["032"] = [](const Vec3& e) {  // Knife: handle, bolster, blade tapering to a point.
-      return flat_tool(symmetric_outline({{0, 0.007},
-                                          {0.01, 0.0105},
-                                          {0.09, 0.0105},
-                                          {0.095, 0.006},
-                                          {0.10, 0.009},
-                                          {0.19, 0.007},
-                                          {0.215, 0}}),
-                       0, e);
+      return flat_tool(
+          symmetric_outline(
+              {{0, 0.007}, {0.01, 0.0105}, {0.09, 0.0105}, {0.095, 0.006}, {0.10, 0.009}, {0.19, 0.007}, {0.215, 0}}),
+          0, e);
     };
     b["033"] = [](const Vec3& e) {  // Spatula: handle, shaft and a wide blade, slightly diagonal.
-      return flat_tool(symmetric_outline({{0, 0.010},
-                                          {0.01, 0.014},
-                                          {0.15, 0.013},
-                                          {0.17, 0.008},
-                                          {0.22, 0.009},
-                                          {0.235, 0.03},
-                                          {0.33, 0.04}}),
-                       0.15, e);
+      return flat_tool(
+          symmetric_outline(
+              {{0, 0.010}, {0.01, 0.014}, {0.15, 0.013}, {0.17, 0.008}, {0.22, 0.009}, {0.235, 0.03}, {0.33, 0.04}}),
+          0.15, e);
     };
     b["035"] = [](const Vec3& e) {  // Pistol drill seen from the side: battery, grip, body, chuck.
-      const std::vector<Vec2> outline{
-          {0.030, 0.000}, {0.150, 0.000}, {0.150, 0.040}, {0.105, 0.040}, {0.105, 0.120},
-          {0.150, 0.120}, {0.150, 0.135}, {0.184, 0.135}, {0.184, 0.170}, {0.150, 0.170},
-          {0.150, 0.188}, {0.010, 0.188}, {0.000, 0.170}, {0.000, 0.130}, {0.010, 0.120},
-          {0.060, 0.120}, {0.060, 0.040}, {0.030, 0.040}};
+      const std::vector<Vec2> outline{{0.030, 0.000}, {0.150, 0.000}, {0.150, 0.040}, {0.105, 0.040}, {0.105, 0.120},
+                                      {0.150, 0.120}, {0.150, 0.135}, {0.184, 0.135}, {0.184, 0.170}, {0.150, 0.170},
+                                      {0.150, 0.188}, {0.010, 0.188}, {0.000, 0.170}, {0.000, 0.130}, {0.010, 0.120},
+                                      {0.060, 0.120}, {0.060, 0.040}, {0.030, 0.040}};
       return flat_tool(outline, 0, e);
     };
     b["037"] = [](const Vec3& e) {  // Scissors along y: closed finger lobes, pivot, blades.
@@ -461,14 +424,10 @@ const std::map<std::string, ShapeBuilder>& shape_builders() {
                        kPi / 2, e);
     };
     b["042"] = [](const Vec3& e) {  // Wrench: handle, head with two jaws, lying diagonally.
-      return flat_tool(symmetric_outline({{0, 0.008},
-                                          {0.01, 0.011},
-                                          {0.15, 0.011},
-                                          {0.165, 0.018},
-                                          {0.175, 0.03},
-                                          {0.19, 0.03}},
-                                         2, 0.02),
-                       kPi / 2 - 0.45, e);
+      return flat_tool(
+          symmetric_outline({{0, 0.008}, {0.01, 0.011}, {0.15, 0.011}, {0.165, 0.018}, {0.175, 0.03}, {0.19, 0.03}}, 2,
+                            0.02),
+          kPi / 2 - 0.45, e);
     };
     b["044"] = [](const Vec3& e) {  // Screwdriver: thick handle, thin shaft, flat tip; diagonal.
       return flat_tool(symmetric_outline({{0, 0.010},
@@ -482,22 +441,20 @@ const std::map<std::string, ShapeBuilder>& shape_builders() {
                        kPi / 4, e);
     };
     b["048"] = [](const Vec3& e) {  // Hammer along y: handle and a head across it.
-      return flat_tool(symmetric_outline({{0, 0.013}, {0.30, 0.012}, {0.30, 0.09}, {0.333, 0.09}}),
+      return flat_tool(symmetric_outline({{0, 0.013}, {0.30, 0.012}, {0.30, 0.09}, {0.333, 0.09}}), kPi / 2, e);
+    };
+    b["072-a"] = [](const Vec3& e) {  // Toy airplane seen from above: tailplane, fuselage, wings, nose.
+      return flat_tool(symmetric_outline({{0, 0.06},
+                                          {0.03, 0.06},
+                                          {0.035, 0.018},
+                                          {0.10, 0.02},
+                                          {0.10, 0.1275},
+                                          {0.16, 0.1275},
+                                          {0.17, 0.022},
+                                          {0.23, 0.02},
+                                          {0.263, 0.008}}),
                        kPi / 2, e);
     };
-    b["072-a"] =
-        [](const Vec3& e) {  // Toy airplane seen from above: tailplane, fuselage, wings, nose.
-          return flat_tool(symmetric_outline({{0, 0.06},
-                                              {0.03, 0.06},
-                                              {0.035, 0.018},
-                                              {0.10, 0.02},
-                                              {0.10, 0.1275},
-                                              {0.16, 0.1275},
-                                              {0.17, 0.022},
-                                              {0.23, 0.02},
-                                              {0.263, 0.008}}),
-                           kPi / 2, e);
-        };
     return b;
   }();
   return builders;
@@ -572,8 +529,7 @@ TriangleMesh make_standin_mesh(const ProtocolObject& object) {
   const auto& builders = shape_builders();
   const auto it = builders.find(object.id);
   // An object outside the protocol table gets a box of its extent.
-  TriangleMesh mesh =
-      it != builders.end() ? it->second(object.extent) : subdivided_box(object.extent);
+  TriangleMesh mesh = it != builders.end() ? it->second(object.extent) : subdivided_box(object.extent);
   return fit_to_extent(std::move(mesh), object.extent);
 }
 

@@ -17,7 +17,8 @@ Eigen::Vector3d to_eigen(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
 
 btTransform to_bt(const Eigen::Isometry3d& X) {
   const Eigen::Quaterniond q(X.linear());
-  return btTransform(btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())), to_bt(X.translation()));
+  return btTransform(btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())),
+                     to_bt(X.translation()));
 }
 
 Eigen::Isometry3d to_eigen(const btTransform& t) {
@@ -105,7 +106,8 @@ World::World(WorldSettings settings) : impl_(std::make_unique<Impl>()) {
   impl_->settings = settings;
   impl_->dynamics.setGravity(to_bt(settings.gravity));
   if (!(settings.table_half_extent > 0)) throw std::invalid_argument("WorldSettings.table_half_extent must be > 0");
-  impl_->table_shape = std::make_unique<btBoxShape>(btVector3(settings.table_half_extent, settings.table_half_extent, 0.05));
+  impl_->table_shape =
+      std::make_unique<btBoxShape>(btVector3(settings.table_half_extent, settings.table_half_extent, 0.05));
   btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, impl_->table_shape.get());
   info.m_friction = 0.8;
   impl_->table = std::make_unique<btRigidBody>(info);
@@ -177,7 +179,8 @@ Eigen::Isometry3d World::resting_pose(const ObjectModel& model, double x, double
 
 HandId World::add_hand(std::shared_ptr<const HandRig> rig) {
   const HandId id(impl_->next_hand++);
-  impl_->hands.emplace(id.value, Impl::Hand{std::make_unique<HandController>(std::move(rig), impl_->settings.grasp), {}});
+  impl_->hands.emplace(id.value,
+                       Impl::Hand{std::make_unique<HandController>(std::move(rig), impl_->settings.grasp), {}});
   return id;
 }
 
@@ -233,7 +236,8 @@ void World::step() {
         const Eigen::Vector3d v = s.v_WorldPalm + s.w_WorldPalm.cross(r);
         o.body->setLinearVelocity(to_bt(v));
         o.body->setAngularVelocity(to_bt(s.w_WorldPalm));
-        GraspEvent e{GraspEvent::Kind::kRelease, hand_id, ev.released_object, w.tick + 1, now, {}, {}, v, s.w_WorldPalm};
+        GraspEvent e{
+            GraspEvent::Kind::kRelease, hand_id, ev.released_object, w.tick + 1, now, {}, {}, v, s.w_WorldPalm};
         w.events.push_back(std::move(e));
       }
     }
@@ -248,7 +252,8 @@ void World::step() {
       }
       o.holder = hand_id;
       w.make_kinematic(o, true);
-      GraspEvent e{GraspEvent::Kind::kGrasp, hand_id, oid, w.tick + 1, now, hand.grasp_metrics(), hand.contacts(), {0, 0, 0}, {0, 0, 0}};
+      GraspEvent e{GraspEvent::Kind::kGrasp, hand_id,         oid,       w.tick + 1, now,
+                   hand.grasp_metrics(),     hand.contacts(), {0, 0, 0}, {0, 0, 0}};
       w.events.push_back(std::move(e));
     }
   }
@@ -280,8 +285,12 @@ std::vector<HandId> World::hands() const {
 }
 
 const ObjectModel& World::object_model(ObjectId id) const { return *impl_->object(id).model; }
-Eigen::Isometry3d World::object_pose(ObjectId id) const { return to_eigen(impl_->object(id).body->getWorldTransform()); }
-Eigen::Vector3d World::object_velocity(ObjectId id) const { return to_eigen(impl_->object(id).body->getLinearVelocity()); }
+Eigen::Isometry3d World::object_pose(ObjectId id) const {
+  return to_eigen(impl_->object(id).body->getWorldTransform());
+}
+Eigen::Vector3d World::object_velocity(ObjectId id) const {
+  return to_eigen(impl_->object(id).body->getLinearVelocity());
+}
 HandId World::holder(ObjectId id) const { return impl_->object(id).holder; }
 const HandController& World::hand(HandId id) const { return *impl_->hand(id).controller; }
 const std::vector<GraspEvent>& World::events() const { return impl_->events; }

@@ -76,7 +76,8 @@ void BM_Closing(benchmark::State& state, const std::string& source) {
     for (int t = 0; t < f.grasp_tick; ++t) hand.tick(squeeze(f.plan, t), kDt, {&view, 1});
     benchmark::DoNotOptimize(hand.state().q.data());
   }
-  state.counters["tick_us"] = benchmark::Counter(f.grasp_tick, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["tick_us"] =
+      benchmark::Counter(f.grasp_tick, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   state.counters["ticks"] = f.grasp_tick;
   state.counters["model_MB"] = static_cast<double>(f.model->memory_bytes()) / 1e6;
 }
@@ -94,7 +95,8 @@ void BM_GraspTick(benchmark::State& state, const std::string& source) {
     grasped = hand.tick(squeeze(f.plan, f.grasp_tick), kDt, {&view, 1}).grasped;
     benchmark::DoNotOptimize(hand.state().q.data());
   }
-  state.counters["tick_us"] = benchmark::Counter(1, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["tick_us"] =
+      benchmark::Counter(1, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   state.counters["grasped"] = grasped;
 }
 
@@ -109,7 +111,8 @@ void BM_Holding(benchmark::State& state, const std::string& source) {
     hand.tick(in, kDt, {&view, 1});
     benchmark::DoNotOptimize(hand.state().q.data());
   }
-  state.counters["tick_us"] = benchmark::Counter(1, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["tick_us"] =
+      benchmark::Counter(1, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   state.counters["grasped"] = hand.state().grasped.valid();
 }
 
@@ -125,9 +128,12 @@ const bool registered = [] {
     for (const auto& o : protocol_objects()) objects.emplace_back(o.name + "_standin", o.name);
   std::sort(objects.begin(), objects.end());
   for (const auto& [name, source] : objects) {
-    benchmark::RegisterBenchmark(("BM_HandTick/" + name + "/closing").c_str(), BM_Closing, source)->Unit(benchmark::kMicrosecond);
-    benchmark::RegisterBenchmark(("BM_HandTick/" + name + "/grasp").c_str(), BM_GraspTick, source)->Unit(benchmark::kMicrosecond);
-    benchmark::RegisterBenchmark(("BM_HandTick/" + name + "/holding").c_str(), BM_Holding, source)->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark(("BM_HandTick/" + name + "/closing").c_str(), BM_Closing, source)
+        ->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark(("BM_HandTick/" + name + "/grasp").c_str(), BM_GraspTick, source)
+        ->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark(("BM_HandTick/" + name + "/holding").c_str(), BM_Holding, source)
+        ->Unit(benchmark::kMicrosecond);
   }
   return true;
 }();

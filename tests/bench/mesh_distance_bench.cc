@@ -19,20 +19,20 @@ namespace {
 
 using Eigen::Vector3d;
 
-constexpr double kRadius = 0.04;          // object radius [m]
+constexpr double kRadius = 0.04;  // object radius [m]
 constexpr double kCapsuleRadius = 0.008;  // finger capsule radius [m]
 constexpr double kCapsuleLength = 0.025;  // finger capsule segment length [m]
-constexpr int kQueries = 1024;            // distinct queries cycled through
+constexpr int kQueries = 1024;  // distinct queries cycled through
 
 /// Geodesic sphere: each icosahedron face split into freq^2 triangles, projected to the
 /// sphere; freq = 22 gives 9680 triangles.
 TriangleMesh make_geodesic_sphere(double radius, int freq) {
   const double p = (1.0 + std::sqrt(5.0)) / 2.0;
-  const double raw[12][3] = {{-1, p, 0}, {1, p, 0}, {-1, -p, 0}, {1, -p, 0}, {0, -1, p}, {0, 1, p},
-                             {0, -1, -p}, {0, 1, -p}, {p, 0, -1}, {p, 0, 1}, {-p, 0, -1}, {-p, 0, 1}};
-  const int faces[20][3] = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                            {11, 10, 2}, {10, 7, 6}, {7, 1, 8},   {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-                            {3, 8, 9},  {4, 9, 5},  {2, 4, 11},  {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  const double raw[12][3] = {{-1, p, 0},  {1, p, 0},  {-1, -p, 0}, {1, -p, 0}, {0, -1, p},  {0, 1, p},
+                             {0, -1, -p}, {0, 1, -p}, {p, 0, -1},  {p, 0, 1},  {-p, 0, -1}, {-p, 0, 1}};
+  const int faces[20][3] = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                            {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                            {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   TriangleMesh m;
   std::map<std::array<long long, 3>, std::uint32_t> index;  // welds points shared by faces
   const auto vertex = [&](const Vector3d& q) {

@@ -45,7 +45,8 @@ bool eventually(const std::function<bool()>& condition, std::chrono::millisecond
 }
 
 std::int64_t steady_now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
 }
 
 bool matched(dds::DataWriter* writer) {
@@ -261,15 +262,25 @@ TEST(ClientLoopbackTest, ServerOutputsReachCallbacksAndPolling) {
 
   Client client(options("viewer", domain, kAllTopics));
   Received received;
-  client.on_hand_skeleton([&](const HandSkeleton& s) { std::lock_guard l(received.mutex); received.skeletons.push_back(s); });
-  client.on_grasp_event([&](const GraspEvent& e) { std::lock_guard l(received.mutex); received.events.push_back(e); });
-  client.on_grasp_state([&](const GraspState& s) { std::lock_guard l(received.mutex); received.grasp_states.push_back(s); });
+  client.on_hand_skeleton([&](const HandSkeleton& s) {
+    std::lock_guard l(received.mutex);
+    received.skeletons.push_back(s);
+  });
+  client.on_grasp_event([&](const GraspEvent& e) {
+    std::lock_guard l(received.mutex);
+    received.events.push_back(e);
+  });
+  client.on_grasp_state([&](const GraspState& s) {
+    std::lock_guard l(received.mutex);
+    received.grasp_states.push_back(s);
+  });
 
   // Hand skeletons (best effort): write both hands of "bob" until the client has both.
   std::uint64_t tick = 0;
   ASSERT_TRUE(eventually([&] {
     ++tick;
-    msg::HandSkeleton left = make_skeleton("bob", msg::HAND_LEFT, tick), right = make_skeleton("bob", msg::HAND_RIGHT, tick);
+    msg::HandSkeleton left = make_skeleton("bob", msg::HAND_LEFT, tick),
+                      right = make_skeleton("bob", msg::HAND_RIGHT, tick);
     skeleton_writer->write(&left);
     skeleton_writer->write(&right);
     return client.latest_hand_skeletons().size() == 2;
@@ -315,7 +326,10 @@ TEST(ClientLoopbackTest, ServerOutputsReachCallbacksAndPolling) {
     e.release_velocity().x(0.25 * id);
     ASSERT_TRUE(event_writer->write(&e));
   }
-  ASSERT_TRUE(eventually([&] { std::lock_guard l(received.mutex); return received.events.size() >= 3; }));
+  ASSERT_TRUE(eventually([&] {
+    std::lock_guard l(received.mutex);
+    return received.events.size() >= 3;
+  }));
   {
     std::lock_guard l(received.mutex);
     ASSERT_EQ(received.events.size(), 3u);

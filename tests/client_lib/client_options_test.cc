@@ -32,10 +32,10 @@ std::string construction_error(const ClientOptions& o) {
   return "";
 }
 
-#define EXPECT_ERROR_MENTIONS(options, text)                                         \
-  do {                                                                               \
-    const std::string error = construction_error(options);                           \
-    EXPECT_NE(error, "") << "no error";                                              \
+#define EXPECT_ERROR_MENTIONS(options, text)                                                \
+  do {                                                                                      \
+    const std::string error = construction_error(options);                                  \
+    EXPECT_NE(error, "") << "no error";                                                     \
     EXPECT_NE(error.find(text), std::string::npos) << "'" << error << "' lacks " << (text); \
   } while (false)
 

@@ -29,7 +29,9 @@ Eigen::Isometry3d make_pose(double angle, const Eigen::Vector3d& axis, const Eig
 void expect_same_pose(const Eigen::Isometry3d& expected, const Eigen::Isometry3d& actual) {
   EXPECT_EQ(expected.translation(), actual.translation());  // copied, not computed
   EXPECT_LT((expected.linear() - actual.linear()).cwiseAbs().maxCoeff(), kRotationTolerance)
-      << "expected\n" << expected.linear() << "\nactual\n" << actual.linear();
+      << "expected\n"
+      << expected.linear() << "\nactual\n"
+      << actual.linear();
 }
 
 void expect_same(const client::HandKey& a, const client::HandKey& b) {
@@ -140,7 +142,8 @@ TEST(ConversionsTest, EnumsMatchTheIdlValues) {
   EXPECT_EQ(to_msg(client::SceneCommand::Kind::kReset), msg::SCENE_RESET);
   for (auto kind : {client::GraspEvent::Kind::kGrasp, client::GraspEvent::Kind::kRelease})
     EXPECT_EQ(from_msg(to_msg(kind)), kind);
-  for (auto kind : {client::SceneCommand::Kind::kSpawn, client::SceneCommand::Kind::kRemove, client::SceneCommand::Kind::kReset})
+  for (auto kind :
+       {client::SceneCommand::Kind::kSpawn, client::SceneCommand::Kind::kRemove, client::SceneCommand::Kind::kReset})
     EXPECT_EQ(from_msg(to_msg(kind)), kind);
 }
 
@@ -218,7 +221,8 @@ TEST(ConversionsTest, HandSkeletonRoundTrip) {
   s.late_latched = true;
   s.frozen = true;
   s.X_WorldPalm = make_pose(0.4, {1, 1, 0}, {0.2, 0.1, 0.9});
-  for (int i = 0; i < 15; ++i) s.X_WorldPhalanx.push_back(make_pose(0.1 * i, {1, 0.1 * i, 0.3}, {0.01 * i, 0.02, -0.03 * i}));
+  for (int i = 0; i < 15; ++i)
+    s.X_WorldPhalanx.push_back(make_pose(0.1 * i, {1, 0.1 * i, 0.3}, {0.01 * i, 0.02, -0.03 * i}));
   s.joint_angles = {0.1, -0.2, 0.3, 1.5, 0.0};
   const msg::HandSkeleton m = to_msg(s);
   EXPECT_EQ(m.client_id().to_string(), "viewer-3");
@@ -481,10 +485,14 @@ TEST(ConversionsTest, DamagedObjectGeometryIsRefused) {
     damage(m);
     return check_object_geometry(m);
   };
-  EXPECT_NE(refused([](msg::ObjectGeometry& m) { m.vertices().pop_back(); }).find("vertex coordinates"), std::string::npos);
+  EXPECT_NE(refused([](msg::ObjectGeometry& m) { m.vertices().pop_back(); }).find("vertex coordinates"),
+            std::string::npos);
   EXPECT_NE(refused([](msg::ObjectGeometry& m) { m.triangle_count(5); }).find("triangle indices"), std::string::npos);
-  EXPECT_NE(refused([](msg::ObjectGeometry& m) { m.triangles()[5] = 4; }).find("past the 4 vertices"), std::string::npos);
-  EXPECT_NE(refused([](msg::ObjectGeometry& m) { m.vertices()[7] = std::numeric_limits<float>::quiet_NaN(); }).find("non-finite"),
+  EXPECT_NE(refused([](msg::ObjectGeometry& m) { m.triangles()[5] = 4; }).find("past the 4 vertices"),
+            std::string::npos);
+  EXPECT_NE(refused([](msg::ObjectGeometry& m) {
+              m.vertices()[7] = std::numeric_limits<float>::quiet_NaN();
+            }).find("non-finite"),
             std::string::npos);
   EXPECT_NE(refused([](msg::ObjectGeometry& m) { m.vertices()[7] = 0.2f; }).find("content_hash"), std::string::npos);
   EXPECT_NE(refused([](msg::ObjectGeometry& m) { m.mesh_omitted(true); }).find("mesh_omitted"), std::string::npos);

@@ -56,8 +56,10 @@ int main(int argc, char** argv) {
 
     telegrasp::idl::DdsParticipant participant(domain, "loopback");
     // Reliable and transient local (the ServerStatus QoS): a late reader still gets the last one.
-    fdds::DataWriter* writer = participant.writer<telegrasp::msg::ServerStatusPubSubType>(kTopic, telegrasp::idl::kServerStatusTopic);
-    fdds::DataReader* reader = participant.reader<telegrasp::msg::ServerStatusPubSubType>(kTopic, nullptr, telegrasp::idl::kServerStatusTopic);
+    fdds::DataWriter* writer =
+        participant.writer<telegrasp::msg::ServerStatusPubSubType>(kTopic, telegrasp::idl::kServerStatusTopic);
+    fdds::DataReader* reader =
+        participant.reader<telegrasp::msg::ServerStatusPubSubType>(kTopic, nullptr, telegrasp::idl::kServerStatusTopic);
     const int self = static_cast<int>(::getpid());
     long own = 0;
     for (std::uint64_t n = 1; !stop; ++n) {
@@ -69,8 +71,10 @@ int main(int argc, char** argv) {
       fdds::SampleInfo info;
       while (reader->take_next_sample(&got, &info) == ReturnCode_t::RETCODE_OK) {
         if (!info.valid_data) continue;
-        if (got.clients() == self) std::printf("own %ld\n", ++own);
-        else std::printf("foreign %d\n", got.clients());
+        if (got.clients() == self)
+          std::printf("own %ld\n", ++own);
+        else
+          std::printf("foreign %d\n", got.clients());
       }
       std::fflush(stdout);
       std::this_thread::sleep_for(std::chrono::milliseconds(10));  // pacing, not a measurement

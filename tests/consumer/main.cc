@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
   sample.X_WorldPalm.translation() = Eigen::Vector3d(0.1, -0.3, 0.9);
   const std::uint64_t sequence = client.publish(sample);
   std::cout << "published sample " << sequence << " of " << client.client_id() << "'s " << to_string(sample.side)
-            << " hand; server found: " << std::boolalpha << client.wait_for_server(std::chrono::milliseconds(20)) << "\n";
+            << " hand; server found: " << std::boolalpha << client.wait_for_server(std::chrono::milliseconds(20))
+            << "\n";
   return sequence == 1 ? 0 : 1;
 }

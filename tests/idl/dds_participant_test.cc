@@ -47,11 +47,13 @@ TEST(DdsParticipantTest, NamesAParticipantProfileNotInTheFile) {
 
 TEST(DdsParticipantTest, NamesTheTopicAndWriterOrReaderProfileNotInTheFile) {
   DdsParticipant p(test_domain(), kDefaultParticipantProfile);
-  const std::string writer_error = error_of([&] { p.writer<msg::ServerStatusPubSubType>("test/Status", "test/NoQos"); });
+  const std::string writer_error =
+      error_of([&] { p.writer<msg::ServerStatusPubSubType>("test/Status", "test/NoQos"); });
   EXPECT_NE(writer_error.find("test/Status"), std::string::npos) << writer_error;
   EXPECT_NE(writer_error.find("'test/NoQos.writer'"), std::string::npos) << writer_error;
   EXPECT_NE(writer_error.find(p.profiles_file()), std::string::npos) << writer_error;
-  const std::string reader_error = error_of([&] { p.reader<msg::ServerStatusPubSubType>("test/Status", nullptr, "test/NoQos"); });
+  const std::string reader_error =
+      error_of([&] { p.reader<msg::ServerStatusPubSubType>("test/Status", nullptr, "test/NoQos"); });
   EXPECT_NE(reader_error.find("'test/NoQos.reader'"), std::string::npos) << reader_error;
 }
 

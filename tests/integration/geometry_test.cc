@@ -53,7 +53,8 @@ std::unique_ptr<ChildProcess> start_server(int domain, const std::vector<std::st
 
 // Waits until the server has printed its start-up line (its geometry is published before it).
 bool server_started(ChildProcess& server) {
-  return eventually([&] { return read_file(server.log_path()).find("telegrasp-server: domain") != std::string::npos; }, 60s);
+  return eventually([&] { return read_file(server.log_path()).find("telegrasp-server: domain") != std::string::npos; },
+                    60s);
 }
 
 // FNV-1a 64 over the geometry's bytes laid out as telegrasp.idl defines content_hash (counts, then
@@ -65,7 +66,8 @@ std::uint64_t recomputed_hash(const client::ObjectGeometry& g) {
     std::memcpy(b, p, 4);
     for (unsigned char c : b) h = (h ^ c) * 0x100000001b3ull;
   };
-  const std::uint32_t counts[2] = {static_cast<std::uint32_t>(g.vertices.size()), static_cast<std::uint32_t>(g.triangles.size())};
+  const std::uint32_t counts[2] = {static_cast<std::uint32_t>(g.vertices.size()),
+                                   static_cast<std::uint32_t>(g.triangles.size())};
   add(&counts[0]);
   add(&counts[1]);
   for (const Eigen::Vector3f& v : g.vertices)
@@ -85,12 +87,14 @@ double receive_all_geometries(int domain, std::map<std::string, std::shared_ptr<
   o.topics = client::kObjectGeometries | client::kServerStatuses;
   const auto start = std::chrono::steady_clock::now();
   client::Client c(o);
-  bool all = eventually([&] {
-    const auto status = c.latest_server_status();
-    if (!status) return false;
-    expected = status->models.size();
-    return c.object_geometries().size() >= expected;
-  }, 60s);
+  bool all = eventually(
+      [&] {
+        const auto status = c.latest_server_status();
+        if (!status) return false;
+        expected = status->models.size();
+        return c.object_geometries().size() >= expected;
+      },
+      60s);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   got = c.object_geometries();
   return all ? seconds : -1;
@@ -150,8 +154,8 @@ TEST(ObjectGeometryTest, ALateJoinerReceivesEveryYcbMeshIntact) {
   ASSERT_GE(seconds, 0) << got.size() << " of " << expected << " geometries arrived";
   std::size_t bytes = 0;
   for (const auto& [name, g] : got) bytes += 12 * g->vertices.size() + 12 * g->triangles.size();
-  std::cout << "[ measured ] a late joiner received " << got.size() << " YCB geometries (" << bytes / 1000 << " KB of mesh) in "
-            << seconds << " s\n";
+  std::cout << "[ measured ] a late joiner received " << got.size() << " YCB geometries (" << bytes / 1000
+            << " KB of mesh) in " << seconds << " s\n";
   for (const auto& [name, g] : got) {
     SCOPED_TRACE(name);
     EXPECT_FALSE(g->mesh_omitted);
@@ -179,14 +183,15 @@ TEST(ObjectGeometryTest, ABotWithoutMeshFilesPlansOnReceivedGeometry) {
   fs::remove_all(meshes);
   fs::create_directories(meshes);
   for (const char* name : {"005_tomato_soup_can", "009_gelatin_box", "055_baseball"})
-    write_obj(meshes / ("wire_" + std::string(name).substr(4) + ".obj"), sim::make_standin_mesh(*sim::find_protocol_object(name)));
+    write_obj(meshes / ("wire_" + std::string(name).substr(4) + ".obj"),
+              sim::make_standin_mesh(*sim::find_protocol_object(name)));
   auto server = start_server(domain, {"--objects", meshes.string()}, "geometry_bot");
   ASSERT_TRUE(server_started(*server)) << server->log_tail();
 
   const int trials = 2;
   const std::string json = work_path("geometry_bot.json"), log = work_path("geometry_bot.log");
-  ChildProcess bot({bin("telegrasp-bot"), "--client-id", "wire-bot", "--trials", std::to_string(trials), "--seed", "3", "--domain",
-                    std::to_string(domain), "--profile", "loopback", "--json", json, "--timeout", "30"},
+  ChildProcess bot({bin("telegrasp-bot"), "--client-id", "wire-bot", "--trials", std::to_string(trials), "--seed", "3",
+                    "--domain", std::to_string(domain), "--profile", "loopback", "--json", json, "--timeout", "30"},
                    log);
   ASSERT_EQ(bot.wait(300s), 0) << bot.exit_description() << "\n" << bot.log_tail();
 
@@ -205,7 +210,8 @@ TEST(ObjectGeometryTest, ABotWithoutMeshFilesPlansOnReceivedGeometry) {
     ++records[g["object"].get<std::string>()];
     held[g["object"].get<std::string>()] += g["held_after_lift"].get<bool>();
   }
-  EXPECT_EQ(records, (std::map<std::string, int>{{"wire_baseball", trials}, {"wire_gelatin_box", trials}, {"wire_tomato_soup_can", trials}}));
+  EXPECT_EQ(records, (std::map<std::string, int>{
+                         {"wire_baseball", trials}, {"wire_gelatin_box", trials}, {"wire_tomato_soup_can", trials}}));
   // Without a model the bot gives an object up unattempted; planned on the received meshes it
   // holds (today every trial; half leaves room for the operator's noise).
   int total_held = 0;

@@ -33,9 +33,9 @@ using client::GraspEvent;
 using telegrasp::testing::DomainLease;
 
 // Generous guards against hangs on a loaded machine: a passing test never waits that long.
-constexpr auto kStartGuard = 60s;    // a server answering, a bot lifting
-constexpr auto kEventGuard = 30s;    // something that follows from what the test just did
-constexpr auto kBotGuard = 300s;     // a bot's whole run
+constexpr auto kStartGuard = 60s;  // a server answering, a bot lifting
+constexpr auto kEventGuard = 30s;  // something that follows from what the test just did
+constexpr auto kBotGuard = 300s;  // a bot's whole run
 
 std::string write_config(const std::string& name, const std::string& text) {
   const std::string path = work_path(name + ".textproto");
@@ -58,11 +58,26 @@ std::unique_ptr<Client> observe(int domain, Observed& seen, const std::string& i
   o.client_id = id;
   o.domain = domain;
   auto c = std::make_unique<Client>(o);
-  c->on_grasp_event([&](const client::GraspEvent& e) { std::lock_guard l(seen.mutex); seen.events.push_back(e); });
-  c->on_contact_set([&](const client::ContactSet& s) { std::lock_guard l(seen.mutex); seen.contacts.push_back(s); });
-  c->on_scene_state([&](const client::SceneState& s) { std::lock_guard l(seen.mutex); seen.scenes[s.tick] = s; });
-  c->on_hand_skeleton([&](const client::HandSkeleton& s) { std::lock_guard l(seen.mutex); seen.skeletons.push_back(s); });
-  c->on_server_status([&](const client::ServerStatus& s) { std::lock_guard l(seen.mutex); seen.status = s; });
+  c->on_grasp_event([&](const client::GraspEvent& e) {
+    std::lock_guard l(seen.mutex);
+    seen.events.push_back(e);
+  });
+  c->on_contact_set([&](const client::ContactSet& s) {
+    std::lock_guard l(seen.mutex);
+    seen.contacts.push_back(s);
+  });
+  c->on_scene_state([&](const client::SceneState& s) {
+    std::lock_guard l(seen.mutex);
+    seen.scenes[s.tick] = s;
+  });
+  c->on_hand_skeleton([&](const client::HandSkeleton& s) {
+    std::lock_guard l(seen.mutex);
+    seen.skeletons.push_back(s);
+  });
+  c->on_server_status([&](const client::ServerStatus& s) {
+    std::lock_guard l(seen.mutex);
+    seen.status = s;
+  });
   // The tests add clients beside the observer: several participants in this process.
   EXPECT_EQ(eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings().intraprocess_delivery,
             eprosima::fastrtps::INTRAPROCESS_OFF)
@@ -79,9 +94,9 @@ std::unique_ptr<ChildProcess> start_server(int domain, const std::string& config
 std::unique_ptr<ChildProcess> start_bot(int domain, const std::string& id, const std::string& hands, int trials,
                                         const std::string& json) {
   return std::make_unique<ChildProcess>(
-      std::vector<std::string>{bin("telegrasp-bot"), "--client-id", id, "--hands", hands, "--trials", std::to_string(trials),
-                               "--seed", "3", "--domain", std::to_string(domain), "--profile", "loopback", "--json", json,
-                               "--timeout", "30"},
+      std::vector<std::string>{bin("telegrasp-bot"), "--client-id", id, "--hands", hands, "--trials",
+                               std::to_string(trials), "--seed", "3", "--domain", std::to_string(domain), "--profile",
+                               "loopback", "--json", json, "--timeout", "30"},
       work_path(id + ".log"));
 }
 
@@ -125,7 +140,8 @@ std::string check_grasp_release_order(const std::vector<GraspEvent>& events, boo
     } else {
       if (!held) return which + ": a release without a grasp before it";
       if (held->object_id != e.object_id)
-        return which + ": releases object " + std::to_string(e.object_id) + ", the grasp took " + std::to_string(held->object_id);
+        return which + ": releases object " + std::to_string(e.object_id) + ", the grasp took " +
+               std::to_string(held->object_id);
       held = nullptr;
     }
   }
@@ -160,7 +176,8 @@ TEST(LoopbackTest, TwoBotsFourHandsEveryEventOnceContactsConsistent) {
     std::set<int> objects;
     for (const auto& g : j["grasps"]) {
       objects.insert(g["object_id"].get<int>());
-      if (g["grasped"].get<bool>()) ++grasped_records[{client_id, g["hand"].get<std::string>(), g["object_id"].get<int>()}];
+      if (g["grasped"].get<bool>())
+        ++grasped_records[{client_id, g["hand"].get<std::string>(), g["object_id"].get<int>()}];
     }
     EXPECT_EQ(j["grasps"].size(), 4u) << path << ": one record per object";
     EXPECT_EQ(objects.size(), 4u) << path << ": one record per object";
@@ -169,12 +186,14 @@ TEST(LoopbackTest, TwoBotsFourHandsEveryEventOnceContactsConsistent) {
   // The bots have exited: each grasp is released (the bot opened its hand, or the server let go
   // of the departed hand). Wait for the last releases.
   std::string order_error;
-  const bool all_released = eventually([&] {
-    std::lock_guard l(seen.mutex);
-    bool closed = false;
-    order_error = check_grasp_release_order(seen.events, closed);
-    return !order_error.empty() || closed;
-  }, kEventGuard);
+  const bool all_released = eventually(
+      [&] {
+        std::lock_guard l(seen.mutex);
+        bool closed = false;
+        order_error = check_grasp_release_order(seen.events, closed);
+        return !order_error.empty() || closed;
+      },
+      kEventGuard);
   EXPECT_EQ(order_error, "");
   EXPECT_TRUE(all_released) << "a grasp was never released";
 
@@ -239,19 +258,22 @@ TEST(LoopbackTest, KilledBotsObjectIsReleasedAndFalls) {
   int held_object = -1;
   double rest_z = 0;
   std::map<int, double> first_z;
-  ASSERT_TRUE(eventually([&] {
-    std::lock_guard l(seen.mutex);
-    if (seen.scenes.empty()) return false;
-    for (const auto& [tick, s] : seen.scenes)
-      for (const auto& o : s.objects) first_z.emplace(o.id, o.X_WorldObject.translation().z());
-    for (const auto& o : seen.scenes.rbegin()->second.objects)
-      if (o.held && o.holder.client_id == "victim" && o.X_WorldObject.translation().z() > first_z[o.id] + 0.05) {
-        held_object = o.id;
-        rest_z = first_z[o.id];
-        return true;
-      }
-    return false;
-  }, kBotGuard)) << "the victim never lifted an object; see " << work_path("victim.log");
+  ASSERT_TRUE(eventually(
+      [&] {
+        std::lock_guard l(seen.mutex);
+        if (seen.scenes.empty()) return false;
+        for (const auto& [tick, s] : seen.scenes)
+          for (const auto& o : s.objects) first_z.emplace(o.id, o.X_WorldObject.translation().z());
+        for (const auto& o : seen.scenes.rbegin()->second.objects)
+          if (o.held && o.holder.client_id == "victim" && o.X_WorldObject.translation().z() > first_z[o.id] + 0.05) {
+            held_object = o.id;
+            rest_z = first_z[o.id];
+            return true;
+          }
+        return false;
+      },
+      kBotGuard))
+      << "the victim never lifted an object; see " << work_path("victim.log");
   victim->signal(SIGKILL);
   const auto killed_at = std::chrono::steady_clock::now();
   auto victims_release = [&]() -> const GraspEvent* {
@@ -259,10 +281,13 @@ TEST(LoopbackTest, KilledBotsObjectIsReleasedAndFalls) {
       if (e.kind == GraspEvent::Kind::kRelease && e.hand.client_id == "victim" && e.object_id == held_object) return &e;
     return nullptr;
   };
-  ASSERT_TRUE(eventually([&] {
-    std::lock_guard l(seen.mutex);
-    return victims_release() != nullptr;
-  }, kEventGuard)) << "no release event for the dead bot's object " << held_object;
+  ASSERT_TRUE(eventually(
+      [&] {
+        std::lock_guard l(seen.mutex);
+        return victims_release() != nullptr;
+      },
+      kEventGuard))
+      << "no release event for the dead bot's object " << held_object;
   const double released_after_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - killed_at).count();
   std::cout << "[ measured ] object " << held_object << " released " << released_after_s << " s after SIGKILL\n";
   {
@@ -270,17 +295,20 @@ TEST(LoopbackTest, KilledBotsObjectIsReleasedAndFalls) {
     const GraspEvent* release = victims_release();
     bool grasp_before = false;
     for (const auto& e : seen.events)
-      grasp_before |= e.kind == GraspEvent::Kind::kGrasp && e.hand.client_id == "victim" && e.object_id == held_object &&
-                      e.event_id < release->event_id;
+      grasp_before |= e.kind == GraspEvent::Kind::kGrasp && e.hand.client_id == "victim" &&
+                      e.object_id == held_object && e.event_id < release->event_id;
     EXPECT_TRUE(grasp_before) << "the release (event " << release->event_id << ") has no grasp before it";
   }
   // The scene says so too, and physics has it: it falls back toward the table.
-  EXPECT_TRUE(eventually([&] {
-    std::lock_guard l(seen.mutex);
-    for (const auto& o : seen.scenes.rbegin()->second.objects)
-      if (o.id == held_object) return !o.held && o.X_WorldObject.translation().z() < rest_z + 0.02;
-    return false;
-  }, kEventGuard)) << "object " << held_object << " is still held or in the air";
+  EXPECT_TRUE(eventually(
+      [&] {
+        std::lock_guard l(seen.mutex);
+        for (const auto& o : seen.scenes.rbegin()->second.objects)
+          if (o.id == held_object) return !o.held && o.X_WorldObject.translation().z() < rest_z + 0.02;
+        return false;
+      },
+      kEventGuard))
+      << "object " << held_object << " is still held or in the air";
   EXPECT_EQ(survivor->wait(kBotGuard), 0) << "see " << work_path("survivor.log");
 }
 
@@ -306,25 +334,29 @@ TEST(LoopbackTest, BadInputsAreRejectedAndCounted) {
   // samples, e.g. until the server's reader has matched eve's writer too.
   auto publish_until_shown = [&](const client::ControllerSample& s) {
     const std::uint64_t first = eve.publish(s);
-    return eventually([&] {
-      {
-        std::lock_guard l(seen.mutex);
-        for (const auto& k : seen.skeletons)
-          if (k.hand.client_id == "eve" && k.input_sequence >= first &&
-              std::abs(k.X_WorldPalm.translation().z() - s.X_WorldPalm.translation().z()) < 1e-9)
-            return true;
-      }
-      eve.publish(s);
-      return false;
-    }, kEventGuard);
+    return eventually(
+        [&] {
+          {
+            std::lock_guard l(seen.mutex);
+            for (const auto& k : seen.skeletons)
+              if (k.hand.client_id == "eve" && k.input_sequence >= first &&
+                  std::abs(k.X_WorldPalm.translation().z() - s.X_WorldPalm.translation().z()) < 1e-9)
+                return true;
+          }
+          eve.publish(s);
+          return false;
+        },
+        kEventGuard);
   };
   ASSERT_TRUE(publish_until_shown(good)) << "eve's hand never showed in a skeleton";
   // Waits until the status has counted `total` rejected inputs.
   auto rejected_total = [&](std::uint64_t total) {
-    return eventually([&] {
-      std::lock_guard l(seen.mutex);
-      return seen.status && seen.status->inputs_rejected == total;
-    }, kEventGuard);
+    return eventually(
+        [&] {
+          std::lock_guard l(seen.mutex);
+          return seen.status && seen.status->inputs_rejected == total;
+        },
+        kEventGuard);
   };
 
   // Samples that fail validation, whatever the hand: one at a time (keep-last 1 per hand: a sample
@@ -364,16 +396,22 @@ TEST(LoopbackTest, BadInputsAreRejectedAndCounted) {
     }();
     eve.publish(bad.back().second);
     bool stale_accepted = false;
-    ASSERT_TRUE(eventually([&] {
-      std::lock_guard l(seen.mutex);
-      stale_rejected = seen.status && seen.status->inputs_rejected == bad.size();
-      for (std::size_t i = skeletons_before; i < seen.skeletons.size(); ++i) {
-        const auto& k = seen.skeletons[i];
-        stale_accepted |= k.hand.client_id == "eve" && k.input_sequence == 1 && std::abs(k.X_WorldPalm.translation().z() - 0.55) < 1e-9;
-      }
-      return stale_rejected || stale_accepted;
-    }, kEventGuard)) << "the stale sample was neither rejected nor accepted";
-    if (!stale_rejected) std::cout << "[ note ] attempt " << attempt << ": the stale sample was accepted (by a new hand, if a stall had the old one removed)\n";
+    ASSERT_TRUE(eventually(
+        [&] {
+          std::lock_guard l(seen.mutex);
+          stale_rejected = seen.status && seen.status->inputs_rejected == bad.size();
+          for (std::size_t i = skeletons_before; i < seen.skeletons.size(); ++i) {
+            const auto& k = seen.skeletons[i];
+            stale_accepted |= k.hand.client_id == "eve" && k.input_sequence == 1 &&
+                              std::abs(k.X_WorldPalm.translation().z() - 0.55) < 1e-9;
+          }
+          return stale_rejected || stale_accepted;
+        },
+        kEventGuard))
+        << "the stale sample was neither rejected nor accepted";
+    if (!stale_rejected)
+      std::cout << "[ note ] attempt " << attempt
+                << ": the stale sample was accepted (by a new hand, if a stall had the old one removed)\n";
   }
   EXPECT_TRUE(stale_rejected);
   {
@@ -413,23 +451,30 @@ TEST(LoopbackTest, ASpoofedClientIdCannotMoveAnotherClientsHand) {
     return n;
   };
   // Alice first, until her hand shows: her participant owns the id "alice" from then on.
-  ASSERT_TRUE(eventually([&] {
-    alice.publish(mine);
-    std::lock_guard l(seen.mutex);
-    return alice_skeletons() > 0;
-  }, kEventGuard)) << "alice's hand never showed";
+  ASSERT_TRUE(eventually(
+      [&] {
+        alice.publish(mine);
+        std::lock_guard l(seen.mutex);
+        return alice_skeletons() > 0;
+      },
+      kEventGuard))
+      << "alice's hand never showed";
   // Then both, until the server has counted mallory's samples as rejected and shown alice's hand
   // again since.
   int skeletons_at_rejection = -1;
-  ASSERT_TRUE(eventually([&] {
-    alice.publish(mine);
-    theirs.sequence_number += 1;
-    mallory.publish(theirs);
-    std::lock_guard l(seen.mutex);
-    if (skeletons_at_rejection < 0 && seen.status && rejected(*seen.status, "client_id_owned_by_another_participant") > 0)
-      skeletons_at_rejection = alice_skeletons();
-    return skeletons_at_rejection >= 0 && alice_skeletons() > skeletons_at_rejection;
-  }, kEventGuard)) << "mallory's samples were never counted as rejected";
+  ASSERT_TRUE(eventually(
+      [&] {
+        alice.publish(mine);
+        theirs.sequence_number += 1;
+        mallory.publish(theirs);
+        std::lock_guard l(seen.mutex);
+        if (skeletons_at_rejection < 0 && seen.status &&
+            rejected(*seen.status, "client_id_owned_by_another_participant") > 0)
+          skeletons_at_rejection = alice_skeletons();
+        return skeletons_at_rejection >= 0 && alice_skeletons() > skeletons_at_rejection;
+      },
+      kEventGuard))
+      << "mallory's samples were never counted as rejected";
   std::lock_guard l(seen.mutex);
   for (const auto& s : seen.skeletons) {
     if (s.hand.client_id != "alice") continue;

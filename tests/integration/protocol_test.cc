@@ -29,9 +29,26 @@ constexpr int kJobs = 2;  // telegrasp-eval runs job k on domain --domain + k
 // on kJobs domains leased for it; returns the exit code.
 int run_protocol(const std::string& name) {
   const DomainLease lease(kJobs);
-  ChildProcess eval({bin("telegrasp-eval"), "protocol", "--participants", "1,1", "--count", "3", "--mode", "both", "--jobs",
-                     std::to_string(kJobs), "--seed", "5", "--domain", std::to_string(lease.domain()), "--json",
-                     work_path(name + ".json"), "--csv", work_path(name + ".csv"), "--report", work_path(name + ".html")},
+  ChildProcess eval({bin("telegrasp-eval"),
+                     "protocol",
+                     "--participants",
+                     "1,1",
+                     "--count",
+                     "3",
+                     "--mode",
+                     "both",
+                     "--jobs",
+                     std::to_string(kJobs),
+                     "--seed",
+                     "5",
+                     "--domain",
+                     std::to_string(lease.domain()),
+                     "--json",
+                     work_path(name + ".json"),
+                     "--csv",
+                     work_path(name + ".csv"),
+                     "--report",
+                     work_path(name + ".html")},
                     work_path(name + ".log"));
   return eval.wait(300s);  // a guard against hangs
 }
@@ -66,7 +83,8 @@ TEST(ProtocolRun, OneRecordPerObjectPerParticipantAndMode_Repeatable) {
   EXPECT_GT(grasped, 0) << "no trial grasped: the per-grasp checks above checked nothing";
   EXPECT_EQ(a["grasps"].size(), 12u);
   EXPECT_EQ(count.size(), 12u);
-  for (const auto& [key, n] : count) EXPECT_EQ(n, 1) << std::get<0>(key) << " p" << std::get<1>(key) << " " << std::get<2>(key);
+  for (const auto& [key, n] : count)
+    EXPECT_EQ(n, 1) << std::get<0>(key) << " p" << std::get<1>(key) << " " << std::get<2>(key);
 
   // CSV: a header and one row per grasp.
   std::ifstream csv(work_path("protocol_a.csv"));
@@ -80,8 +98,9 @@ TEST(ProtocolRun, OneRecordPerObjectPerParticipantAndMode_Repeatable) {
   for (const char* mode : {"precise", "discrete"})
     for (const char* group : {"experienced", "inexperienced"})
       for (const std::string& object : order) {
-        const std::regex bar("class=\"bar\"[^>]*data-chart=\"time_by_group\\." + std::string(mode) + "\"[^>]*data-mode=\"" + mode +
-                             "\"[^>]*data-group=\"" + group + "\"[^>]*data-object=\"" + object + "\"");
+        const std::regex bar("class=\"bar\"[^>]*data-chart=\"time_by_group\\." + std::string(mode) +
+                             "\"[^>]*data-mode=\"" + mode + "\"[^>]*data-group=\"" + group + "\"[^>]*data-object=\"" +
+                             object + "\"");
         const auto n = std::distance(std::sregex_iterator(page.begin(), page.end(), bar), std::sregex_iterator());
         EXPECT_EQ(n, 1) << mode << " " << group << " " << object;
       }

@@ -11,7 +11,8 @@ namespace telegrasp::server {
 
 /// `in` as the wire sample of hand (`client`, `side`) with sequence number `seq` (client time
 /// seq microseconds), tracking valid.
-inline msg::ControllerState to_state(const std::string& client, std::uint8_t side, std::uint64_t seq, const sim::ControllerInput& in) {
+inline msg::ControllerState to_state(const std::string& client, std::uint8_t side, std::uint64_t seq,
+                                     const sim::ControllerInput& in) {
   msg::ControllerState s;
   s.client_id(client);
   s.hand_side(side);

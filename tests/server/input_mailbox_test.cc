@@ -123,7 +123,8 @@ TEST_F(MailboxTest, AWakeBeforeTheWaitIsKeptForIt) {
 
 TEST_F(MailboxTest, WaitReturnsFalseAtTheDeadline) {
   EXPECT_FALSE(box.wait(std::chrono::steady_clock::now() + std::chrono::milliseconds(1)));
-  EXPECT_FALSE(box.wait(std::chrono::steady_clock::now() - std::chrono::seconds(1))) << "a past deadline returns at once";
+  EXPECT_FALSE(box.wait(std::chrono::steady_clock::now() - std::chrono::seconds(1)))
+      << "a past deadline returns at once";
 }
 
 }  // namespace

@@ -63,11 +63,14 @@ struct Got {
   bool operator==(const Got&) const = default;
 };
 std::ostream& operator<<(std::ostream& o, const Got& g) {
-  return o << "{" << g.now_ns << ": " << g.inputs << " inputs, " << g.commands << " commands" << (g.tick ? ", tick" : "") << "}";
+  return o << "{" << g.now_ns << ": " << g.inputs << " inputs, " << g.commands << " commands"
+           << (g.tick ? ", tick" : "") << "}";
 }
 
 struct RecordedFeedTest : ::testing::Test {
-  std::string path = (std::filesystem::temp_directory_path() / ("telegrasp-feed-test-" + std::to_string(::getpid()) + ".tgrec")).string();
+  std::string path =
+      (std::filesystem::temp_directory_path() / ("telegrasp-feed-test-" + std::to_string(::getpid()) + ".tgrec"))
+          .string();
   void TearDown() override { std::filesystem::remove(path); }
 
   void write(const std::vector<proto::Record>& records) {
@@ -100,11 +103,11 @@ struct RecordedFeedTest : ::testing::Test {
 // time; anything else starts the next iteration.
 TEST_F(RecordedFeedTest, GroupsTheCallsIntoTheLoopsIterations) {
   write({inputs_at(10), command_at(10), command_at(10), tick_at(10), output(proto::OUTPUT_SERVER_STATUS, ""),  //
-         inputs_at(20), command_at(20),                                                                         //
-         tick_at(30), command_at(30),                                                                           // a command after the tick
-         tick_at(40), tick_at(40),                                                                              // two ticks
-         inputs_at(50), inputs_at(50),                                                                          // two inputs calls
-         command_at(60), tick_at(61)});                                                                         // another time
+         inputs_at(20), command_at(20),  //
+         tick_at(30), command_at(30),  // a command after the tick
+         tick_at(40), tick_at(40),  // two ticks
+         inputs_at(50), inputs_at(50),  // two inputs calls
+         command_at(60), tick_at(61)});  // another time
   RecordingReader reader(path);
   OutputCapture capture;
   RecordedFeed feed(reader, capture);
@@ -132,7 +135,8 @@ TEST_F(RecordedFeedTest, GroupsTheCallsIntoTheLoopsIterations) {
 // Each tick's recorded SceneState is compared with the published one before the next call; one
 // published beyond the end of the recording diverges at its end.
 TEST_F(RecordedFeedTest, ComparesEachCallsOutputsThenFindsAnExtraOneAtTheEnd) {
-  write({tick_at(10), output(proto::OUTPUT_SCENE_STATE, to_cdr(scene_at_tick(1))), tick_at(20), output(proto::OUTPUT_SCENE_STATE, to_cdr(scene_at_tick(2)))});
+  write({tick_at(10), output(proto::OUTPUT_SCENE_STATE, to_cdr(scene_at_tick(1))), tick_at(20),
+         output(proto::OUTPUT_SCENE_STATE, to_cdr(scene_at_tick(2)))});
   RecordingReader reader(path);
   OutputCapture capture;
   RecordedFeed feed(reader, capture);
@@ -177,7 +181,8 @@ TEST_F(RecordedFeedTest, AnOutputOfTheWrongCallDiverges) {
 // An undecodable command is reported when the replay reaches it, after the outputs of the call
 // before it: if those differ, that difference is reported instead.
 TEST_F(RecordedFeedTest, AnUndecodableCallIsReportedAfterTheOutputsBeforeIt) {
-  write({tick_at(10), output(proto::OUTPUT_SCENE_STATE, to_cdr(scene_at_tick(1))), command_at(10, "not cdr"), tick_at(20)});
+  write({tick_at(10), output(proto::OUTPUT_SCENE_STATE, to_cdr(scene_at_tick(1))), command_at(10, "not cdr"),
+         tick_at(20)});
   for (const bool same_scene : {true, false}) {
     RecordingReader reader(path);
     OutputCapture capture;
@@ -187,7 +192,8 @@ TEST_F(RecordedFeedTest, AnUndecodableCallIsReportedAfterTheOutputsBeforeIt) {
     ASSERT_TRUE(feed.finished());
     ASSERT_TRUE(feed.divergence());
     if (same_scene) {
-      EXPECT_EQ(feed.divergence()->message, "record 2 (tick 1): the recorded SceneCommand does not decode with this build's IDL");
+      EXPECT_EQ(feed.divergence()->message,
+                "record 2 (tick 1): the recorded SceneCommand does not decode with this build's IDL");
     } else {
       EXPECT_EQ(feed.divergence()->record, 1u);
       EXPECT_EQ(feed.divergence()->field, "tick");

@@ -98,8 +98,10 @@ TEST_F(RecordingTest, RecordThenReplayGivesZeroDivergence) {
   std::uint64_t outputs = 0, statuses = 0, events = 0, removals = 0;
   for (const auto& r : rec.records) {
     if (!r.has_output()) continue;
-    if (r.output().type() == proto::OUTPUT_SERVER_STATUS) ++statuses;
-    else ++outputs;
+    if (r.output().type() == proto::OUTPUT_SERVER_STATUS)
+      ++statuses;
+    else
+      ++outputs;
     events += r.output().type() == proto::OUTPUT_GRASP_EVENT;
     removals += r.output().type() == proto::OUTPUT_HAND_REMOVED;
   }
@@ -143,7 +145,8 @@ TEST_F(RecordingTest, AnAlteredInputDivergesAtItsFirstOutput) {
   EXPECT_EQ(result.divergence->type, "HandSkeleton");
   EXPECT_EQ(result.divergence->key, "client 'alice' right hand");
   EXPECT_EQ(result.divergence->field, "palm.position.x");
-  EXPECT_NE(result.divergence->message.find("record " + std::to_string(k + 1)), std::string::npos) << result.divergence->message;
+  EXPECT_NE(result.divergence->message.find("record " + std::to_string(k + 1)), std::string::npos)
+      << result.divergence->message;
   EXPECT_EQ(result.exit_code(), 1);
 }
 
@@ -163,12 +166,12 @@ TEST_F(RecordingTest, ATruncatedRecordingIsReadUpToTheCut) {
   };
   const std::size_t mid = n / 2;
   const std::vector<Cut> cuts = {
-      {starts[0], 0},                                  // right after the header
-      {starts[7] + 1, 7},                              // inside record 7's frame
-      {starts[mid], mid},                              // at a frame boundary: no End record
+      {starts[0], 0},  // right after the header
+      {starts[7] + 1, 7},  // inside record 7's frame
+      {starts[mid], mid},  // at a frame boundary: no End record
       {starts[mid] + (starts[mid + 1] - starts[mid]) / 2, mid},
-      {starts[n - 1] + 2, n - 1},                      // inside the last record
-      {original.size() - 1, n},                        // inside the End record's checksum
+      {starts[n - 1] + 2, n - 1},  // inside the last record
+      {original.size() - 1, n},  // inside the End record's checksum
   };
   const std::string cut_path = (scratch() / "cut.tgrec").string();
   for (const Cut& cut : cuts) {
@@ -176,7 +179,8 @@ TEST_F(RecordingTest, ATruncatedRecordingIsReadUpToTheCut) {
     write_bytes(cut_path, original.substr(0, cut.bytes));
     const Recording r = read_recording(cut_path);
     ASSERT_EQ(r.records.size(), cut.kept);
-    for (std::size_t i = 0; i < cut.kept; ++i) ASSERT_EQ(r.records[i].SerializeAsString(), rec.records[i].SerializeAsString()) << i;
+    for (std::size_t i = 0; i < cut.kept; ++i)
+      ASSERT_EQ(r.records[i].SerializeAsString(), rec.records[i].SerializeAsString()) << i;
     EXPECT_FALSE(r.complete);
     ASSERT_TRUE(r.damage);
     EXPECT_TRUE(r.damage->truncated);
@@ -186,7 +190,8 @@ TEST_F(RecordingTest, ATruncatedRecordingIsReadUpToTheCut) {
                                      std::to_string(starts[cut.kept]) + " is truncated"),
               std::string::npos)
         << r.damage->message;
-    EXPECT_NE(r.damage->message.find("the " + std::to_string(cut.kept) + " records before it are kept"), std::string::npos)
+    EXPECT_NE(r.damage->message.find("the " + std::to_string(cut.kept) + " records before it are kept"),
+              std::string::npos)
         << r.damage->message;
   }
 
@@ -205,7 +210,8 @@ TEST_F(RecordingTest, ATruncatedRecordingIsReadUpToTheCut) {
     RecordingReader reader(cut_path);
     ADD_FAILURE() << "a recording cut inside its header was read";
   } catch (const RecordingError& e) {
-    EXPECT_NE(std::string(e.what()).find("recording " + cut_path + ": header at byte " + std::to_string(kRecordingMagicSize) + " is truncated"),
+    EXPECT_NE(std::string(e.what()).find("recording " + cut_path + ": header at byte " +
+                                         std::to_string(kRecordingMagicSize) + " is truncated"),
               std::string::npos)
         << e.what();
   }
@@ -223,13 +229,14 @@ TEST_F(RecordingTest, AFlippedByteIsReportedAsCorruptWithTheRecordsBeforeKept) {
 
   const Recording r = read_recording(path);
   ASSERT_EQ(r.records.size(), k);
-  for (std::size_t i = 0; i < k; ++i) ASSERT_EQ(r.records[i].SerializeAsString(), rec.records[i].SerializeAsString()) << i;
+  for (std::size_t i = 0; i < k; ++i)
+    ASSERT_EQ(r.records[i].SerializeAsString(), rec.records[i].SerializeAsString()) << i;
   ASSERT_TRUE(r.damage);
   EXPECT_FALSE(r.damage->truncated);
   EXPECT_EQ(r.damage->record, k);
   EXPECT_EQ(r.damage->byte, starts[k]);
-  EXPECT_NE(r.damage->message.find("recording " + path + ": record " + std::to_string(k) + " at byte " + std::to_string(starts[k]) +
-                                   " is corrupt (checksum mismatch)"),
+  EXPECT_NE(r.damage->message.find("recording " + path + ": record " + std::to_string(k) + " at byte " +
+                                   std::to_string(starts[k]) + " is corrupt (checksum mismatch)"),
             std::string::npos)
       << r.damage->message;
 
@@ -334,7 +341,8 @@ TEST(RecordingHeaderTest, SettingsRoundTrip) {
 std::string box_obj(double x, double y, double z) {
   std::ostringstream o;
   for (int i = 0; i < 8; ++i) {
-    const int corner[8][3] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1}, {-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1}};
+    const int corner[8][3] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
+                              {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
     o << "v " << corner[i][0] * x / 2 << " " << corner[i][1] * y / 2 << " " << corner[i][2] * z / 2 << "\n";
   }
   o << "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n";

@@ -47,8 +47,10 @@ Outputs count_outputs(const Recording& rec) {
     if (!r.has_output()) continue;
     ++o.all;
     double t = NAN;
-    if (msg::HandSkeleton m; r.output().type() == proto::OUTPUT_HAND_SKELETON && from_cdr(r.output().cdr(), m)) t = m.time();
-    if (msg::SceneState m; r.output().type() == proto::OUTPUT_SCENE_STATE && from_cdr(r.output().cdr(), m)) t = m.time();
+    if (msg::HandSkeleton m; r.output().type() == proto::OUTPUT_HAND_SKELETON && from_cdr(r.output().cdr(), m))
+      t = m.time();
+    if (msg::SceneState m; r.output().type() == proto::OUTPUT_SCENE_STATE && from_cdr(r.output().cdr(), m))
+      t = m.time();
     if (std::isfinite(t)) {
       o.first_s = std::min(o.first_s, t);
       o.last_s = std::max(o.last_s, t);
@@ -59,7 +61,9 @@ Outputs count_outputs(const Recording& rec) {
 
 class ReplayExportMcapTest : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() { session_ = new RecordedSession(record_session((scratch() / "session.tgrec").string())); }
+  static void SetUpTestSuite() {
+    session_ = new RecordedSession(record_session((scratch() / "session.tgrec").string()));
+  }
   static void TearDownTestSuite() {
     delete session_;
     session_ = nullptr;
@@ -96,7 +100,8 @@ TEST_F(ReplayExportMcapTest, TheRateSetsTheViewUpdatesPerSecondOfServerTime) {
   const double seconds = o.last_s - o.first_s;
   for (double rate : {10.0, 30.0, 90.0}) {
     SCOPED_TRACE("rate " + std::to_string(rate));
-    const McapExport e = export_mcap(session().path, (scratch() / "rate.mcap").string(), {.rate_hz = rate, .schema_dir = ""});
+    const McapExport e =
+        export_mcap(session().path, (scratch() / "rate.mcap").string(), {.rate_hz = rate, .schema_dir = ""});
     // One update per period of server time (ticks are 1/90 s, so at most 90 Hz), plus the last.
     const double per_second = std::min(rate, 90.0);
     EXPECT_GE(static_cast<double>(e.steps), std::floor(seconds * per_second * 0.99));

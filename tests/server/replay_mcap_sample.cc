@@ -46,7 +46,9 @@ int main(int argc, char** argv) {
     RecordingReader reader(session.path);
     const std::int64_t created_ns = reader.header().created_unix_ns();
     // Nanoseconds since the epoch pass 2^53: written as strings, which JavaScript reads as BigInt.
-    const auto ns = [&](double server_time_s) { return std::to_string(created_ns + std::llround(server_time_s * 1e9)); };
+    const auto ns = [&](double server_time_s) {
+      return std::to_string(created_ns + std::llround(server_time_s * 1e9));
+    };
     std::map<std::string, int> outputs;
     double first_s = INFINITY, last_s = -INFINITY;
     Json events = Json::array(), status_ticks = Json::array(), palms = Json::array(), objects = Json::array();
@@ -68,18 +70,28 @@ int main(int argc, char** argv) {
           hands[hand] = true;
           const auto& p = m.palm().position();
           const auto& q = m.palm().orientation();
-          palms.push_back({{"time_ns", ns(m.time())}, {"frame", hand + "/palm"}, {"p", {p.x(), p.y(), p.z()}},
+          palms.push_back({{"time_ns", ns(m.time())},
+                           {"frame", hand + "/palm"},
+                           {"p", {p.x(), p.y(), p.z()}},
                            {"q", {q.w(), q.x(), q.y(), q.z()}}});
           break;
         }
-        case proto::OUTPUT_GRASP_STATE: ++outputs["grasp_state"]; at(decode<msg::GraspState>(o).time()); break;
-        case proto::OUTPUT_CONTACT_SET: ++outputs["contact_set"]; at(decode<msg::ContactSet>(o).time()); break;
+        case proto::OUTPUT_GRASP_STATE:
+          ++outputs["grasp_state"];
+          at(decode<msg::GraspState>(o).time());
+          break;
+        case proto::OUTPUT_CONTACT_SET:
+          ++outputs["contact_set"];
+          at(decode<msg::ContactSet>(o).time());
+          break;
         case proto::OUTPUT_GRASP_EVENT: {
           const auto m = decode<msg::GraspEvent>(o);
           ++outputs["grasp_event"];
           at(m.time());
-          events.push_back({{"event_id", m.event_id()}, {"kind", m.kind() == msg::GRASP_EVENT_GRASP ? "grasp" : "release"},
-                            {"object_name", m.object_name().to_string()}, {"time_ns", ns(m.time())}});
+          events.push_back({{"event_id", m.event_id()},
+                            {"kind", m.kind() == msg::GRASP_EVENT_GRASP ? "grasp" : "release"},
+                            {"object_name", m.object_name().to_string()},
+                            {"time_ns", ns(m.time())}});
           break;
         }
         case proto::OUTPUT_SCENE_STATE: {
@@ -97,8 +109,11 @@ int main(int argc, char** argv) {
           status_ticks.push_back(m.tick());
           break;
         }
-        case proto::OUTPUT_HAND_REMOVED: ++outputs["hand_removed"]; break;
-        default: break;
+        case proto::OUTPUT_HAND_REMOVED:
+          ++outputs["hand_removed"];
+          break;
+        default:
+          break;
       }
     }
     if (!reader.complete()) throw std::runtime_error("the recording is not complete");

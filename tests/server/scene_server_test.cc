@@ -81,7 +81,8 @@ struct SceneServerTest : ::testing::Test {
     const sim::ObjectModel& model = scene->world().object_model(sim::ObjectId(object));
     sim::ScriptedOperator op(right, sim::skill_profile("perfect"), 7);
     Eigen::Isometry3d start = Eigen::Isometry3d::Identity();
-    start.translation() = scene->world().object_pose(sim::ObjectId(object)).translation() + Eigen::Vector3d(-0.3, -0.2, 0.3);
+    start.translation() =
+        scene->world().object_pose(sim::ObjectId(object)).translation() + Eigen::Vector3d(-0.3, -0.2, 0.3);
     op.begin(model, scene->world().object_pose(sim::ObjectId(object)), start, scene->world().time());
     while (op.phase() != sim::OperatorPhase::kHold && scene->world().time() < 20) {
       const bool held = scene->world().holder(sim::ObjectId(object)).valid();
@@ -254,7 +255,7 @@ TEST_F(SceneServerTest, AnObjectThatFallsOffTheTableIsPutBack) {
   }
   EXPECT_LT(lowest, SceneServer::kFallenHeight + 0.2);  // it did fall
   const Eigen::Vector3d p = scene->world().object_pose(dropped).translation();
-  EXPECT_GT(p.z(), SceneServer::kFallenHeight);          // and is back up at its spawn pose or on its way down again
+  EXPECT_GT(p.z(), SceneServer::kFallenHeight);  // and is back up at its spawn pose or on its way down again
   EXPECT_NEAR(p.x(), SceneServer::kTableHalfExtent + 0.2, 1e-6);
   EXPECT_TRUE(scene->world().object_pose(sim::ObjectId(ball)).isApprox(X_spawn, 1e-3));  // the other one never moved
 }
@@ -274,7 +275,8 @@ TEST(SceneServerResetTest, ResetRestoresTheConfiguredScene) {
   EXPECT_EQ(scene.world().object_model(objects[1]).name, "056_tennis_ball");
   EXPECT_NEAR(scene.world().object_pose(objects[1]).translation().x(), 0.6, 1e-12);
   settings.objects = {{"no_such_model", 0, 0, 0}};
-  EXPECT_THROW(SceneServer(settings, standins(), rig("human_right"), rig("human_left"), mailbox, sink), std::runtime_error);
+  EXPECT_THROW(SceneServer(settings, standins(), rig("human_right"), rig("human_left"), mailbox, sink),
+               std::runtime_error);
 }
 
 // Lockstep: the scene waits for every live hand's answer to the current tick and for the commands

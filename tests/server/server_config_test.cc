@@ -35,7 +35,8 @@ TEST(ServerConfigTest, ReadsEveryFieldAndKeepsDefaultsElsewhere) {
     objects { model: "005_tomato_soup_can" x: 0.4 y: 0.1 yaw: 0.5 }
     closing_mode: "discrete"
     late_latch: false
-  )"), s);
+  )"),
+                     s);
   EXPECT_EQ(s.domain, 7);
   EXPECT_EQ(s.profile, "lan");
   EXPECT_EQ(s.tick_hz, 120);

@@ -227,7 +227,8 @@ TEST_F(ServerLoopTest, LockstepTicksWhenEveryLiveHandAnsweredOrAfterAStall) {
 TEST_F(ServerLoopTest, LockstepWithNoHandsSleepsUntilTheNextStatus) {
   settings.lockstep = true;
   run_until(std::chrono::milliseconds(2500));
-  EXPECT_EQ(trace.times("status"), (std::vector<duration>{duration::zero(), std::chrono::seconds(1), std::chrono::seconds(2)}));
+  EXPECT_EQ(trace.times("status"),
+            (std::vector<duration>{duration::zero(), std::chrono::seconds(1), std::chrono::seconds(2)}));
   EXPECT_EQ(clock.deadlines.size(), 4u) << "the loop woke between statuses";
   EXPECT_EQ(loop->ticks(), 0u);
 }
@@ -261,7 +262,8 @@ TEST_F(ServerLoopTest, CatchesUpATickLateByLessThanTwoPeriods) {
 TEST_F(ServerLoopTest, PublishesServerStatusAtOnceThenOncePerPeriod) {
   settings.status_period_s = 0.5;
   run_until(std::chrono::milliseconds(1200));
-  EXPECT_EQ(trace.times("status"), (std::vector<duration>{duration::zero(), std::chrono::milliseconds(500), std::chrono::seconds(1)}));
+  EXPECT_EQ(trace.times("status"),
+            (std::vector<duration>{duration::zero(), std::chrono::milliseconds(500), std::chrono::seconds(1)}));
 }
 
 // stop() during the wait for the third tick: the loop returns from that wait without ticking.

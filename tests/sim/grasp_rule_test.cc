@@ -8,7 +8,8 @@ namespace {
 
 TEST(GraspRuleTest, HumanRuleTruthTable) {
   const HandRig rig = HandRig::load(HandRig::builtin_path("human_right"));
-  const char* names[] = {"thumb_mid", "thumb_dist", "index_mid", "index_dist", "middle_mid", "middle_dist", "ring_mid", "little_dist"};
+  const char* names[] = {"thumb_mid",  "thumb_dist",  "index_mid", "index_dist",
+                         "middle_mid", "middle_dist", "ring_mid",  "little_dist"};
   // Every combination of the eight capsules that matter or must not matter, and the palm.
   for (unsigned bits = 0; bits < (1u << 9); ++bits) {
     std::vector<std::uint8_t> blocked(rig.phalanges().size(), 0);
@@ -32,9 +33,7 @@ TEST(GraspRuleTest, GripperOpposesFingerAOrPalmWithBOrC) {
   EXPECT_FALSE(evaluate_grasp_rule(rig.grasp_rule(), blocked, true));
 }
 
-TEST(GraspRuleTest, EmptyRuleNeverGrasps) {
-  EXPECT_FALSE(evaluate_grasp_rule({}, {1, 1}, true));
-}
+TEST(GraspRuleTest, EmptyRuleNeverGrasps) { EXPECT_FALSE(evaluate_grasp_rule({}, {1, 1}, true)); }
 
 }  // namespace
 }  // namespace telegrasp::sim

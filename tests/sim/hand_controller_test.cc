@@ -83,7 +83,8 @@ ControllerInput at_identity(double trigger) {
 
 // Exact gap between a capsule of `rig` and the bar whose x-z cross-section is the rectangle
 // [x0, x1] x [z0, z1] (the bar is long in y): 2D distance from the capsule axis, densely sampled.
-double gap_to_bar_2d(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r, double x0, double x1, double z0, double z1) {
+double gap_to_bar_2d(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r, double x0, double x1, double z0,
+                     double z1) {
   double best = 1e9;
   constexpr int kSamples = 200000;
   for (int i = 0; i <= kSamples; ++i) {
@@ -139,7 +140,8 @@ double min_blocked_gap(const HandController& hand, const ObjectView& view, bool 
   for (PhalanxId id : rig.capsule_phalanges()) {
     if (!hand.state().blocked[id.value]) continue;
     const auto& c = *rig.phalanges()[id.value].capsule;
-    const Eigen::Isometry3d X = view.X_WorldObject.inverse() * hand.state().X_WorldPalm * hand.state().X_PalmPhalanx[id.value];
+    const Eigen::Isometry3d X =
+        view.X_WorldObject.inverse() * hand.state().X_WorldPalm * hand.state().X_PalmPhalanx[id.value];
     const double gap = view.model->distance.capsule_signed_distance(X * c.p_PhalanxA, X * c.p_PhalanxB, c.radius);
     worst = largest ? std::max(worst, gap) : std::min(worst, gap);
   }
@@ -361,8 +363,8 @@ TEST(HandControllerTest, ValidateInputNamesTheBadField) {
 // centre; the paper's origin distance prefers the small object whose centre is nearer.
 TEST(HandControllerTest, SelectsNearestBySurfaceOrOrigin) {
   auto rig = finger_rig();  // selection sphere centre at (0.07, 0, 0), radius 0.2
-  BoxScene big({0.1, 0.1, 0.1}, {0.07, 0, -0.12});   // surface 2 cm below the centre, origin 12 cm
-  BoxScene small({0.01, 0.01, 0.01}, {0.07, 0.1, 0}); // surface 9 cm away, origin 10 cm
+  BoxScene big({0.1, 0.1, 0.1}, {0.07, 0, -0.12});  // surface 2 cm below the centre, origin 12 cm
+  BoxScene small({0.01, 0.01, 0.01}, {0.07, 0.1, 0});  // surface 9 cm away, origin 10 cm
   big.view.id = ObjectId(1);
   small.view.id = ObjectId(2);
   const ObjectView views[] = {big.view, small.view};
@@ -533,7 +535,8 @@ TEST(HandControllerTest, GraspMetricsAndContactsEqualFreshExactQueries) {
 
 // The closing modes' names, as flags, configuration files and records write them, read back.
 TEST(ClosingModeTest, NamesReadBackAndOthersAreRefused) {
-  for (ClosingMode m : {ClosingMode::kPrecise, ClosingMode::kDiscrete}) EXPECT_EQ(parse_closing_mode(closing_mode_name(m)), m);
+  for (ClosingMode m : {ClosingMode::kPrecise, ClosingMode::kDiscrete})
+    EXPECT_EQ(parse_closing_mode(closing_mode_name(m)), m);
   EXPECT_STREQ(closing_mode_name(ClosingMode::kPrecise), "precise");
   EXPECT_STREQ(closing_mode_name(ClosingMode::kDiscrete), "discrete");
   EXPECT_EQ(parse_closing_mode("Precise"), std::nullopt);

@@ -82,13 +82,24 @@ TEST(HandRigTest, BadFieldsAreNamed) {
   const std::string good = read_builtin("human_right");
   ASSERT_EQ(error_of(good), "");
   // The index finger is fingers[1]; its middle phalanx is phalanges[1].
-  EXPECT_NE(error_of(edit(good, "radius: 0.0085", "radius: 0")).find("fingers[1].phalanges[1].capsule.radius"), std::string::npos);
-  EXPECT_NE(error_of(edit(good, "\"index_dist\", \"middle_mid\"", "\"index_nail\", \"middle_mid\"")).find("unknown phalanx 'index_nail'"), std::string::npos);
-  EXPECT_NE(error_of(edit(good, "open_deg: 0 closed_deg: 45 min_deg: -10", "open_deg: -20 closed_deg: 45 min_deg: -10")).find("fingers[0].phalanges[0].joint.open_deg"), std::string::npos);
+  EXPECT_NE(error_of(edit(good, "radius: 0.0085", "radius: 0")).find("fingers[1].phalanges[1].capsule.radius"),
+            std::string::npos);
+  EXPECT_NE(error_of(edit(good, "\"index_dist\", \"middle_mid\"", "\"index_nail\", \"middle_mid\""))
+                .find("unknown phalanx 'index_nail'"),
+            std::string::npos);
+  EXPECT_NE(error_of(edit(good, "open_deg: 0 closed_deg: 45 min_deg: -10", "open_deg: -20 closed_deg: 45 min_deg: -10"))
+                .find("fingers[0].phalanges[0].joint.open_deg"),
+            std::string::npos);
   EXPECT_NE(error_of(edit(good, "name: \"human_right\"", "name: \"\"")).find("field 'name'"), std::string::npos);
-  EXPECT_NE(error_of(edit(good, "name: \"index_mid\"", "name: \"thumb_mid\"")).find("duplicate phalanx name 'thumb_mid'"), std::string::npos);
-  EXPECT_NE(error_of(edit(good, "palm_selection_sphere { center { x: 0.035 y: 0 z: -0.04 } radius: 0.09 }", "")).find("palm_selection_sphere.radius"), std::string::npos);
-  EXPECT_NE(error_of(edit(good, "joint { axis { x: 0 y: 1 z: 0 }", "joint { axis { x: 0 y: 0 z: 0 }")).find("joint.axis"), std::string::npos);
+  EXPECT_NE(
+      error_of(edit(good, "name: \"index_mid\"", "name: \"thumb_mid\"")).find("duplicate phalanx name 'thumb_mid'"),
+      std::string::npos);
+  EXPECT_NE(error_of(edit(good, "palm_selection_sphere { center { x: 0.035 y: 0 z: -0.04 } radius: 0.09 }", ""))
+                .find("palm_selection_sphere.radius"),
+            std::string::npos);
+  EXPECT_NE(
+      error_of(edit(good, "joint { axis { x: 0 y: 1 z: 0 }", "joint { axis { x: 0 y: 0 z: 0 }")).find("joint.axis"),
+      std::string::npos);
 }
 
 }  // namespace

@@ -12,10 +12,9 @@ namespace {
 /// Axis-aligned box [0,a] x [0,b] x [0,c], 12 outward triangles.
 TriangleMesh make_box(double a, double b, double c) {
   TriangleMesh mesh;
-  for (int i = 0; i < 8; ++i)
-    mesh.vertices.emplace_back((i & 1) ? a : 0, (i & 2) ? b : 0, (i & 4) ? c : 0);
-  mesh.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6},   // -z, +z
-                    {0, 1, 4}, {1, 5, 4}, {2, 6, 3}, {3, 6, 7},   // -y, +y
+  for (int i = 0; i < 8; ++i) mesh.vertices.emplace_back((i & 1) ? a : 0, (i & 2) ? b : 0, (i & 4) ? c : 0);
+  mesh.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6},  // -z, +z
+                    {0, 1, 4}, {1, 5, 4}, {2, 6, 3}, {3, 6, 7},  // -y, +y
                     {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};  // -x, +x
   return mesh;
 }
@@ -28,15 +27,13 @@ TriangleMesh make_uv_sphere(double r, int stacks, int slices) {
     const double theta = std::numbers::pi * i / stacks;
     for (int j = 0; j < slices; ++j) {
       const double phi = 2 * std::numbers::pi * j / slices;
-      mesh.vertices.emplace_back(r * std::sin(theta) * std::cos(phi),
-                                 r * std::sin(theta) * std::sin(phi), -r * std::cos(theta));
+      mesh.vertices.emplace_back(r * std::sin(theta) * std::cos(phi), r * std::sin(theta) * std::sin(phi),
+                                 -r * std::cos(theta));
     }
   }
   mesh.vertices.emplace_back(0, 0, r);
   const auto top = static_cast<std::uint32_t>(mesh.vertices.size() - 1);
-  auto at = [slices](int ring, int j) {
-    return static_cast<std::uint32_t>(1 + ring * slices + (j % slices));
-  };
+  auto at = [slices](int ring, int j) { return static_cast<std::uint32_t>(1 + ring * slices + (j % slices)); };
   for (int j = 0; j < slices; ++j) {
     mesh.triangles.push_back({0, at(0, j + 1), at(0, j)});
     for (int i = 0; i + 2 < stacks; ++i) {
@@ -123,8 +120,7 @@ TEST(MassProperties, UvSphereApproachesBall) {
     previous_error = error;
     EXPECT_LT(props.centroid.norm(), 1e-12);
     const double ball_inertia = 0.4 * props.volume * r * r;
-    for (int i = 0; i < 3; ++i)
-      expect_relative(props.inertia_per_density(i, i), ball_inertia, 20.0 / (n * n));
+    for (int i = 0; i < 3; ++i) expect_relative(props.inertia_per_density(i, i), ball_inertia, 20.0 / (n * n));
   }
 }
 

@@ -80,12 +80,12 @@ TriangleMesh make_tetrahedron(double s) {
 TriangleMesh make_icosphere(double r, int levels) {
   TriangleMesh m;
   const double p = (1.0 + std::sqrt(5.0)) / 2.0;
-  const double raw[12][3] = {{-1, p, 0}, {1, p, 0}, {-1, -p, 0}, {1, -p, 0}, {0, -1, p}, {0, 1, p},
-                             {0, -1, -p}, {0, 1, -p}, {p, 0, -1}, {p, 0, 1}, {-p, 0, -1}, {-p, 0, 1}};
+  const double raw[12][3] = {{-1, p, 0},  {1, p, 0},  {-1, -p, 0}, {1, -p, 0}, {0, -1, p},  {0, 1, p},
+                             {0, -1, -p}, {0, 1, -p}, {p, 0, -1},  {p, 0, 1},  {-p, 0, -1}, {-p, 0, 1}};
   for (const auto& v : raw) m.vertices.push_back(r * Vector3d(v[0], v[1], v[2]).normalized());
-  m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8},   {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-                 {3, 8, 9},  {4, 9, 5},  {2, 4, 11},  {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  m.triangles = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                 {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   for (int l = 0; l < levels; ++l) {
     std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> mid;
     const auto midpoint = [&](std::uint32_t a, std::uint32_t b) {
@@ -253,9 +253,7 @@ double box_sdf(const Vector3d& h, const Vector3d& p) {
 
 /// Largest gap between the sphere of radius r and the icosphere's facets (vertices lie on the
 /// sphere, facets inside it): the surface lies in the shell [r - error, r].
-double tessellation_error(const TriangleMesh& m, double r) {
-  return r - brute_point_distance(m, Vector3d::Zero());
-}
+double tessellation_error(const TriangleMesh& m, double r) { return r - brute_point_distance(m, Vector3d::Zero()); }
 
 /// First t >= 0 at which o + t d comes within `radius` of the origin (d unit), or +inf.
 double ray_sphere(const Vector3d& o, const Vector3d& d, double radius) {
@@ -630,16 +628,16 @@ TEST(MeshDistance, CapsuleSignedDistancePenetratingFaceBy3mm) {
   EXPECT_NEAR(md.capsule_signed_distance(Vector3d(-0.02, 0, z), Vector3d(0.02, 0.005, z), r), -0.003, 1e-6);
   // Segment tip 3 mm under the top face (segment crosses the surface).
   const double r2 = 0.002;
-  EXPECT_NEAR(md.capsule_signed_distance(Vector3d(0.001, 0.002, 0.04), Vector3d(0.001, 0.002, 0.017), r2),
-              -0.003 - r2, 1e-6);
+  EXPECT_NEAR(md.capsule_signed_distance(Vector3d(0.001, 0.002, 0.04), Vector3d(0.001, 0.002, 0.017), r2), -0.003 - r2,
+              1e-6);
 }
 
 TEST(MeshDistance, CapsuleSignedDistanceSegmentThroughWholeBox) {
   const MeshDistance md(make_box(kBoxHalf));
   const double r = 0.004;
   // Along x through the box at (y, z) = (0.005, 0.004): deepest signed distance is -(0.02 - 0.004).
-  EXPECT_NEAR(md.capsule_signed_distance(Vector3d(-0.1, 0.005, 0.004), Vector3d(0.1, 0.005, 0.004), r),
-              -0.016 - r, 1e-6);
+  EXPECT_NEAR(md.capsule_signed_distance(Vector3d(-0.1, 0.005, 0.004), Vector3d(0.1, 0.005, 0.004), r), -0.016 - r,
+              1e-6);
   // Oblique segment through the box; expectation from the analytic box SDF, densely sampled.
   const Vector3d a(-0.08, -0.04, -0.01), b(0.07, 0.035, 0.03);
   double expected = std::numeric_limits<double>::infinity();
@@ -647,8 +645,7 @@ TEST(MeshDistance, CapsuleSignedDistanceSegmentThroughWholeBox) {
   EXPECT_NEAR(md.capsule_signed_distance(a, b, r), expected - r, 1e-6);
   // Entirely inside without touching: minimum over the segment.
   // Its end points are 0.01 deep, its midpoint 0.02 deep (nearest face z = +-0.02).
-  EXPECT_NEAR(md.capsule_signed_distance(Vector3d(-0.01, 0.0, 0.01), Vector3d(0.01, 0.0, -0.01), r), -0.02 - r,
-              1e-6);
+  EXPECT_NEAR(md.capsule_signed_distance(Vector3d(-0.01, 0.0, 0.01), Vector3d(0.01, 0.0, -0.01), r), -0.02 - r, 1e-6);
 }
 
 TEST(MeshDistance, CapsuleSignedDistanceThroughIcosphereIsConvexMinimum) {
@@ -784,8 +781,7 @@ TEST_F(IcosphereBruteForce, ClosestPointMatchesBruteForce) {
     EXPECT_NEAR(std::abs(q.signed_distance), expected, 1e-12);
     // The reported point lies on the reported triangle.
     const auto& t = mesh_.triangles[q.triangle];
-    EXPECT_LT(ref_point_triangle_sq(q.point_on_mesh, mesh_.vertices[t[0]], mesh_.vertices[t[1]],
-                                    mesh_.vertices[t[2]]),
+    EXPECT_LT(ref_point_triangle_sq(q.point_on_mesh, mesh_.vertices[t[0]], mesh_.vertices[t[1]], mesh_.vertices[t[2]]),
               1e-24);
     // Sign against the shell [R - tol, R] that holds the surface.
     const double rho = p.norm();
@@ -850,7 +846,9 @@ TEST_F(IcosphereBruteForce, PointCapsulesAndHintsGiveTheSameAnswers) {
     EXPECT_EQ(md_.capsule_overlaps(p, p, r), q.distance <= r || q.signed_distance < 0) << i;
     const Vector3d b = p + len(rng_) * random_unit(rng_);
     const std::uint32_t hint = tri(rng_);
-    EXPECT_EQ(md_.closest_to_segment(p, b, std::numeric_limits<double>::infinity(), hint).distance, md_.closest_to_segment(p, b).distance) << i;
+    EXPECT_EQ(md_.closest_to_segment(p, b, std::numeric_limits<double>::infinity(), hint).distance,
+              md_.closest_to_segment(p, b).distance)
+        << i;
     EXPECT_EQ(md_.capsule_overlaps(p, b, r, hint), md_.capsule_overlaps(p, b, r)) << i;
     EXPECT_EQ(md_.capsule_signed_distance(p, b, r, hint), md_.capsule_signed_distance(p, b, r)) << i;
   }

@@ -21,8 +21,7 @@ namespace fs = std::filesystem;
 
 Eigen::Vector3d triangle_normal(const TriangleMesh& mesh, std::size_t t) {
   const auto& tri = mesh.triangles[t];
-  return (mesh.vertices[tri[1]] - mesh.vertices[tri[0]])
-      .cross(mesh.vertices[tri[2]] - mesh.vertices[tri[0]]);
+  return (mesh.vertices[tri[1]] - mesh.vertices[tri[0]]).cross(mesh.vertices[tri[2]] - mesh.vertices[tri[0]]);
 }
 
 /// Every undirected edge is used by exactly two triangles, once in each direction.
@@ -45,8 +44,8 @@ class TempDir {
   TempDir() {
     static std::atomic<int> counter{0};
     std::random_device random;
-    path_ = fs::temp_directory_path() / ("telegrasp_mesh_loading_test_" + std::to_string(random()) +
-                                         "_" + std::to_string(counter++));
+    path_ = fs::temp_directory_path() /
+            ("telegrasp_mesh_loading_test_" + std::to_string(random()) + "_" + std::to_string(counter++));
     fs::create_directories(path_);
   }
   ~TempDir() {
@@ -178,8 +177,7 @@ TEST(CleanMesh, KeepsWinding) {
   ASSERT_EQ(cleaned.triangles.size(), 4u);
   EXPECT_TRUE(is_closed_and_consistent(cleaned));
   for (std::size_t t = 0; t < 4; ++t) {
-    EXPECT_TRUE(
-        triangle_normal(cleaned, t).normalized().isApprox(triangle_normal(soup, t).normalized()));
+    EXPECT_TRUE(triangle_normal(cleaned, t).normalized().isApprox(triangle_normal(soup, t).normalized()));
   }
 }
 
@@ -225,13 +223,12 @@ TEST(LoadMeshFile, ObjCubeWithQuads) {
 TEST(LoadMeshFile, AsciiStlTetrahedron) {
   TempDir dir;
   auto facet = [](const char* a, const char* b, const char* c) {
-    return std::string("facet normal 0 0 0\nouter loop\nvertex ") + a + "\nvertex " + b +
-           "\nvertex " + c + "\nendloop\nendfacet\n";
+    return std::string("facet normal 0 0 0\nouter loop\nvertex ") + a + "\nvertex " + b + "\nvertex " + c +
+           "\nendloop\nendfacet\n";
   };
   const char *o = "0 0 0", *x = "0.1 0 0", *y = "0 0.1 0", *z = "0 0 0.1";
-  const std::string path =
-      dir.write("tet.stl", "solid tet\n" + facet(o, y, x) + facet(o, x, z) + facet(o, z, y) +
-                               facet(x, y, z) + "endsolid tet\n");
+  const std::string path = dir.write(
+      "tet.stl", "solid tet\n" + facet(o, y, x) + facet(o, x, z) + facet(o, z, y) + facet(x, y, z) + "endsolid tet\n");
   const TriangleMesh mesh = load_mesh_file(path);
   EXPECT_EQ(mesh.vertices.size(), 4u);  // 12 corners in the file, welded by clean_mesh.
   EXPECT_EQ(mesh.triangles.size(), 4u);
@@ -240,13 +237,12 @@ TEST(LoadMeshFile, AsciiStlTetrahedron) {
 
 TEST(LoadMeshFile, AsciiPlyPyramidWithQuadBase) {
   TempDir dir;
-  const std::string path =
-      dir.write("pyramid.ply",
-                "ply\nformat ascii 1.0\nelement vertex 5\n"
-                "property float x\nproperty float y\nproperty float z\n"
-                "element face 5\nproperty list uchar int vertex_indices\nend_header\n"
-                "0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.5 1\n"
-                "4 0 3 2 1\n3 0 1 4\n3 1 2 4\n3 2 3 4\n3 3 0 4\n");
+  const std::string path = dir.write("pyramid.ply",
+                                     "ply\nformat ascii 1.0\nelement vertex 5\n"
+                                     "property float x\nproperty float y\nproperty float z\n"
+                                     "element face 5\nproperty list uchar int vertex_indices\nend_header\n"
+                                     "0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.5 1\n"
+                                     "4 0 3 2 1\n3 0 1 4\n3 1 2 4\n3 2 3 4\n3 3 0 4\n");
   const TriangleMesh mesh = load_mesh_file(path);
   EXPECT_EQ(mesh.vertices.size(), 5u);
   EXPECT_EQ(mesh.triangles.size(), 6u);
@@ -288,8 +284,7 @@ TEST(LoadMeshFile, ColladaNodeTransformsAreApplied) {
 
 TEST(LoadMeshFile, MissingFileNamesPath) {
   TempDir dir;
-  const std::string path =
-      (fs::temp_directory_path() / "telegrasp_no_such_dir" / "missing.obj").string();
+  const std::string path = (fs::temp_directory_path() / "telegrasp_no_such_dir" / "missing.obj").string();
   expect_load_error(path, "file not found");
 }
 

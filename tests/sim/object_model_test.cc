@@ -37,14 +37,15 @@ TEST(ObjectModelTest, InModelFrameKeepsTheFrameAndTheMass) {
 // make_object_model's output, rebuilt in its own frame, is the same model.
 TEST(ObjectModelTest, InModelFrameRebuildsARecentredModel) {
   const ObjectModelPtr original = make_object_model("box", offset_box({0.1, 0.2, 0.3}), 0.5, "test");
-  const ObjectModelPtr rebuilt =
-      make_object_model_in_model_frame("box", original->mesh, original->mass_kg, "rebuilt", original->p_OriginalCenterOfMass);
+  const ObjectModelPtr rebuilt = make_object_model_in_model_frame("box", original->mesh, original->mass_kg, "rebuilt",
+                                                                  original->p_OriginalCenterOfMass);
   EXPECT_EQ(rebuilt->mesh.triangles, original->mesh.triangles);
   EXPECT_EQ(rebuilt->p_ObjectMin, original->p_ObjectMin);
   EXPECT_EQ(rebuilt->p_ObjectMax, original->p_ObjectMax);
   EXPECT_EQ(rebuilt->p_OriginalCenterOfMass, original->p_OriginalCenterOfMass);
   EXPECT_NEAR(rebuilt->mass_properties.volume, original->mass_properties.volume, 1e-15);
-  EXPECT_TRUE(rebuilt->mass_properties.inertia_per_density.isApprox(original->mass_properties.inertia_per_density, 1e-12));
+  EXPECT_TRUE(
+      rebuilt->mass_properties.inertia_per_density.isApprox(original->mass_properties.inertia_per_density, 1e-12));
 }
 
 // Caller mistakes name the source and what is wrong.

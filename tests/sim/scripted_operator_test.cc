@@ -48,7 +48,8 @@ TEST(ScriptedOperatorTest, SeededAndDeterministic) {
 }
 
 // A full trial in a world; returns whether the object was held through the lift and hold.
-bool trial(const std::string& rig_name, const std::string& object, const std::string& skill, GraspSettings settings = {}) {
+bool trial(const std::string& rig_name, const std::string& object, const std::string& skill,
+           GraspSettings settings = {}) {
   WorldSettings ws;
   ws.grasp = settings;
   World world(ws);
@@ -73,7 +74,9 @@ bool trial(const std::string& rig_name, const std::string& object, const std::st
   return op.held_after_lift();
 }
 
-TEST(ScriptedOperatorTest, PerfectOperatorLiftsACan) { EXPECT_TRUE(trial("human_right", "002_master_chef_can", "perfect")); }
+TEST(ScriptedOperatorTest, PerfectOperatorLiftsACan) {
+  EXPECT_TRUE(trial("human_right", "002_master_chef_can", "perfect"));
+}
 TEST(ScriptedOperatorTest, LeftHandLiftsABox) { EXPECT_TRUE(trial("human_left", "004_sugar_box", "perfect")); }
 TEST(ScriptedOperatorTest, GripperLiftsABall) { EXPECT_TRUE(trial("gripper3", "055_baseball", "perfect")); }
 
@@ -122,7 +125,8 @@ void fast_close_on(const ObjectModelPtr& knife) {
   EXPECT_GE(blocked, 2);
 }
 
-NdSearchResult nd_search(const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject, int refinements, int min_hits = 4) {
+NdSearchResult nd_search(const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject, int refinements,
+                         int min_hits = 4) {
   NdSearchSettings search;
   search.random_poses = 40;
   search.refinements = refinements;
@@ -151,7 +155,10 @@ TEST(ScriptedOperatorTest, NdPoseSearchKeepsACleanGrasp) {
     if (c.blocked) {
       EXPECT_GE(c.signed_distance, -0.1e-3);
     }
-    if (c.hit) { sum += 1000 * std::abs(c.nd); ++hits; }
+    if (c.hit) {
+      sum += 1000 * std::abs(c.nd);
+      ++hits;
+    }
   }
   EXPECT_GE(hits, 4);
   EXPECT_NEAR(r.nd_mean_mm, sum / hits, 1e-9);

@@ -30,8 +30,8 @@ bool is_watertight_and_consistent(const TriangleMesh& mesh, std::string* problem
   for (const auto& [edge, count] : directed) {
     const auto reverse = directed.find({edge.second, edge.first});
     if (count != 1 || reverse == directed.end() || reverse->second != 1) {
-      *problem = "edge " + std::to_string(edge.first) + "-" + std::to_string(edge.second) +
-                 " used " + std::to_string(count) + " times, reverse " +
+      *problem = "edge " + std::to_string(edge.first) + "-" + std::to_string(edge.second) + " used " +
+                 std::to_string(count) + " times, reverse " +
                  std::to_string(reverse == directed.end() ? 0 : reverse->second);
       return false;
     }
@@ -112,8 +112,7 @@ TEST_P(StandinMeshTest, ClosedOutwardAndSizedToExtent) {
   EXPECT_NEAR(lo.z(), 0.0, 1e-12);
   EXPECT_NEAR(0.5 * (lo.x() + hi.x()), 0.0, 1e-3);
   EXPECT_NEAR(0.5 * (lo.y() + hi.y()), 0.0, 1e-3);
-  EXPECT_TRUE((props.centroid.array() > lo.array()).all() &&
-              (props.centroid.array() < hi.array()).all());
+  EXPECT_TRUE((props.centroid.array() > lo.array()).all() && (props.centroid.array() < hi.array()).all());
 }
 
 INSTANTIATE_TEST_SUITE_P(AllProtocolObjects, StandinMeshTest, ::testing::Range<std::size_t>(0, 30),
@@ -146,7 +145,8 @@ TEST(StandinMesh, UnknownObjectGetsABoxOfItsExtent) {
 // loaders, knowing no catalogue, give both the volume's.
 TEST(ProtocolObjectFiles, ProtocolNamesGetTheirRealMass) {
   namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / ("telegrasp_standin_objects_test_" + std::to_string(std::random_device{}()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("telegrasp_standin_objects_test_" + std::to_string(std::random_device{}()));
   fs::create_directories(dir);
   const std::string cube =
       "v 0 0 0\nv 0.1 0 0\nv 0.1 0.1 0\nv 0 0.1 0\nv 0 0 0.1\nv 0.1 0 0.1\nv 0.1 0.1 0.1\nv 0 0.1 0.1\n"
@@ -184,7 +184,6 @@ TEST(ProtocolObjects, PaperOrderIsAPermutationFromLemonToAirplane) {
   EXPECT_EQ(ordered[11].name, "002_master_chef_can");
   EXPECT_EQ(ordered.back().name, "072-a_toy_airplane");
 }
-
 
 }  // namespace
 }  // namespace telegrasp::sim

@@ -74,7 +74,8 @@ TEST(WorldTest, ReleaseCarriesTheHandVelocity) {
   in.trigger = 1.0;
   const auto advance = [&] {
     in.X_WorldPalm.translation() += v * world.dt();
-    in.X_WorldPalm.linear() = Eigen::AngleAxisd(w.norm() * world.dt(), w.normalized()).toRotationMatrix() * in.X_WorldPalm.linear();
+    in.X_WorldPalm.linear() =
+        Eigen::AngleAxisd(w.norm() * world.dt(), w.normalized()).toRotationMatrix() * in.X_WorldPalm.linear();
   };
   for (int t = 0; t < 10; ++t) {
     advance();
@@ -83,7 +84,8 @@ TEST(WorldTest, ReleaseCarriesTheHandVelocity) {
     ASSERT_EQ(world.holder(can), hand) << "held while moving";
   }
   const Eigen::Isometry3d held_pose = world.object_pose(can);
-  EXPECT_LT((held_pose.translation() - world.hand(hand).grasped_object_pose()->translation()).norm(), 1e-9) << "follows the hand exactly";
+  EXPECT_LT((held_pose.translation() - world.hand(hand).grasped_object_pose()->translation()).norm(), 1e-9)
+      << "follows the hand exactly";
   // Where the object is as the hand lets go: carried by this tick's hand pose.
   const Eigen::Isometry3d X_PalmObject = world.hand(hand).state().X_PalmObject;
   in.trigger = 0.0;
@@ -136,12 +138,14 @@ TEST(WorldTest, ObjectLocalContactsMatchWorldContacts) {
   ControllerInput in;
   in.X_WorldPalm = world.hand(hand).state().X_WorldPalm;
   in.X_WorldPalm.translation() += Eigen::Vector3d(0.05, 0.02, 0.1);
-  in.X_WorldPalm.linear() = Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix() * in.X_WorldPalm.linear();
+  in.X_WorldPalm.linear() =
+      Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix() * in.X_WorldPalm.linear();
   in.trigger = 1.0;
   world.set_input(hand, in);
   world.step();
   const Eigen::Isometry3d moved = world.object_pose(id);
-  for (const Contact& c : world.hand(hand).contacts()) EXPECT_LT((moved * c.p_ObjectContact - c.p_WorldContact).norm(), 1e-9);
+  for (const Contact& c : world.hand(hand).contacts())
+    EXPECT_LT((moved * c.p_ObjectContact - c.p_WorldContact).norm(), 1e-9);
 }
 
 // Removing a held object lets the hand go and reports the release with the next step's events.
@@ -182,7 +186,8 @@ TEST(WorldTest, RemovingAHandDropsItsObjectToPhysics) {
   int releases = 0;
   for (int i = 0; i < 90; ++i) {
     world.step();
-    for (const GraspEvent& e : world.events()) releases += e.kind == GraspEvent::Kind::kRelease && e.object == can && e.hand == hand;
+    for (const GraspEvent& e : world.events())
+      releases += e.kind == GraspEvent::Kind::kRelease && e.object == can && e.hand == hand;
   }
   EXPECT_EQ(releases, 1);
   EXPECT_LT(world.object_pose(can).translation().z(), z_lifted - 0.04);  // it fell

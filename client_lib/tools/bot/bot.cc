@@ -20,16 +20,16 @@ using nlohmann::json;
 
 namespace {
 
-constexpr double kTrialLimit = 30.0;           // s of operator time before a trial is cut short
-constexpr double kSettleTime = 0.2;            // s at the start pose before the operator starts
-constexpr double kFinishLimit = 2.0;           // s to wait for the release (and grasp event) after a trial
-constexpr double kGiveUpAfter = 10.0;          // s an object may be unavailable before it is given up
-constexpr double kRestingSpeed = 0.01;         // m/s: slower objects may be resting ...
-constexpr double kStillTime = 0.3;             // s: ... once their pose has not changed for this long
-constexpr double kStillMove = 1e-4;            // m, rad: pose changes below this between scene states are none
-constexpr double kOnTableZ = -0.05;            // m: an object below this fell off the table
-constexpr double kNearObject = 0.15;           // m: a palm this close to an object's centre is working on it
-constexpr double kSameTime = 0.05;             // s of server time: two hands arriving this close together tie
+constexpr double kTrialLimit = 30.0;  // s of operator time before a trial is cut short
+constexpr double kSettleTime = 0.2;  // s at the start pose before the operator starts
+constexpr double kFinishLimit = 2.0;  // s to wait for the release (and grasp event) after a trial
+constexpr double kGiveUpAfter = 10.0;  // s an object may be unavailable before it is given up
+constexpr double kRestingSpeed = 0.01;  // m/s: slower objects may be resting ...
+constexpr double kStillTime = 0.3;  // s: ... once their pose has not changed for this long
+constexpr double kStillMove = 1e-4;  // m, rad: pose changes below this between scene states are none
+constexpr double kOnTableZ = -0.05;  // m: an object below this fell off the table
+constexpr double kNearObject = 0.15;  // m: a palm this close to an object's centre is working on it
+constexpr double kSameTime = 0.05;  // s of server time: two hands arriving this close together tie
 
 std::string hex64(std::uint64_t h) {
   char text[19];
@@ -45,7 +45,8 @@ std::string hand_name(const client::HandKey& k) { return k.client_id + " " + sid
 std::vector<client::HandKey> hands_near(const client::ObjectState& o, const std::vector<client::HandSkeleton>& others) {
   std::vector<client::HandKey> out;
   for (const auto& s : others)
-    if (!s.frozen && (s.X_WorldPalm.translation() - o.X_WorldObject.translation()).norm() < kNearObject) out.push_back(s.hand);
+    if (!s.frozen && (s.X_WorldPalm.translation() - o.X_WorldObject.translation()).norm() < kNearObject)
+      out.push_back(s.hand);
   return out;
 }
 
@@ -61,8 +62,8 @@ void track_stillness(Target& t, const client::ObjectState* o, double server_time
 }
 
 // Why an object cannot be started now ("" if it can).
-std::string why_unavailable(const Target& t, const client::ObjectState* o, const std::vector<client::HandSkeleton>& others,
-                            double server_time) {
+std::string why_unavailable(const Target& t, const client::ObjectState* o,
+                            const std::vector<client::HandSkeleton>& others, double server_time) {
   if (!o) return "removed from the scene";
   if (o->held) return "held by " + hand_name(o->holder);
   if (const auto near = hands_near(*o, others); !near.empty()) return "being worked on by " + hand_name(near.front());
@@ -84,8 +85,8 @@ bool geometry_complete(const client::Client& c, const client::SceneState& scene,
 sim::ObjectModelPtr model_from_geometry(const client::ObjectGeometry& g) {
   const std::string source = "ObjectGeometry " + g.model + " (hash " + hex64(g.content_hash) + ")";
   if (g.mesh_omitted)
-    throw sim::MeshLoadError(source + ": the server published it without its mesh (" + std::to_string(g.triangle_count) +
-                             " triangles, over its limit)");
+    throw sim::MeshLoadError(source + ": the server published it without its mesh (" +
+                             std::to_string(g.triangle_count) + " triangles, over its limit)");
   sim::TriangleMesh mesh;
   mesh.vertices.reserve(g.vertices.size());
   for (const Eigen::Vector3f& v : g.vertices) mesh.vertices.push_back(v.cast<double>());
@@ -126,8 +127,8 @@ std::map<std::string, sim::ObjectModelPtr> resolve_models(const client::Client& 
     return out;
   };
   if (!received.empty())
-    std::cerr << "telegrasp-bot: planning on the server's published geometry for " << received.size() << " model(s): " << names(received)
-              << "\n";
+    std::cerr << "telegrasp-bot: planning on the server's published geometry for " << received.size()
+              << " model(s): " << names(received) << "\n";
   if (!standins.empty())
     std::cerr << "telegrasp-bot: no mesh file and no geometry from the server for " << standins.size()
               << " model(s): planning on the built-in stand-ins of " << names(standins) << "\n";
@@ -139,8 +140,8 @@ Bot::Bot(Options opt, client::Client& c, std::map<std::string, sim::ObjectModelP
   for (client::HandSide side : opt_.hands) {
     Hand h;
     h.key = {client_.client_id(), side};
-    h.rig = std::make_shared<const sim::HandRig>(
-        sim::HandRig::load(sim::HandRig::builtin_path(side == client::HandSide::kRight ? "human_right" : "human_left")));
+    h.rig = std::make_shared<const sim::HandRig>(sim::HandRig::load(
+        sim::HandRig::builtin_path(side == client::HandSide::kRight ? "human_right" : "human_left")));
     h.input.X_WorldPalm.translation() = Eigen::Vector3d(0.0, side == client::HandSide::kRight ? -0.3 : 0.3, 0.3);
     hands_.push_back(std::move(h));
   }
@@ -158,13 +159,16 @@ bool Bot::set_scene(const client::SceneState& scene) {
     t.name = o.name;
     t.label = count[o.name] > 1 ? o.name + "#" + std::to_string(o.id) : o.name;
     t.scene_index = i;
-    if (auto it = models_.find(o.name); it != models_.end()) t.model = it->second;
-    else unknown.insert(o.name);
+    if (auto it = models_.find(o.name); it != models_.end())
+      t.model = it->second;
+    else
+      unknown.insert(o.name);
     targets_.push_back(std::move(t));
   }
   if (!unknown.empty()) {
     std::cerr << "telegrasp-bot: no model for " << unknown.size() << " scene object(s) (" << *unknown.begin()
-              << (unknown.size() > 1 ? ", ..." : "") << "); pass the server's --objects DIR. They are recorded as not grasped.\n";
+              << (unknown.size() > 1 ? ", ..." : "")
+              << "); pass the server's --objects DIR. They are recorded as not grasped.\n";
   }
   // A fixed order from the seed; each hand takes the first free object with the fewest trials started.
   order_.resize(targets_.size());
@@ -284,8 +288,8 @@ void Bot::on_event(const client::GraspEvent& e) {
   Hand* h = hand_of(e.hand);
   if (!h || e.kind != client::GraspEvent::Kind::kGrasp) return;
   if (!h->target || e.object_id != h->target->id || h->stage == Stage::kIdle || h->stage == Stage::kSettle) {
-    std::cerr << "telegrasp-bot: " << side_name(h->key.side) << " hand grasped " << e.object_name << " (id " << e.object_id
-              << "), not its target\n";
+    std::cerr << "telegrasp-bot: " << side_name(h->key.side) << " hand grasped " << e.object_name << " (id "
+              << e.object_id << "), not its target\n";
     return;
   }
   if (h->got_grasp_event) return;  // a later attempt's grasp: the first one is the trial's
@@ -329,7 +333,9 @@ void Bot::add_record(BotRecord r) {
   const report::Record& rec = r.record;
   std::cerr << "[" << done_ << "/" << total_ << "] " << side_name(r.hand) << " " << rec.object << " trial " << rec.trial
             << (rec.held_after_lift ? " held" : " NOT held");
-  if (rec.grasped) std::cerr << " (grasp " << report::fmt(rec.time_to_grasp_s) << " s, HandError " << report::fmt(rec.hand_error_mm, 1) << " mm)";
+  if (rec.grasped)
+    std::cerr << " (grasp " << report::fmt(rec.time_to_grasp_s) << " s, HandError " << report::fmt(rec.hand_error_mm, 1)
+              << " mm)";
   if (!r.reason.empty()) std::cerr << ": " << r.reason;
   std::cerr << "\n";
   records_.push_back(std::move(r));
@@ -354,7 +360,8 @@ bool Bot::holds_target(const Hand& h, const client::ObjectState* o) const {
   return gs && gs->grasped_object == h.target->id;
 }
 
-void Bot::step(Hand& h, std::int64_t tick, const client::SceneState& scene, const std::map<int, const client::ObjectState*>& objects) {
+void Bot::step(Hand& h, std::int64_t tick, const client::SceneState& scene,
+               const std::map<int, const client::ObjectState*>& objects) {
   const double dt = 1.0 / kRate;
   if (h.stage == Stage::kIdle) {
     Target* t = pick(objects);
@@ -394,10 +401,13 @@ void Bot::step(Hand& h, std::int64_t tick, const client::SceneState& scene, cons
         return;
       }
     }
-    if (!o) h.note = "removed from the scene during the trial";
-    else if (h.seen_grasped && !grasped && o->held && !(o->holder == h.key)) h.note = "taken by " + hand_name(o->holder);
+    if (!o)
+      h.note = "removed from the scene during the trial";
+    else if (h.seen_grasped && !grasped && o->held && !(o->holder == h.key))
+      h.note = "taken by " + hand_name(o->holder);
     h.input = h.op->next(t_op, grasped);
-    if (h.op->phase() == sim::OperatorPhase::kHold && o) h.z_max = std::max(h.z_max, o->X_WorldObject.translation().z());
+    if (h.op->phase() == sim::OperatorPhase::kHold && o)
+      h.z_max = std::max(h.z_max, o->X_WorldObject.translation().z());
     if (h.op->done() || t_op > kTrialLimit) {
       if (!h.op->done()) h.note = "cut short after " + report::fmt(kTrialLimit, 0) + " s";
       h.input.trigger = 0;
@@ -422,7 +432,8 @@ std::optional<client::HandKey> Bot::yields_to(Hand& h, const client::ObjectState
   if (!o) return std::nullopt;
   if (o->held && !(o->holder == h.key)) return o->holder;
   for (const client::HandSkeleton& s : own_)
-    if (s.hand == h.key && !h.near_time && (s.X_WorldPalm.translation() - o->X_WorldObject.translation()).norm() < kNearObject)
+    if (s.hand == h.key && !h.near_time &&
+        (s.X_WorldPalm.translation() - o->X_WorldObject.translation()).norm() < kNearObject)
       h.near_time = s.time;
   for (const client::HandSkeleton& s : others_) {
     if (s.frozen || (s.X_WorldPalm.translation() - o->X_WorldObject.translation()).norm() >= kNearObject) continue;
@@ -464,7 +475,8 @@ void Bot::start_trial(Hand& h, Target& t, std::int64_t tick, const client::Objec
 
 // Drops the current trial without counting it: `other` has the object, or came for it first.
 void Bot::abandon(Hand& h, const client::HandKey& other) {
-  std::cerr << side_name(h.key.side) << " hand leaves " << h.target->label << " to " << hand_name(other) << " for now\n";
+  std::cerr << side_name(h.key.side) << " hand leaves " << h.target->label << " to " << hand_name(other)
+            << " for now\n";
   --h.target->started;
   h.target = nullptr;
   h.op.reset();
@@ -482,9 +494,12 @@ void Bot::finish_trial(Hand& h) {
   r.hand = h.key.side;
   r.reason = h.note;
   if (r.reason.empty() && !r.record.held_after_lift) {
-    if (!h.seen_grasped) r.reason = "not grasped in " + std::to_string(r.record.attempts) + " attempt(s)";
-    else if (!h.op->held_after_lift()) r.reason = "dropped during the lift or hold";
-    else r.reason = "rose only " + report::fmt(1000 * (h.z_max - h.z0), 0) + " mm";
+    if (!h.seen_grasped)
+      r.reason = "not grasped in " + std::to_string(r.record.attempts) + " attempt(s)";
+    else if (!h.op->held_after_lift())
+      r.reason = "dropped during the lift or hold";
+    else
+      r.reason = "rose only " + report::fmt(1000 * (h.z_max - h.z0), 0) + " mm";
   }
   if (h.seen_grasped && !h.got_grasp_event && r.reason.empty()) r.reason = "no grasp event received";
   ++h.target->finished;

@@ -27,8 +27,8 @@ namespace sim = telegrasp::sim;
 namespace report = telegrasp::report;
 using Clock = std::chrono::steady_clock;
 
-constexpr double kRate = 90.0;                 // controller samples per second per hand
-constexpr double kStaleScene = 0.25;           // s without a new SceneState: the server is stalled, wait
+constexpr double kRate = 90.0;  // controller samples per second per hand
+constexpr double kStaleScene = 0.25;  // s without a new SceneState: the server is stalled, wait
 
 // The bot's settings (telegrasp-bot --help).
 struct Options {
@@ -59,9 +59,9 @@ sim::ObjectModelPtr model_from_geometry(const client::ObjectGeometry& geometry);
 // One object of the scene and this bot's trials on it.
 struct Target {
   int id = -1;
-  std::string name, label;     // label: the table's row name (name, or name#id for duplicates)
-  std::size_t scene_index = 0; // position in the first SceneState: seeds the operator
-  sim::ObjectModelPtr model;   // null: this bot has no model of that name
+  std::string name, label;  // label: the table's row name (name, or name#id for duplicates)
+  std::size_t scene_index = 0;  // position in the first SceneState: seeds the operator
+  sim::ObjectModelPtr model;  // null: this bot has no model of that name
   int started = 0, finished = 0;
   bool given_up = false;
   std::optional<Clock::time_point> unavailable_since;
@@ -148,7 +148,8 @@ class Bot {
 
   bool holds_target(const Hand& h, const client::ObjectState* o) const;
 
-  void step(Hand& h, std::int64_t tick, const client::SceneState& scene, const std::map<int, const client::ObjectState*>& objects);
+  void step(Hand& h, std::int64_t tick, const client::SceneState& scene,
+            const std::map<int, const client::ObjectState*>& objects);
 
   // Before its squeeze a hand gives the object up, as a person would, to a hand that holds it, or
   // came near it first, or came at the same time with a greater key (so exactly one of two goes on).
@@ -170,7 +171,7 @@ class Bot {
   std::vector<Target> targets_;
   std::vector<std::size_t> order_;
   std::vector<client::HandSkeleton> others_, own_;  // other clients' hands and ours, this tick
-  double server_time_ = 0;                          // of the newest scene state
+  double server_time_ = 0;  // of the newest scene state
   std::vector<BotRecord> records_;
   int total_ = 0, done_ = 0;
 };

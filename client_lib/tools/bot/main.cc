@@ -74,13 +74,18 @@ Options parse(int argc, char** argv) {
   telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
     if (a == "--client-id") {
       o.client_id = value();
-      if (o.client_id.empty() || o.client_id.size() > 64) usage_error("--client-id expects 1 to 64 characters, got '" + o.client_id + "'");
+      if (o.client_id.empty() || o.client_id.size() > 64)
+        usage_error("--client-id expects 1 to 64 characters, got '" + o.client_id + "'");
     } else if (a == "--hands") {
       const std::string h = value();
-      if (h == "right") o.hands = {client::HandSide::kRight};
-      else if (h == "left") o.hands = {client::HandSide::kLeft};
-      else if (h == "both") o.hands = {client::HandSide::kRight, client::HandSide::kLeft};
-      else usage_error("--hands expects right, left or both, got '" + h + "'");
+      if (h == "right")
+        o.hands = {client::HandSide::kRight};
+      else if (h == "left")
+        o.hands = {client::HandSide::kLeft};
+      else if (h == "both")
+        o.hands = {client::HandSide::kRight, client::HandSide::kLeft};
+      else
+        usage_error("--hands expects right, left or both, got '" + h + "'");
     } else if (a == "--skill") {
       o.skill = value();
       try {
@@ -88,15 +93,22 @@ Options parse(int argc, char** argv) {
       } catch (const std::exception&) {
         usage_error("--skill expects perfect, experienced or inexperienced, got '" + o.skill + "'");
       }
-    }
-    else if (a == "--trials") o.trials = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 10000, usage_error));
-    else if (a == "--seed") o.seed = static_cast<std::uint64_t>(telegrasp::cli::parse_whole(a, value(), 0, 1L << 62, usage_error));
-    else if (a == "--objects") o.objects_dir = value();
-    else if (a == "--json") o.json_path = value();
-    else if (a == "--domain") o.domain = telegrasp::cli::parse_domain(a, value(), usage_error);
-    else if (a == "--profile") o.profile = telegrasp::cli::parse_profile(a, value(), usage_error);
-    else if (a == "--profiles") o.profiles_file = value();
-    else if (a == "--timeout") o.timeout_s = telegrasp::cli::parse_number(a, value(), 0.1, 86400, usage_error);
+    } else if (a == "--trials")
+      o.trials = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 10000, usage_error));
+    else if (a == "--seed")
+      o.seed = static_cast<std::uint64_t>(telegrasp::cli::parse_whole(a, value(), 0, 1L << 62, usage_error));
+    else if (a == "--objects")
+      o.objects_dir = value();
+    else if (a == "--json")
+      o.json_path = value();
+    else if (a == "--domain")
+      o.domain = telegrasp::cli::parse_domain(a, value(), usage_error);
+    else if (a == "--profile")
+      o.profile = telegrasp::cli::parse_profile(a, value(), usage_error);
+    else if (a == "--profiles")
+      o.profiles_file = value();
+    else if (a == "--timeout")
+      o.timeout_s = telegrasp::cli::parse_number(a, value(), 0.1, 86400, usage_error);
     else {
       return false;
     }
@@ -146,8 +158,8 @@ int main(int argc, char** argv) {
   copt.domain = opt.domain;
   copt.profile = opt.profile;
   copt.profiles_file = opt.profiles_file;
-  copt.topics = client::kHandSkeletons | client::kGraspStates | client::kGraspEvents | client::kSceneStates | client::kServerStatuses |
-               client::kObjectGeometries;
+  copt.topics = client::kHandSkeletons | client::kGraspStates | client::kGraspEvents | client::kSceneStates |
+                client::kServerStatuses | client::kObjectGeometries;
   std::unique_ptr<client::Client> c;
   try {
     c = std::make_unique<client::Client>(copt);
@@ -191,7 +203,10 @@ int main(int argc, char** argv) {
   bool paused = false;
   int status = 0;
   for (std::int64_t tick = 0; !bot.all_done();) {
-    if (g_stop) { status = 130; break; }
+    if (g_stop) {
+      status = 130;
+      break;
+    }
     if (auto s = c->latest_scene_state(); s && s->tick != last_scene_tick) {
       scene = std::move(s);
       last_scene_tick = scene->tick;
@@ -199,7 +214,8 @@ int main(int argc, char** argv) {
     }
     const auto silent = Clock::now() - last_scene_change;
     if (silent > std::chrono::duration<double>(opt.timeout_s)) {
-      std::cerr << "telegrasp-bot: the server sent no scene state for " << opt.timeout_s << " s (--timeout); stopping\n";
+      std::cerr << "telegrasp-bot: the server sent no scene state for " << opt.timeout_s
+                << " s (--timeout); stopping\n";
       status = 1;
       break;
     }

@@ -4,7 +4,8 @@
 
 namespace telegrasp::tools {
 
-void record_grasp_event(const client::GraspEvent& e, double trial_start_time, const sim::HandRig& rig, report::Record& rec) {
+void record_grasp_event(const client::GraspEvent& e, double trial_start_time, const sim::HandRig& rig,
+                        report::Record& rec) {
   rec.grasped = true;
   rec.time_to_grasp_s = e.time - std::max(e.object_spawn_time, trial_start_time);
   rec.hand_error_mm = rec.grasp_tick_hand_error_mm = e.hand_error_mm;

@@ -15,6 +15,7 @@ namespace telegrasp::tools {
 /// reachable to the grasp tick. The object is reachable from the later of its spawn
 /// (`e.object_spawn_time`) and `trial_start_time`, the server time at which the operator's trial
 /// began (its hand placed and free to reach).
-void record_grasp_event(const client::GraspEvent& e, double trial_start_time, const sim::HandRig& rig, report::Record& rec);
+void record_grasp_event(const client::GraspEvent& e, double trial_start_time, const sim::HandRig& rig,
+                        report::Record& rec);
 
 }  // namespace telegrasp::tools

@@ -37,8 +37,9 @@ extern "C" void on_signal(int) { g_signalled = 1; }
 // Topic names as printed and accepted by --topics, with their subscription bits.
 const std::map<std::string, unsigned, std::less<>>& topic_bits() {
   static const std::map<std::string, unsigned, std::less<>> bits = {
-      {"HandSkeleton", tc::kHandSkeletons}, {"GraspState", tc::kGraspStates}, {"ContactSet", tc::kContactSets},
-      {"GraspEvent", tc::kGraspEvents},     {"SceneState", tc::kSceneStates}, {"ServerStatus", tc::kServerStatuses},
+      {"HandSkeleton", tc::kHandSkeletons},      {"GraspState", tc::kGraspStates},
+      {"ContactSet", tc::kContactSets},          {"GraspEvent", tc::kGraspEvents},
+      {"SceneState", tc::kSceneStates},          {"ServerStatus", tc::kServerStatuses},
       {"ObjectGeometry", tc::kObjectGeometries},
   };
   return bits;
@@ -105,10 +106,13 @@ Json to_json(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()
 
 Json to_json(const Eigen::Isometry3d& X) {
   const Eigen::Quaterniond q(X.linear());
-  return Json{{"p_m", to_json(Eigen::Vector3d(X.translation()))}, {"q_wxyz", Json::array({q.w(), q.x(), q.y(), q.z()})}};
+  return Json{{"p_m", to_json(Eigen::Vector3d(X.translation()))},
+              {"q_wxyz", Json::array({q.w(), q.x(), q.y(), q.z()})}};
 }
 
-Json to_json(const tc::HandKey& hand) { return Json{{"client_id", hand.client_id}, {"side", tc::to_string(hand.side)}}; }
+Json to_json(const tc::HandKey& hand) {
+  return Json{{"client_id", hand.client_id}, {"side", tc::to_string(hand.side)}};
+}
 
 Json to_json(const tc::ContactPoint& c) {
   return Json{{"phalanx", c.phalanx},
@@ -188,7 +192,9 @@ Json to_json(const tc::GraspEvent& e) {
   using Kind = tc::GraspEvent::Kind;
   Json j{{"topic", "GraspEvent"},
          {"event_id", e.event_id},
-         {"kind", e.kind == Kind::kGrasp ? "grasp" : e.kind == Kind::kRelease ? "release" : "unknown"},
+         {"kind", e.kind == Kind::kGrasp     ? "grasp"
+                  : e.kind == Kind::kRelease ? "release"
+                                             : "unknown"},
          {"hand", to_json(e.hand)},
          {"object_id", e.object_id},
          {"object_name", e.object_name},
@@ -238,11 +244,16 @@ Json to_json(const tc::ServerStatus& s) {
 Json to_json(const tc::ObjectGeometry& g) {
   char hash[19];
   std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(g.content_hash));
-  return Json{{"topic", "ObjectGeometry"},     {"model", g.model},
-              {"content_hash", hash},          {"vertex_count", g.vertex_count},
-              {"triangle_count", g.triangle_count}, {"mesh_omitted", g.mesh_omitted},
-              {"p_ObjectMin_m", to_json(g.p_ObjectMin)}, {"p_ObjectMax_m", to_json(g.p_ObjectMax)},
-              {"mass_kg", g.mass_kg},          {"volume_m3", g.volume_m3},
+  return Json{{"topic", "ObjectGeometry"},
+              {"model", g.model},
+              {"content_hash", hash},
+              {"vertex_count", g.vertex_count},
+              {"triangle_count", g.triangle_count},
+              {"mesh_omitted", g.mesh_omitted},
+              {"p_ObjectMin_m", to_json(g.p_ObjectMin)},
+              {"p_ObjectMax_m", to_json(g.p_ObjectMax)},
+              {"mass_kg", g.mass_kg},
+              {"volume_m3", g.volume_m3},
               {"inertia_diagonal_kg_m2", to_json(g.inertia_diagonal)}};
 }
 
@@ -277,13 +288,20 @@ Args parse_args(int argc, char** argv) {
   Args args;
   args.options.client_id = "echo-" + std::to_string(::getpid());
   cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
-    if (a == "--topics") args.options.topics = parse_topics(value());
-    else if (a == "--domain") args.options.domain = cli::parse_domain(a, value(), usage_error);
-    else if (a == "--profile") args.options.profile = cli::parse_profile(a, value(), usage_error);
-    else if (a == "--profiles") args.options.profiles_file = value();
-    else if (a == "--count") args.count = static_cast<std::uint64_t>(cli::parse_whole(a, value(), 1, 1'000'000'000'000, usage_error));
-    else if (a == "--seconds") args.seconds = cli::parse_number(a, value(), 0.001, 1e9, usage_error);
-    else return false;
+    if (a == "--topics")
+      args.options.topics = parse_topics(value());
+    else if (a == "--domain")
+      args.options.domain = cli::parse_domain(a, value(), usage_error);
+    else if (a == "--profile")
+      args.options.profile = cli::parse_profile(a, value(), usage_error);
+    else if (a == "--profiles")
+      args.options.profiles_file = value();
+    else if (a == "--count")
+      args.count = static_cast<std::uint64_t>(cli::parse_whole(a, value(), 1, 1'000'000'000'000, usage_error));
+    else if (a == "--seconds")
+      args.seconds = cli::parse_number(a, value(), 0.001, 1e9, usage_error);
+    else
+      return false;
     return true;
   });
   return args;

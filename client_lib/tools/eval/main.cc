@@ -36,8 +36,8 @@ struct Subcommand {
 };
 
 constexpr Subcommand kSubcommands[] = {
-    {"run", telegrasp::eval::run_in_process},     {"protocol", telegrasp::eval::run_protocol},
-    {"nd-bound", telegrasp::eval::run_nd_bound},  {"questionnaire", telegrasp::eval::run_questionnaire},
+    {"run", telegrasp::eval::run_in_process},          {"protocol", telegrasp::eval::run_protocol},
+    {"nd-bound", telegrasp::eval::run_nd_bound},       {"questionnaire", telegrasp::eval::run_questionnaire},
     {"participant", telegrasp::eval::run_participant},
 };
 

@@ -62,10 +62,10 @@ unreadable, no server found or it went silent, the server lacks a protocol objec
 file not writable), 2 a usage error (a bad or missing option or value).
 )";
 
-constexpr double kTrialLimit = 30.0;     // s of simulated time before a grasp is cut short
-constexpr double kAppearLimit = 2.0;     // s of simulated time for a spawned object to appear
-constexpr double kEventWait = 2.0;       // s of wall time to wait for the GraspEvent of a grasp seen in SceneState
-constexpr double kDt = 1.0 / 90.0;       // the operator's step; the server's tick is the same by default
+constexpr double kTrialLimit = 30.0;  // s of simulated time before a grasp is cut short
+constexpr double kAppearLimit = 2.0;  // s of simulated time for a spawned object to appear
+constexpr double kEventWait = 2.0;  // s of wall time to wait for the GraspEvent of a grasp seen in SceneState
+constexpr double kDt = 1.0 / 90.0;  // the operator's step; the server's tick is the same by default
 
 struct Options {
   int domain = 0, participant = 1, count = 30;
@@ -81,9 +81,12 @@ constexpr const char* kTool = "telegrasp-eval participant";
 Options parse(int argc, char** argv) {
   Options o;
   cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
-    if (a == "--domain") o.domain = cli::parse_domain(a, value(), usage_error);
-    else if (a == "--profile") o.profile = cli::parse_profile(a, value(), usage_error);
-    else if (a == "--profiles") o.profiles_file = value();
+    if (a == "--domain")
+      o.domain = cli::parse_domain(a, value(), usage_error);
+    else if (a == "--profile")
+      o.profile = cli::parse_profile(a, value(), usage_error);
+    else if (a == "--profiles")
+      o.profiles_file = value();
     else if (a == "--group") {
       o.group = value();
       try {
@@ -91,18 +94,23 @@ Options parse(int argc, char** argv) {
       } catch (const std::invalid_argument&) {
         usage_error("--group expects a skill profile: perfect, experienced or inexperienced, got '" + o.group + "'");
       }
-    }
-    else if (a == "--participant") o.participant = static_cast<int>(cli::parse_whole(a, value(), 1, 100'000, usage_error));
-    else if (a == "--seed") o.seed = static_cast<std::uint64_t>(cli::parse_whole(a, value(), 0, 1L << 50, usage_error));
+    } else if (a == "--participant")
+      o.participant = static_cast<int>(cli::parse_whole(a, value(), 1, 100'000, usage_error));
+    else if (a == "--seed")
+      o.seed = static_cast<std::uint64_t>(cli::parse_whole(a, value(), 0, 1L << 50, usage_error));
     else if (a == "--mode") {
       o.mode = value();
       if (!sim::parse_closing_mode(o.mode)) usage_error("--mode expects precise or discrete, got '" + o.mode + "'");
-    }
-    else if (a == "--objects") o.objects_dir = value();
-    else if (a == "--count") o.count = static_cast<int>(cli::parse_whole(a, value(), 1, 30, usage_error));
-    else if (a == "--json") o.json_path = value();
-    else if (a == "--timeout") o.timeout_s = cli::parse_number(a, value(), 0.1, 86400, usage_error);
-    else return false;
+    } else if (a == "--objects")
+      o.objects_dir = value();
+    else if (a == "--count")
+      o.count = static_cast<int>(cli::parse_whole(a, value(), 1, 30, usage_error));
+    else if (a == "--json")
+      o.json_path = value();
+    else if (a == "--timeout")
+      o.timeout_s = cli::parse_number(a, value(), 0.1, 86400, usage_error);
+    else
+      return false;
     return true;
   });
   return o;
@@ -113,11 +121,14 @@ enum class Stage { kAppear, kRun, kRelease, kDone };
 class Participant {
  public:
   Participant(const Options& opt, client::Client& c, std::map<std::string, sim::ObjectModelPtr> models)
-      : opt_(opt), client_(c), models_(std::move(models)),
+      : opt_(opt),
+        client_(c),
+        models_(std::move(models)),
         rig_(std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")))),
         skill_(participant_skill(opt.group, opt.seed, opt.participant)) {
     const auto& order = paper_object_order();
-    objects_.assign(order.begin(), order.begin() + std::min<std::size_t>(order.size(), static_cast<std::size_t>(opt.count)));
+    objects_.assign(order.begin(),
+                    order.begin() + std::min<std::size_t>(order.size(), static_cast<std::size_t>(opt.count)));
     input_.X_WorldPalm = home_palm_pose();
   }
 
@@ -160,7 +171,8 @@ class Participant {
         } else if (static_cast<double>(scene.tick - spawn_tick_) * kDt > kAppearLimit) {
           rec_ = {};
           rec_.object = objects_[index_];
-          note_ = "did not appear within " + report::fmt(kAppearLimit, 0) + " s of its spawn command (see the server's log)";
+          note_ = "did not appear within " + report::fmt(kAppearLimit, 0) +
+                  " s of its spawn command (see the server's log)";
           finish(scene.tick);
         }
         break;
@@ -212,8 +224,8 @@ class Participant {
     z0_ = o.X_WorldObject.translation().z();
     z_max_ = -1e9;
     start_tick_ = scene.tick;
-    op_ = std::make_unique<sim::ScriptedOperator>(rig_, skill_, grasp_seed(opt_.seed, opt_.participant, static_cast<int>(index_)),
-                                                  sim::GraspSettings{}, kDt);
+    op_ = std::make_unique<sim::ScriptedOperator>(
+        rig_, skill_, grasp_seed(opt_.seed, opt_.participant, static_cast<int>(index_)), sim::GraspSettings{}, kDt);
     // Planning takes a while; the lockstep server waits for this answer, so simulated time does not run.
     op_->begin(*models_.at(o.name), o.X_WorldObject, home_palm_pose(), 0.0);
     input_ = op_->next(0.0, false);
@@ -225,8 +237,8 @@ class Participant {
     const auto deadline = Clock::now() + std::chrono::duration<double>(kEventWait);
     while (true) {
       for (const client::GraspEvent& e : client_.take_grasp_events())
-        if (e.kind == client::GraspEvent::Kind::kGrasp && e.hand.client_id == client_.client_id() && e.object_id == object_id_ &&
-            !rec_.grasped)
+        if (e.kind == client::GraspEvent::Kind::kGrasp && e.hand.client_id == client_.client_id() &&
+            e.object_id == object_id_ && !rec_.grasped)
           take_grasp_event(e);
       if (rec_.grasped || Clock::now() > deadline) return;
       std::this_thread::sleep_for(std::chrono::microseconds(100));
@@ -272,8 +284,8 @@ class Participant {
     rec_.attempts = op_ ? op_->attempts() : 0;
     rec_.held_after_lift = op_ && op_->held_after_lift() && z_max_ - z0_ > 0.8 * sim::ScriptedOperator::kLiftHeight;
     records_.push_back(rec_);
-    std::printf("grasp %zu/%zu %s %s%s%s\n", index_ + 1, objects_.size(), rec_.object.c_str(), rec_.held_after_lift ? "held" : "not-held",
-                note_.empty() ? "" : ": ", note_.c_str());
+    std::printf("grasp %zu/%zu %s %s%s%s\n", index_ + 1, objects_.size(), rec_.object.c_str(),
+                rec_.held_after_lift ? "held" : "not-held", note_.empty() ? "" : ": ", note_.c_str());
     std::fflush(stdout);
     if (object_id_ >= 0) {
       client::SceneCommand remove;
@@ -285,10 +297,11 @@ class Participant {
     input_ = {};
     input_.X_WorldPalm = home_palm_pose();
     ++index_;
-    if (!done()) send_spawn(tick);
-    else stage_ = Stage::kDone;
+    if (!done())
+      send_spawn(tick);
+    else
+      stage_ = Stage::kDone;
   }
-
 
   const Options& opt_;
   client::Client& client_;

@@ -103,7 +103,8 @@ value).
 struct Options {
   int experienced = 4, inexperienced = 6, count = 30, jobs = 2, domain = -1;
   std::vector<std::string> modes{sim::closing_mode_name(sim::ClosingMode::kPrecise)};  // names, as records write them
-  std::string objects_dir, json_path, csv_path, report_path, questionnaire_path, profile = "loopback", profiles_file, logs_dir, record_dir;
+  std::string objects_dir, json_path, csv_path, report_path, questionnaire_path, profile = "loopback", profiles_file,
+                                                                                 logs_dir, record_dir;
   std::uint64_t seed = 1;
 };
 
@@ -130,24 +131,40 @@ Options parse(int argc, char** argv) {
     } else if (a == "--mode") {
       const std::string m = value();
       using sim::ClosingMode;
-      if (m == "both") o.modes = {closing_mode_name(ClosingMode::kPrecise), closing_mode_name(ClosingMode::kDiscrete)};
-      else if (const std::optional<ClosingMode> mode = sim::parse_closing_mode(m)) o.modes = {closing_mode_name(*mode)};
-      else usage_error("--mode expects precise, discrete or both, got '" + m + "'");
-    }
-    else if (a == "--objects") o.objects_dir = value();
-    else if (a == "--count") o.count = static_cast<int>(cli::parse_whole(a, value(), 1, 30, usage_error));
-    else if (a == "--seed") o.seed = static_cast<std::uint64_t>(cli::parse_whole(a, value(), 0, 1L << 50, usage_error));
-    else if (a == "--jobs") o.jobs = static_cast<int>(cli::parse_whole(a, value(), 1, 64, usage_error));
-    else if (a == "--json") o.json_path = value();
-    else if (a == "--csv") o.csv_path = value();
-    else if (a == "--report") o.report_path = value();
-    else if (a == "--questionnaire") o.questionnaire_path = value();
-    else if (a == "--domain") o.domain = cli::parse_domain(a, value(), usage_error);
-    else if (a == "--profile") o.profile = cli::parse_profile(a, value(), usage_error);
-    else if (a == "--profiles") o.profiles_file = value();
-    else if (a == "--keep-logs") o.logs_dir = value();
-    else if (a == "--record") o.record_dir = value();
-    else return false;
+      if (m == "both")
+        o.modes = {closing_mode_name(ClosingMode::kPrecise), closing_mode_name(ClosingMode::kDiscrete)};
+      else if (const std::optional<ClosingMode> mode = sim::parse_closing_mode(m))
+        o.modes = {closing_mode_name(*mode)};
+      else
+        usage_error("--mode expects precise, discrete or both, got '" + m + "'");
+    } else if (a == "--objects")
+      o.objects_dir = value();
+    else if (a == "--count")
+      o.count = static_cast<int>(cli::parse_whole(a, value(), 1, 30, usage_error));
+    else if (a == "--seed")
+      o.seed = static_cast<std::uint64_t>(cli::parse_whole(a, value(), 0, 1L << 50, usage_error));
+    else if (a == "--jobs")
+      o.jobs = static_cast<int>(cli::parse_whole(a, value(), 1, 64, usage_error));
+    else if (a == "--json")
+      o.json_path = value();
+    else if (a == "--csv")
+      o.csv_path = value();
+    else if (a == "--report")
+      o.report_path = value();
+    else if (a == "--questionnaire")
+      o.questionnaire_path = value();
+    else if (a == "--domain")
+      o.domain = cli::parse_domain(a, value(), usage_error);
+    else if (a == "--profile")
+      o.profile = cli::parse_profile(a, value(), usage_error);
+    else if (a == "--profiles")
+      o.profiles_file = value();
+    else if (a == "--keep-logs")
+      o.logs_dir = value();
+    else if (a == "--record")
+      o.record_dir = value();
+    else
+      return false;
     return true;
   });
   if (o.domain < 0) o.domain = 100 + static_cast<int>(getpid() % 101);
@@ -244,7 +261,8 @@ std::optional<ReportInputs> load_report_inputs(const Options& opt) {
       for (const auto& r : in.questionnaire->rejected) std::cerr << kTool << ": --questionnaire: " << r.message << "\n";
     }
     in.paper = load_paper_rows();
-    in.pictures.rig = std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")));
+    in.pictures.rig =
+        std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")));
   } catch (const std::exception& e) {
     std::cerr << kTool << ": " << e.what() << "\n";
     return std::nullopt;
@@ -255,7 +273,7 @@ std::optional<ReportInputs> load_report_inputs(const Options& opt) {
 // The programs every job runs and the folder for their logs and records.
 struct Setup {
   std::string server_bin, self_bin;  // telegrasp-server and telegrasp-eval, next to this program
-  fs::path work;                     // --keep-logs, or a temporary folder removed at the end
+  fs::path work;  // --keep-logs, or a temporary folder removed at the end
 };
 
 // Checks the server is there and makes the --record folder and the work folder; nothing (said on
@@ -307,8 +325,8 @@ std::vector<Job> make_jobs(const Options& opt) {
 
 void print_plan(const Options& opt, int total, std::size_t standins) {
   std::cerr << kTool << ": paper, " << opt.count << " objects x (" << opt.experienced << " experienced + "
-            << opt.inexperienced << " inexperienced) participants x " << opt.modes.size() << " mode(s) = " << total << " grasps, "
-            << opt.jobs << " at a time";
+            << opt.inexperienced << " inexperienced) participants x " << opt.modes.size() << " mode(s) = " << total
+            << " grasps, " << opt.jobs << " at a time";
   if (standins) std::cerr << "; " << standins << " object(s) as built-in stand-ins";
   std::cerr << "\n";
 }
@@ -325,17 +343,25 @@ void start_job(Job& j, int slot, const Options& opt, const Setup& setup) {
   j.slot = slot;
   const std::string name = job_name(j);
   const std::string domain = std::to_string(opt.domain + slot);
-  std::vector<std::string> server = {setup.server_bin, "--lockstep", "--empty-scene", "--mode", j.mode, "--domain", domain, "--profile", opt.profile};
-  std::vector<std::string> bot = {setup.self_bin, "participant", "--domain", domain, "--profile", opt.profile, "--group", j.group,
-                                  "--participant", std::to_string(j.participant), "--seed", std::to_string(opt.seed), "--mode", j.mode,
-                                  "--count", std::to_string(opt.count), "--json", (setup.work / (name + ".json")).string()};
+  std::vector<std::string> server = {setup.server_bin, "--lockstep", "--empty-scene", "--mode",   j.mode,
+                                     "--domain",       domain,       "--profile",     opt.profile};
+  std::vector<std::string> bot = {setup.self_bin,  "participant",
+                                  "--domain",      domain,
+                                  "--profile",     opt.profile,
+                                  "--group",       j.group,
+                                  "--participant", std::to_string(j.participant),
+                                  "--seed",        std::to_string(opt.seed),
+                                  "--mode",        j.mode,
+                                  "--count",       std::to_string(opt.count),
+                                  "--json",        (setup.work / (name + ".json")).string()};
   if (!opt.objects_dir.empty()) {
     for (const char* a : {"--objects", opt.objects_dir.c_str()}) server.push_back(a), bot.push_back(a);
     server.push_back("--fill-standins");
   }
   if (!opt.profiles_file.empty())
     for (const char* a : {"--profiles", opt.profiles_file.c_str()}) server.push_back(a), bot.push_back(a);
-  if (!opt.record_dir.empty()) server.insert(server.end(), {"--record", (fs::path(opt.record_dir) / (name + ".tgrec")).string()});
+  if (!opt.record_dir.empty())
+    server.insert(server.end(), {"--record", (fs::path(opt.record_dir) / (name + ".tgrec")).string()});
   j.server.start(server, (setup.work / (name + ".server.log")).string());
   j.bot.start(bot, (setup.work / (name + ".participant.log")).string(), true);
 }
@@ -348,8 +374,8 @@ void finish_job(Job& j, int bot_status, const fs::path& work) {
   j.finished = true;
   if (bot_status != 0) {
     j.failed = true;
-    j.error = "participant " + std::to_string(j.participant) + " (" + j.mode + ") failed; its log:\n" + j.bot.log_tail(5) +
-              "  server log:\n" + j.server.log_tail(5);
+    j.error = "participant " + std::to_string(j.participant) + " (" + j.mode + ") failed; its log:\n" +
+              j.bot.log_tail(5) + "  server log:\n" + j.server.log_tail(5);
     return;
   }
   try {
@@ -372,7 +398,8 @@ struct Progress {
 int read_grasp_lines(Job& j) {
   int grasps = 0;
   char buf[4096];
-  for (ssize_t n; (n = read(j.bot.stdout_fd(), buf, sizeof buf)) > 0;) j.buffer.append(buf, static_cast<std::size_t>(n));
+  for (ssize_t n; (n = read(j.bot.stdout_fd(), buf, sizeof buf)) > 0;)
+    j.buffer.append(buf, static_cast<std::size_t>(n));
   for (std::size_t nl; (nl = j.buffer.find('\n')) != std::string::npos; j.buffer.erase(0, nl + 1))
     if (j.buffer.compare(0, 6, "grasp ") == 0) ++grasps;
   return grasps;
@@ -492,13 +519,18 @@ report::ExperimentRun experiment_run(int argc, char** argv, const Options& opt, 
 }
 
 // Writes the --json, --csv and --report files asked for; false (said on stderr) when one cannot be.
-bool write_reports(const report::ExperimentRun& run, const json& summaries, const ReportInputs& in, const Options& opt) {
+bool write_reports(const report::ExperimentRun& run, const json& summaries, const ReportInputs& in,
+                   const Options& opt) {
   try {
     if (!opt.json_path.empty()) {
       json grasps = json::array();
       for (const report::Record& r : run.records) grasps.push_back(report::record_json(r));
-      report::write_text_file(opt.json_path, json{{"grasps", grasps}, {"summaries", summaries}, {"aggregates", report::aggregate_json(run)},
-                                                  {"standin_objects", run.standin_objects}}.dump(1) + "\n");
+      report::write_text_file(opt.json_path, json{{"grasps", grasps},
+                                                  {"summaries", summaries},
+                                                  {"aggregates", report::aggregate_json(run)},
+                                                  {"standin_objects", run.standin_objects}}
+                                                     .dump(1) +
+                                                 "\n");
       std::cerr << "wrote " << opt.json_path << "\n";
     }
     if (!opt.csv_path.empty()) {
@@ -506,8 +538,9 @@ bool write_reports(const report::ExperimentRun& run, const json& summaries, cons
       std::cerr << "wrote " << opt.csv_path << " and " << by_object << "\n";
     }
     if (!opt.report_path.empty()) {
-      report::write_text_file(opt.report_path,
-                              report::html_report(run, in.paper, in.questionnaire ? &*in.questionnaire : nullptr, &in.pictures));
+      report::write_text_file(
+          opt.report_path,
+          report::html_report(run, in.paper, in.questionnaire ? &*in.questionnaire : nullptr, &in.pictures));
       std::cerr << "wrote " << opt.report_path << "\n";
     }
   } catch (const std::exception& e) {

@@ -12,8 +12,9 @@ namespace {
 
 // One generator per purpose and person, so that adding a draw to one does not shift the others.
 std::mt19937_64 generator(std::uint64_t seed, std::uint64_t purpose, int participant, int index = 0) {
-  std::seed_seq seq{static_cast<std::uint32_t>(seed), static_cast<std::uint32_t>(seed >> 32), static_cast<std::uint32_t>(purpose),
-                    static_cast<std::uint32_t>(participant), static_cast<std::uint32_t>(index)};
+  std::seed_seq seq{static_cast<std::uint32_t>(seed), static_cast<std::uint32_t>(seed >> 32),
+                    static_cast<std::uint32_t>(purpose), static_cast<std::uint32_t>(participant),
+                    static_cast<std::uint32_t>(index)};
   return std::mt19937_64(seq);
 }
 
@@ -28,7 +29,8 @@ const std::vector<std::string>& paper_object_order() {
   return order;
 }
 
-std::map<std::string, sim::ObjectModelPtr> protocol_models(const std::string& objects_dir, std::vector<std::string>* standins) {
+std::map<std::string, sim::ObjectModelPtr> protocol_models(const std::string& objects_dir,
+                                                           std::vector<std::string>* standins) {
   std::map<std::string, sim::ObjectModelPtr> models;
   if (!objects_dir.empty())
     for (auto& m : sim::load_protocol_object_dir(objects_dir)) models.emplace(m->name, std::move(m));
@@ -68,6 +70,8 @@ Eigen::Isometry3d home_palm_pose() {
   return X;
 }
 
-std::uint64_t grasp_seed(std::uint64_t seed, int participant, int index) { return generator(seed, 3, participant, index)(); }
+std::uint64_t grasp_seed(std::uint64_t seed, int participant, int index) {
+  return generator(seed, 3, participant, index)();
+}
 
 }  // namespace telegrasp::eval

@@ -22,7 +22,8 @@ const std::vector<std::string>& paper_object_order();
 /// The models of a protocol run: every mesh in `objects_dir` (none if empty), plus the built-in
 /// stand-in of each protocol object that has no mesh there (their names go to `standins`).
 /// Throws what sim::load_protocol_object_dir throws.
-std::map<std::string, sim::ObjectModelPtr> protocol_models(const std::string& objects_dir, std::vector<std::string>* standins);
+std::map<std::string, sim::ObjectModelPtr> protocol_models(const std::string& objects_dir,
+                                                           std::vector<std::string>* standins);
 
 /// The operator model of one participant: the group's skill profile (sim::skill_profile), scaled
 /// by the person: a speed factor s ~ lognormal(0, 0.15) multiplies the reach speed and divides

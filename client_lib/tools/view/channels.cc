@@ -38,63 +38,64 @@ Json echo_pose() { return object("telegrasp.Pose", {{"p_m", vec3()}, {"q_wxyz", 
 // Field names and meanings as in client_lib/include/telegrasp/client/types.h, with the unit of
 // every quantity appended as telegrasp-echo writes them.
 Json grasp_state_schema() {
-  Json s = object("telegrasp.GraspState",
-                  {{"hand", hand()},
-                   {"tick", integer()},
-                   {"time_s", number()},
-                   {"selected_object", integer()},
-                   {"grasped_object", integer()},
-                   {"trigger", number()},
-                   {"palm_contact", boolean()},
-                   {"phalanges", array_of(object("telegrasp.PhalanxState", {{"name", string()}, {"blocked", boolean()}}))}});
+  Json s =
+      object("telegrasp.GraspState",
+             {{"hand", hand()},
+              {"tick", integer()},
+              {"time_s", number()},
+              {"selected_object", integer()},
+              {"grasped_object", integer()},
+              {"trigger", number()},
+              {"palm_contact", boolean()},
+              {"phalanges", array_of(object("telegrasp.PhalanxState", {{"name", string()}, {"blocked", boolean()}}))}});
   s["description"] = "A hand's grasp state, sent when it changes (GraspState topic); -1: no object";
   return s;
 }
 
 Json grasp_event_schema() {
-  Json s = object("telegrasp.GraspEvent",
-                  {{"event_id", integer()},
-                   {"kind", Json{{"type", "string"}, {"enum", {"grasp", "release"}}}},
-                   {"hand", hand()},
-                   {"object_id", integer()},
-                   {"object_name", string()},
-                   {"tick", integer()},
-                   {"time_s", number()},
-                   {"object_spawn_time_s", number()},
-                   {"X_WorldObject", echo_pose()},
-                   {"input_sequence", integer()},
-                   {"hand_error_mm", number()},
-                   {"capsules_without_hit", integer()},
-                   {"capsules", array_of(object("telegrasp.CapsuleMetric",
-                                                {{"phalanx", integer()},
-                                                 {"phalanx_name", string()},
-                                                 {"hit", boolean()},
-                                                 {"nd_mm", Json{{"type", {"number", "null"}}}},
-                                                 {"signed_distance_mm", number()},
-                                                 {"blocked", boolean()}}))},
-                   {"contacts", integer()},
-                   {"v_WorldObject_m_per_s", vec3()},
-                   {"w_WorldObject_rad_per_s", vec3()}});
+  Json s =
+      object("telegrasp.GraspEvent",
+             {{"event_id", integer()},
+              {"kind", Json{{"type", "string"}, {"enum", {"grasp", "release"}}}},
+              {"hand", hand()},
+              {"object_id", integer()},
+              {"object_name", string()},
+              {"tick", integer()},
+              {"time_s", number()},
+              {"object_spawn_time_s", number()},
+              {"X_WorldObject", echo_pose()},
+              {"input_sequence", integer()},
+              {"hand_error_mm", number()},
+              {"capsules_without_hit", integer()},
+              {"capsules", array_of(object("telegrasp.CapsuleMetric", {{"phalanx", integer()},
+                                                                       {"phalanx_name", string()},
+                                                                       {"hit", boolean()},
+                                                                       {"nd_mm", Json{{"type", {"number", "null"}}}},
+                                                                       {"signed_distance_mm", number()},
+                                                                       {"blocked", boolean()}}))},
+              {"contacts", integer()},
+              {"v_WorldObject_m_per_s", vec3()},
+              {"w_WorldObject_rad_per_s", vec3()}});
   s["description"] = "A grasp or release (GraspEvent topic); grasps carry the paper's metrics (nd_mm null: no hit)";
   return s;
 }
 
 Json server_status_schema() {
-  Json s = object("telegrasp.ServerStatus",
-                  {{"tick", integer()},
-                   {"time_s", number()},
-                   {"tick_rate_hz", number()},
-                   {"clients", integer()},
-                   {"hands", integer()},
-                   {"objects", integer()},
-                   {"tick_us_p50", number()},
-                   {"tick_us_max", number()},
-                   {"missed_ticks", integer()},
-                   {"inputs_accepted", integer()},
-                   {"inputs_rejected", integer()},
-                   {"rejected", Json{{"type", "object"}, {"additionalProperties", integer()}}},
-                   {"commands_accepted", integer()},
-                   {"commands_rejected", integer()}});
+  Json s =
+      object("telegrasp.ServerStatus", {{"tick", integer()},
+                                        {"time_s", number()},
+                                        {"tick_rate_hz", number()},
+                                        {"clients", integer()},
+                                        {"hands", integer()},
+                                        {"objects", integer()},
+                                        {"tick_us_p50", number()},
+                                        {"tick_us_max", number()},
+                                        {"missed_ticks", integer()},
+                                        {"inputs_accepted", integer()},
+                                        {"inputs_rejected", integer()},
+                                        {"rejected", Json{{"type", "object"}, {"additionalProperties", integer()}}},
+                                        {"commands_accepted", integer()},
+                                        {"commands_rejected", integer()}});
   s["description"] = "The server's status, once a second (ServerStatus topic)";
   return s;
 }
@@ -104,7 +105,8 @@ Json server_status_schema() {
 std::vector<Channel> view_channels(const std::filesystem::path& schema_dir) {
   return {
       {kSceneChannel, "/scene", "foxglove.SceneUpdate", read_schema(schema_dir, "foxglove.SceneUpdate"), false},
-      {kTransformsChannel, "/tf", "foxglove.FrameTransforms", read_schema(schema_dir, "foxglove.FrameTransforms"), true},
+      {kTransformsChannel, "/tf", "foxglove.FrameTransforms", read_schema(schema_dir, "foxglove.FrameTransforms"),
+       true},
       {kGraspStateChannel, "/grasp_state", "telegrasp.GraspState", grasp_state_schema().dump(), false},
       {kGraspEventsChannel, "/grasp_events", "telegrasp.GraspEvent", grasp_event_schema().dump(), false},
       {kServerStatusChannel, "/server_status", "telegrasp.ServerStatus", server_status_schema().dump(), true},

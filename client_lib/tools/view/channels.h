@@ -11,11 +11,11 @@
 namespace telegrasp::view {
 
 enum ChannelId : std::uint32_t {
-  kSceneChannel = 1,        ///< /scene, foxglove.SceneUpdate; kept (changes only).
-  kTransformsChannel = 2,   ///< /tf, foxglove.FrameTransforms; every frame, latest only.
-  kGraspStateChannel = 3,   ///< /grasp_state, telegrasp.GraspState; kept, one per change.
+  kSceneChannel = 1,  ///< /scene, foxglove.SceneUpdate; kept (changes only).
+  kTransformsChannel = 2,  ///< /tf, foxglove.FrameTransforms; every frame, latest only.
+  kGraspStateChannel = 3,  ///< /grasp_state, telegrasp.GraspState; kept, one per change.
   kGraspEventsChannel = 4,  ///< /grasp_events, telegrasp.GraspEvent; kept.
-  kServerStatusChannel = 5, ///< /server_status, telegrasp.ServerStatus; latest only.
+  kServerStatusChannel = 5,  ///< /server_status, telegrasp.ServerStatus; latest only.
 };
 
 /// The channels, reading the foxglove schemas from `schema_dir`. Throws std::runtime_error

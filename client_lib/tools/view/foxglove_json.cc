@@ -38,9 +38,7 @@ Rgba colours::hand_colour(std::size_t index) {
   return kPalette[index % kPalette.size()];
 }
 
-Json stamp(std::uint64_t ns) {
-  return Json{{"sec", ns / 1'000'000'000u}, {"nsec", ns % 1'000'000'000u}};
-}
+Json stamp(std::uint64_t ns) { return Json{{"sec", ns / 1'000'000'000u}, {"nsec", ns % 1'000'000'000u}}; }
 
 Json pose(const Eigen::Vector3d& p, const Eigen::Quaterniond& q) {
   return Json{{"position", vec3(p)}, {"orientation", Json{{"x", q.x()}, {"y", q.y()}, {"z", q.z()}, {"w", q.w()}}}};
@@ -65,7 +63,7 @@ Json scene_entity(const std::string& id, const std::string& frame_id, std::uint6
          {"frame_id", frame_id},
          {"id", id},
          {"lifetime", Json{{"sec", 0}, {"nsec", 0}}},  // until replaced or deleted
-         {"frame_locked", true},                       // moves with its frame's transforms
+         {"frame_locked", true},  // moves with its frame's transforms
          {"metadata", Json::array()}};
   for (const char* kind : {"arrows", "cubes", "spheres", "cylinders", "lines", "triangles", "texts", "models"})
     e[kind] = Json::array();
@@ -122,12 +120,13 @@ void add_arrow(Json& entity, const Eigen::Vector3d& p_FrameTail, const Eigen::Ve
   // A foxglove arrow points along its local +x.
   const Eigen::Vector3d d = d_Frame.norm() > 1e-12 ? Eigen::Vector3d(d_Frame.normalized()) : Eigen::Vector3d::UnitZ();
   const double head = 0.3 * length;
-  entity["arrows"].push_back(Json{{"pose", pose(p_FrameTail, Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitX(), d))},
-                                  {"shaft_length", length - head},
-                                  {"shaft_diameter", 0.08 * length},
-                                  {"head_length", head},
-                                  {"head_diameter", 0.22 * length},
-                                  {"color", colour(c)}});
+  entity["arrows"].push_back(
+      Json{{"pose", pose(p_FrameTail, Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitX(), d))},
+           {"shaft_length", length - head},
+           {"shaft_diameter", 0.08 * length},
+           {"head_length", head},
+           {"head_diameter", 0.22 * length},
+           {"color", colour(c)}});
 }
 
 void add_text(Json& entity, const Eigen::Vector3d& p_FrameText, const std::string& text, const Rgba& c) {
@@ -163,10 +162,14 @@ Json grasp_state_message(const client::GraspState& s, const std::vector<std::str
   for (std::size_t i = 0; i < s.blocked.size(); ++i)
     phalanges.push_back(Json{{"name", i < phalanx_names.size() ? phalanx_names[i] : "phalanx " + std::to_string(i)},
                              {"blocked", static_cast<bool>(s.blocked[i])}});
-  return Json{{"hand", echo_hand(s.hand)},       {"tick", s.tick},
-              {"time_s", s.time},                {"selected_object", s.selected_object},
-              {"grasped_object", s.grasped_object}, {"trigger", s.trigger},
-              {"palm_contact", s.palm_contact},  {"phalanges", std::move(phalanges)}};
+  return Json{{"hand", echo_hand(s.hand)},
+              {"tick", s.tick},
+              {"time_s", s.time},
+              {"selected_object", s.selected_object},
+              {"grasped_object", s.grasped_object},
+              {"trigger", s.trigger},
+              {"palm_contact", s.palm_contact},
+              {"phalanges", std::move(phalanges)}};
 }
 
 Json grasp_event_message(const client::GraspEvent& e) {

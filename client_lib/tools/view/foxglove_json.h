@@ -25,10 +25,10 @@ struct Rgba {
 
 /// The colours of the scene (the page and the tests read them from the entities, not from here).
 namespace colours {
-inline constexpr Rgba kSkin{0.88, 0.69, 0.56, 1};         ///< A free phalanx, the palm.
-inline constexpr Rgba kBlocked{0.84, 0.15, 0.16, 1};      ///< A blocked phalanx, palm contact.
-inline constexpr Rgba kFreeObject{0.62, 0.64, 0.68, 1};   ///< An object nobody holds.
-inline constexpr Rgba kContact{1.0, 0.85, 0.1, 1};        ///< Contact arrows.
+inline constexpr Rgba kSkin{0.88, 0.69, 0.56, 1};  ///< A free phalanx, the palm.
+inline constexpr Rgba kBlocked{0.84, 0.15, 0.16, 1};  ///< A blocked phalanx, palm contact.
+inline constexpr Rgba kFreeObject{0.62, 0.64, 0.68, 1};  ///< An object nobody holds.
+inline constexpr Rgba kContact{1.0, 0.85, 0.1, 1};  ///< Contact arrows.
 /// A hand's identity colour (its palm sphere, and the object it holds), by palette index.
 Rgba hand_colour(std::size_t index);
 }  // namespace colours

@@ -91,19 +91,27 @@ Args parse(int argc, char** argv) {
   Args a;
   a.client.client_id = "view-" + std::to_string(::getpid());
   cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& flag, const auto& value) {
-    if (flag == "--port") a.port = static_cast<std::uint16_t>(cli::parse_whole(flag, value(), 0, 65535, usage_error));
-    else if (flag == "--address") a.address = value();
-    else if (flag == "--rate") a.rate_hz = cli::parse_number(flag, value(), 1, 240, usage_error);
-    else if (flag == "--domain") a.client.domain = cli::parse_domain(flag, value(), usage_error);
-    else if (flag == "--profile") a.client.profile = cli::parse_profile(flag, value(), usage_error);
-    else if (flag == "--profiles") a.client.profiles_file = value();
-    else if (flag == "--web") a.web_dir = value();
-    else if (flag == "--stats") a.stats_s = cli::parse_number(flag, value(), 0.1, 86400, usage_error);
+    if (flag == "--port")
+      a.port = static_cast<std::uint16_t>(cli::parse_whole(flag, value(), 0, 65535, usage_error));
+    else if (flag == "--address")
+      a.address = value();
+    else if (flag == "--rate")
+      a.rate_hz = cli::parse_number(flag, value(), 1, 240, usage_error);
+    else if (flag == "--domain")
+      a.client.domain = cli::parse_domain(flag, value(), usage_error);
+    else if (flag == "--profile")
+      a.client.profile = cli::parse_profile(flag, value(), usage_error);
+    else if (flag == "--profiles")
+      a.client.profiles_file = value();
+    else if (flag == "--web")
+      a.web_dir = value();
+    else if (flag == "--stats")
+      a.stats_s = cli::parse_number(flag, value(), 0.1, 86400, usage_error);
     else if (flag == "--record") {
       a.record_path = value();
       if (a.record_path.empty()) usage_error("--record expects a file name, got ''");
-    }
-    else return false;
+    } else
+      return false;
     return true;
   });
   return a;
@@ -111,7 +119,8 @@ Args parse(int argc, char** argv) {
 
 std::uint64_t wall_ns() {
   return static_cast<std::uint64_t>(
-      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count());
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+          .count());
 }
 
 double cpu_seconds() {
@@ -123,7 +132,8 @@ double cpu_seconds() {
 
 std::uint64_t steady_ns() {
   return static_cast<std::uint64_t>(
-      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count());
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+          .count());
 }
 
 using view::payload;
@@ -163,11 +173,13 @@ struct Meter {
 int main(int argc, char** argv) {
   const Args args = parse(argc, argv);
 
-  const std::filesystem::path web_root = args.web_dir.empty() ? sim::data_dir() / "view" : std::filesystem::path(args.web_dir);
+  const std::filesystem::path web_root =
+      args.web_dir.empty() ? sim::data_dir() / "view" : std::filesystem::path(args.web_dir);
   for (const char* needed : {"index.html", "vendor/three/build/three.module.js"}) {
     if (!std::filesystem::is_regular_file(web_root / needed)) {
-      std::cerr << "telegrasp-view: " << (web_root / needed).string() << " not found (the build stages the page and "
-                << "three.js from client_lib/tools/view/web/node_modules: run deploy/install-deps.sh, then build again)\n";
+      std::cerr
+          << "telegrasp-view: " << (web_root / needed).string() << " not found (the build stages the page and "
+          << "three.js from client_lib/tools/view/web/node_modules: run deploy/install-deps.sh, then build again)\n";
       return telegrasp::cli::kExitFailure;
     }
   }
@@ -211,7 +223,9 @@ int main(int argc, char** argv) {
       std::vector<std::shared_ptr<const std::string>> out;
       const std::uint64_t now = wall_ns();
       switch (channel) {
-        case view::kSceneChannel: out.push_back(payload(model.scene_full(now))); break;
+        case view::kSceneChannel:
+          out.push_back(payload(model.scene_full(now)));
+          break;
         case view::kTransformsChannel:
           if (auto tf = model.transforms_full(now)) out.push_back(payload(*tf));
           break;
@@ -224,7 +238,8 @@ int main(int argc, char** argv) {
         case view::kServerStatusChannel:
           if (model.server_status()) out.push_back(payload(*model.server_status()));
           break;
-        default: break;
+        default:
+          break;
       }
       return out;
     });
@@ -237,11 +252,13 @@ int main(int argc, char** argv) {
             << server->port() << " (Foxglove WebSocket), DDS domain " << args.client.domain << std::endl;
 
   // One step per 1/rate: poll the client (newest of everything), update the model, publish.
-  const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(1.0 / args.rate_hz));
+  const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(1.0 / args.rate_hz));
   asio::steady_timer timer(io);
   Meter meter;
   std::optional<std::uint64_t> last_scene_tick;
-  auto next_stats = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(args.stats_s));
+  auto next_stats = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                           std::chrono::duration<double>(args.stats_s));
   std::function<void()> step = [&] {
     view::ClientSnapshot snap;
     snap.skeletons = client->latest_hand_skeletons();
@@ -284,29 +301,34 @@ int main(int argc, char** argv) {
 
     if (args.stats_s > 0 && std::chrono::steady_clock::now() >= next_stats) {
       const view::WebServerStats s = server->stats();
-      const double cpu = cpu_seconds(), wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - meter.wall).count();
+      const double cpu = cpu_seconds(),
+                   wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - meter.wall).count();
       const std::uint64_t ticks = meter.hand_ticks;
       const std::uint64_t recorded = recorder ? recorder->writer().bytes_written() : meter.bytes_recorded;
-      std::cerr << view::Json{{"viewers", s.viewers},
-                              {"hands", snap.skeletons.size()},
-                              {"objects", model.object_count()},
-                              {"seconds", wall},
-                              {"cpu_percent", 100 * (cpu - meter.cpu_s) / wall},
-                              {"hand_ticks", ticks},
-                              {"cpu_us_per_hand_tick", ticks ? 1e6 * (cpu - meter.cpu_s) / static_cast<double>(ticks) : 0.0},
-                              {"sent_kb_per_s", static_cast<double>(s.bytes_sent - meter.bytes_sent) / 1024.0 / wall},
-                              {"messages_sent", s.messages_sent},
-                              {"messages_replaced", s.messages_replaced},
-                              {"viewers_dropped", s.viewers_dropped},
-                              {"recording", recorder.has_value()},
-                              {"recorded_kb_per_s", static_cast<double>(recorded - meter.bytes_recorded) / 1024.0 / wall},
-                              {"record_us_per_step", meter.steps ? 1e-3 * static_cast<double>(meter.record_ns) / static_cast<double>(meter.steps) : 0.0}}
-                       .dump()
-                << std::endl;
+      std::cerr
+          << view::Json{{"viewers", s.viewers},
+                        {"hands", snap.skeletons.size()},
+                        {"objects", model.object_count()},
+                        {"seconds", wall},
+                        {"cpu_percent", 100 * (cpu - meter.cpu_s) / wall},
+                        {"hand_ticks", ticks},
+                        {"cpu_us_per_hand_tick", ticks ? 1e6 * (cpu - meter.cpu_s) / static_cast<double>(ticks) : 0.0},
+                        {"sent_kb_per_s", static_cast<double>(s.bytes_sent - meter.bytes_sent) / 1024.0 / wall},
+                        {"messages_sent", s.messages_sent},
+                        {"messages_replaced", s.messages_replaced},
+                        {"viewers_dropped", s.viewers_dropped},
+                        {"recording", recorder.has_value()},
+                        {"recorded_kb_per_s", static_cast<double>(recorded - meter.bytes_recorded) / 1024.0 / wall},
+                        {"record_us_per_step",
+                         meter.steps ? 1e-3 * static_cast<double>(meter.record_ns) / static_cast<double>(meter.steps)
+                                     : 0.0}}
+                 .dump()
+          << std::endl;
       meter = Meter{};
       meter.bytes_sent = s.bytes_sent;
       meter.bytes_recorded = recorded;
-      next_stats += std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(args.stats_s));
+      next_stats +=
+          std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(args.stats_s));
     }
     timer.expires_at(std::max(timer.expiry() + period, std::chrono::steady_clock::now()));
     timer.async_wait([&](boost::system::error_code ec) {
@@ -331,7 +353,8 @@ int main(int argc, char** argv) {
     try {
       recorder->close();
       std::cerr << "telegrasp-view: recorded " << recorder->writer().message_count() << " messages ("
-                << telegrasp::cli::format_number(std::round(static_cast<double>(recorder->writer().bytes_written()) / 1024.0))
+                << telegrasp::cli::format_number(
+                       std::round(static_cast<double>(recorder->writer().bytes_written()) / 1024.0))
                 << " KiB) to " << args.record_path << "\n";
     } catch (const std::exception& e) {
       std::cerr << "telegrasp-view: closing the recording: " << e.what() << "\n";

@@ -5,7 +5,8 @@
 namespace telegrasp::view {
 
 McapRecorder::McapRecorder(const std::string& path, const std::vector<Channel>& channels, Options options)
-    : writer_(path, mcap::Options{.profile = "", .library = "telegrasp-view", .chunk_size_bytes = options.chunk_size_bytes}),
+    : writer_(path,
+              mcap::Options{.profile = "", .library = "telegrasp-view", .chunk_size_bytes = options.chunk_size_bytes}),
       options_(options) {
   for (const Channel& c : channels) {
     const mcap::SchemaId schema = writer_.add_schema(c.schema_name, mcap::kSchemaEncodingJsonSchema, c.schema);
@@ -15,7 +16,8 @@ McapRecorder::McapRecorder(const std::string& path, const std::vector<Channel>& 
 
 void McapRecorder::write(std::uint32_t channel, std::string_view json, std::uint64_t time_ns) {
   const auto it = channels_.find(channel);
-  if (it == channels_.end()) throw std::invalid_argument("McapRecorder: unknown view channel " + std::to_string(channel));
+  if (it == channels_.end())
+    throw std::invalid_argument("McapRecorder: unknown view channel " + std::to_string(channel));
   writer_.write(it->second.id, it->second.sequence++, time_ns, time_ns, json);
 }
 

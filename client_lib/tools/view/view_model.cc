@@ -10,11 +10,11 @@
 namespace telegrasp::view {
 namespace {
 
-constexpr double kMinHalfExtent = 0.02;        // m, the smallest placeholder box
-constexpr int kMeshTriangles = 2000;           // an object's mesh is decimated to this for the wire
-constexpr double kJointSphereRadius = 0.006;   // m, a phalanx of an unknown rig
+constexpr double kMinHalfExtent = 0.02;  // m, the smallest placeholder box
+constexpr int kMeshTriangles = 2000;  // an object's mesh is decimated to this for the wire
+constexpr double kJointSphereRadius = 0.006;  // m, a phalanx of an unknown rig
 constexpr double kContactArrowLength = 0.025;  // m
-constexpr double kContactDotRadius = 0.0025;   // m
+constexpr double kContactDotRadius = 0.0025;  // m
 
 // Rounds for appearance keys, so float noise does not re-send an entity.
 std::string rounded(double v, double step) {
@@ -209,8 +209,10 @@ std::map<std::string, ViewModel::Look> ViewModel::appearance() const {
       const auto holder = hands_.find(o.holder);
       look += "held|" + std::to_string(holder == hands_.end() ? 0 : holder->second.colour) + "|";
     }
-    if (const auto mesh = meshes_.find(o.name); mesh != meshes_.end()) look += "mesh|" + std::to_string(mesh->second.content_hash);
-    else for (int k = 0; k < 3; ++k) look += rounded(object.half_extent[k], 1e-3);
+    if (const auto mesh = meshes_.find(o.name); mesh != meshes_.end())
+      look += "mesh|" + std::to_string(mesh->second.content_hash);
+    else
+      for (int k = 0; k < 3; ++k) look += rounded(object.half_extent[k], 1e-3);
     looks[object_entity_id(id)] = Look{Kind::kObject, nullptr, 0, id, std::move(look)};
   }
   return looks;
@@ -218,10 +220,14 @@ std::map<std::string, ViewModel::Look> ViewModel::appearance() const {
 
 Json ViewModel::build(const Look& look, std::uint64_t stamp_ns) const {
   switch (look.kind) {
-    case Look::Kind::kPalm: return hand_entity(*look.hand, hands_.at(*look.hand), stamp_ns);
-    case Look::Kind::kPhalanx: return phalanx_entity(*look.hand, hands_.at(*look.hand), look.phalanx, stamp_ns);
-    case Look::Kind::kContacts: return contacts_entity(*look.hand, hands_.at(*look.hand), stamp_ns);
-    case Look::Kind::kObject: return object_entity(objects_.at(look.object_id), stamp_ns);
+    case Look::Kind::kPalm:
+      return hand_entity(*look.hand, hands_.at(*look.hand), stamp_ns);
+    case Look::Kind::kPhalanx:
+      return phalanx_entity(*look.hand, hands_.at(*look.hand), look.phalanx, stamp_ns);
+    case Look::Kind::kContacts:
+      return contacts_entity(*look.hand, hands_.at(*look.hand), stamp_ns);
+    case Look::Kind::kObject:
+      return object_entity(objects_.at(look.object_id), stamp_ns);
   }
   return Json();
 }
@@ -271,7 +277,8 @@ Json ViewModel::object_entity(const Object& object, std::uint64_t stamp_ns) cons
   if (o.held) add_metadata(e, "holder", o.holder.client_id + "/" + client::to_string(o.holder.side));
   const auto mesh = meshes_.find(o.name);
   add_object_geometry(e, o, object.half_extent.cwiseMax(Eigen::Vector3d::Constant(kMinHalfExtent)),
-                      o.held ? holder_colour(o) : colours::kFreeObject, mesh == meshes_.end() ? nullptr : &mesh->second);
+                      o.held ? holder_colour(o) : colours::kFreeObject,
+                      mesh == meshes_.end() ? nullptr : &mesh->second);
   return e;
 }
 
@@ -328,7 +335,8 @@ Json ViewModel::moved_transforms(bool all, std::uint64_t stamp_ns) {
       const Eigen::Isometry3d X_PalmPhalanx = X_PalmWorld * hand.skeleton.X_WorldPhalanx[i];
       // Re-posing the hand leaves X_PalmPhalanx equal up to rounding: compare at 1e-9.
       if (resend || !X_PalmPhalanx.matrix().isApprox(hand.sent_X_PalmPhalanx[i].matrix(), 1e-9)) {
-        transforms.push_back(frame_transform(palm_frame(key), phalanx_frame(key, phalanx_name(hand.rig, i)), X_PalmPhalanx, stamp_ns));
+        transforms.push_back(
+            frame_transform(palm_frame(key), phalanx_frame(key, phalanx_name(hand.rig, i)), X_PalmPhalanx, stamp_ns));
         hand.sent_X_PalmPhalanx[i] = X_PalmPhalanx;
       }
     }

@@ -46,14 +46,14 @@ ObjectMesh view_mesh(const client::ObjectGeometry& geometry, int max_triangles);
 
 /// What one update produced, each ready to send on its channel.
 struct ViewUpdate {
-  std::optional<Json> scene;           ///< /scene: changed entities and deletions (absent: nothing changed).
+  std::optional<Json> scene;  ///< /scene: changed entities and deletions (absent: nothing changed).
   /// /tf: the frames that moved since the last update, and every frame every kFullTransformsEvery
   /// (absent: none moved). `transforms_full` is then every frame, for a viewer that missed one.
   std::optional<Json> transforms;
-  bool transforms_complete = false;   ///< `transforms` holds every frame.
-  std::vector<Json> grasp_states;      ///< /grasp_state: one per hand whose state changed.
-  std::vector<Json> grasp_events;      ///< /grasp_events: in arrival order.
-  std::optional<Json> server_status;   ///< /server_status: when a new one arrived.
+  bool transforms_complete = false;  ///< `transforms` holds every frame.
+  std::vector<Json> grasp_states;  ///< /grasp_state: one per hand whose state changed.
+  std::vector<Json> grasp_events;  ///< /grasp_events: in arrival order.
+  std::optional<Json> server_status;  ///< /server_status: when a new one arrived.
 };
 
 class ViewModel {
@@ -131,7 +131,7 @@ class ViewModel {
   std::map<int, Object> objects_;
   std::map<std::string, ObjectMesh> meshes_;  ///< By model name, once its geometry arrived.
   std::size_t next_colour_ = 0;
-  std::map<std::string, std::string> sent_;      ///< Entity id -> appearance key last sent.
+  std::map<std::string, std::string> sent_;  ///< Entity id -> appearance key last sent.
   std::uint64_t last_scene_tick_ = 0;
   std::optional<std::uint64_t> last_status_tick_;
   std::uint64_t last_full_transforms_ns_ = 0;

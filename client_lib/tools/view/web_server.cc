@@ -66,7 +66,7 @@ struct WebServer::Hub {
   tcp::acceptor acceptor;
   std::set<std::shared_ptr<ViewerSession>> viewers;
   WebServerStats stats;
-  std::string advertise;    // the Advertise message, the same for every viewer
+  std::string advertise;  // the Advertise message, the same for every viewer
   std::string server_info;  // the Server Info message
   bool closed = false;
 
@@ -160,7 +160,8 @@ class ViewerSession : public std::enable_shared_from_this<ViewerSession> {
   void handle(const std::string& text) {
     const Json request = Json::parse(text, nullptr, false);
     const std::string op = request.is_object() && request.contains("op") && request["op"].is_string()
-                               ? request["op"].get<std::string>() : "";
+                               ? request["op"].get<std::string>()
+                               : "";
     if (op == "subscribe" && request.contains("subscriptions") && request["subscriptions"].is_array()) {
       for (const Json& s : request["subscriptions"]) {
         if (!s.is_object() || !s.contains("id") || !s.contains("channelId") || !s["id"].is_number_unsigned() ||
@@ -181,10 +182,10 @@ class ViewerSession : public std::enable_shared_from_this<ViewerSession> {
           subscription_of_channel_[channel] = id;
           // Bring the new subscriber up to date before anything newer.
           const std::uint64_t now = static_cast<std::uint64_t>(
-              std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count());
+              std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+                  .count());
           if (hub_.on_subscribe)
-            for (const auto& payload : hub_.on_subscribe(channel))
-              offer(channel, payload, now, false);
+            for (const auto& payload : hub_.on_subscribe(channel)) offer(channel, payload, now, false);
         }
       }
     } else if (op == "unsubscribe" && request.contains("subscriptionIds") && request["subscriptionIds"].is_array()) {
@@ -297,17 +298,20 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     std::string target(request.target().substr(0, request.target().find('?')));
     if (target == "/") target = "/index.html";
     // Files under the web root only.
-    if (target.empty() || target[0] != '/' || target.find("..") != std::string::npos || target.find('\\') != std::string::npos)
+    if (target.empty() || target[0] != '/' || target.find("..") != std::string::npos ||
+        target.find('\\') != std::string::npos)
       return reply_text(request, http::status::bad_request, "bad path\n");
     const std::filesystem::path path = hub_.options.web_root / target.substr(1);
     std::error_code fs_ec;
-    if (!std::filesystem::is_regular_file(path, fs_ec)) return reply_text(request, http::status::not_found, "not found\n");
+    if (!std::filesystem::is_regular_file(path, fs_ec))
+      return reply_text(request, http::status::not_found, "not found\n");
     http::file_body::value_type body;
     beast::error_code open_ec;
     body.open(path.c_str(), beast::file_mode::scan, open_ec);
     if (open_ec) return reply_text(request, http::status::not_found, "not found\n");
-    auto response = std::make_shared<http::response<http::file_body>>(
-        std::piecewise_construct, std::make_tuple(std::move(body)), std::make_tuple(http::status::ok, request.version()));
+    auto response =
+        std::make_shared<http::response<http::file_body>>(std::piecewise_construct, std::make_tuple(std::move(body)),
+                                                          std::make_tuple(http::status::ok, request.version()));
     response->set(http::field::server, hub_.options.name);
     response->set(http::field::content_type, std::string(mime_type(path)));
     response->set(http::field::cache_control, "no-cache");
@@ -372,7 +376,8 @@ WebServer::WebServer(asio::io_context& io, Options options, std::vector<Channel>
                               {"schemaEncoding", "jsonschema"}});
   }
   hub_->advertise = Json{{"op", "advertise"}, {"channels", std::move(advertised)}}.dump();
-  const auto session = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch());
+  const auto session =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch());
   hub_->server_info = Json{{"op", "serverInfo"},
                            {"name", hub_->options.name},
                            {"capabilities", Json::array()},

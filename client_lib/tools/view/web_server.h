@@ -22,17 +22,17 @@ struct Channel {
   std::uint32_t id = 0;
   std::string topic;
   std::string schema_name;
-  std::string schema;          ///< JSON Schema text.
-  bool latest_only = false;    ///< Each message is complete: an unsent older one may be dropped.
+  std::string schema;  ///< JSON Schema text.
+  bool latest_only = false;  ///< Each message is complete: an unsent older one may be dropped.
 };
 
 struct WebServerStats {
-  std::size_t viewers = 0;              ///< Connected WebSocket viewers now.
-  std::uint64_t viewers_total = 0;      ///< Since start.
-  std::uint64_t messages_sent = 0;      ///< WebSocket messages written.
-  std::uint64_t bytes_sent = 0;         ///< WebSocket payload bytes written (headers of TCP/WS aside).
+  std::size_t viewers = 0;  ///< Connected WebSocket viewers now.
+  std::uint64_t viewers_total = 0;  ///< Since start.
+  std::uint64_t messages_sent = 0;  ///< WebSocket messages written.
+  std::uint64_t bytes_sent = 0;  ///< WebSocket payload bytes written (headers of TCP/WS aside).
   std::uint64_t messages_replaced = 0;  ///< Dropped for a newer one (slow viewers).
-  std::uint64_t viewers_dropped = 0;    ///< Disconnected for a queue past the bound.
+  std::uint64_t viewers_dropped = 0;  ///< Disconnected for a queue past the bound.
   std::uint64_t http_requests = 0;
 };
 
@@ -40,9 +40,9 @@ class WebServer {
  public:
   struct Options {
     std::string address = "0.0.0.0";
-    std::uint16_t port = 8765;               ///< 0: any free port (see port()).
-    std::filesystem::path web_root;          ///< The page's files; "/" is index.html.
-    std::size_t max_queued_bytes = 64u << 20; ///< Per viewer, messages kept (not latest only).
+    std::uint16_t port = 8765;  ///< 0: any free port (see port()).
+    std::filesystem::path web_root;  ///< The page's files; "/" is index.html.
+    std::size_t max_queued_bytes = 64u << 20;  ///< Per viewer, messages kept (not latest only).
     std::string name = "telegrasp-view";
   };
   /// Called on the server thread when a viewer subscribes to `channel`: the messages (payloads)

@@ -24,8 +24,10 @@ std::set<int> g_live;
 
 void set_live(int pid, bool live) {
   std::lock_guard lock(g_live_mutex);
-  if (live) g_live.insert(pid);
-  else g_live.erase(pid);
+  if (live)
+    g_live.insert(pid);
+  else
+    g_live.erase(pid);
 }
 
 void write_stderr(const char* s) { (void)!::write(STDERR_FILENO, s, std::strlen(s)); }
@@ -160,8 +162,7 @@ int ChildProcess::stop(std::chrono::milliseconds grace) {
   if (wait(grace) >= 0) return status_;
   signal(SIGKILL);
   int status = 0;
-  while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
-  }
+  while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {}
   reaped(status);
   exit_description_ += " (did not stop within " + std::to_string(grace.count()) + " ms of SIGTERM: SIGKILLed)";
   return status_;

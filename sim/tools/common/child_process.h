@@ -14,7 +14,8 @@ class ChildProcess {
   /// Nothing running yet; see start().
   ChildProcess() = default;
   /// start(argv, log_path, pipe_stdout).
-  explicit ChildProcess(const std::vector<std::string>& argv, const std::string& log_path = "", bool pipe_stdout = false);
+  explicit ChildProcess(const std::vector<std::string>& argv, const std::string& log_path = "",
+                        bool pipe_stdout = false);
   /// Stops the child if it still runs (stop()).
   ~ChildProcess();
   ChildProcess(ChildProcess&& other) noexcept;

@@ -54,7 +54,8 @@ using Fail = void (*)(const std::string& what);
 
 /// The number `v` given to option `flag`, if it is finite and lies in [lo, hi]; otherwise calls
 /// `fail` with a message naming both.
-[[nodiscard]] inline double parse_number(const std::string& flag, const std::string& v, double lo, double hi, Fail fail) {
+[[nodiscard]] inline double parse_number(const std::string& flag, const std::string& v, double lo, double hi,
+                                         Fail fail) {
   char* end = nullptr;
   const double x = v.empty() ? NAN : std::strtod(v.c_str(), &end);
   if (!v.empty() && *end == '\0' && std::isfinite(x) && x >= lo && x <= hi) return x;

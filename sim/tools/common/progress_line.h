@@ -41,7 +41,7 @@ class ProgressLine {
   bool terminal_;
   Clock::duration terminal_period_, log_period_;
   std::function<Clock::time_point()> now_;
-  bool written_ = false;    // a line was written (show or finish)
+  bool written_ = false;  // a line was written (show or finish)
   bool open_line_ = false;  // on a terminal: a line is shown, not yet ended
   Clock::time_point last_{};
   std::string last_text_;

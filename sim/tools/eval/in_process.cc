@@ -32,11 +32,11 @@ namespace {
 
 using namespace telegrasp::sim;
 using nlohmann::json;
+using telegrasp::eval::EvalInputs;
 using telegrasp::report::capsule_records;
 using telegrasp::report::fmt;
 using telegrasp::report::Record;
 using telegrasp::report::summarize;
-using telegrasp::eval::EvalInputs;
 
 constexpr const char* kUsage = R"(Usage: telegrasp-eval run [options]
 
@@ -82,10 +82,14 @@ constexpr const char* kTool = "telegrasp-eval run";
 Options parse(int argc, char** argv) {
   Options o;
   telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
-    if (a == "--objects") o.objects_dir = value();
-    else if (a == "--rig") o.rig_path = value();
-    else if (a == "--json") o.json_path = value();
-    else if (a == "--svg") o.svg_dir = value();
+    if (a == "--objects")
+      o.objects_dir = value();
+    else if (a == "--rig")
+      o.rig_path = value();
+    else if (a == "--json")
+      o.json_path = value();
+    else if (a == "--svg")
+      o.svg_dir = value();
     else if (a == "--skill") {
       o.skill = value();
       try {
@@ -93,28 +97,36 @@ Options parse(int argc, char** argv) {
       } catch (const std::invalid_argument&) {
         usage_error("--skill expects perfect, experienced or inexperienced, got '" + o.skill + "'");
       }
-    }
-    else if (a == "--selection") {
+    } else if (a == "--selection") {
       const std::string m = value();
-      if (m == "surface") o.selection = SelectionMetric::kSurface;
-      else if (m == "origin") o.selection = SelectionMetric::kOrigin;
-      else usage_error("--selection expects surface or origin, got '" + m + "'");
-    }
-    else if (a == "--trials") o.trials = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 100000, usage_error));
-    else if (a == "--threads") o.threads = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 64, usage_error));
-    else if (a == "--seed") o.seed = static_cast<std::uint64_t>(telegrasp::cli::parse_whole(a, value(), 0, 1L << 62, usage_error));
+      if (m == "surface")
+        o.selection = SelectionMetric::kSurface;
+      else if (m == "origin")
+        o.selection = SelectionMetric::kOrigin;
+      else
+        usage_error("--selection expects surface or origin, got '" + m + "'");
+    } else if (a == "--trials")
+      o.trials = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 100000, usage_error));
+    else if (a == "--threads")
+      o.threads = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 64, usage_error));
+    else if (a == "--seed")
+      o.seed = static_cast<std::uint64_t>(telegrasp::cli::parse_whole(a, value(), 0, 1L << 62, usage_error));
     else if (a == "--mode") {
       const std::string m = value();
-      if (m == "both") o.modes = {ClosingMode::kPrecise, ClosingMode::kDiscrete};
-      else if (const std::optional<ClosingMode> mode = parse_closing_mode(m)) o.modes = {*mode};
-      else usage_error("--mode expects precise, discrete or both, got '" + m + "'");
+      if (m == "both")
+        o.modes = {ClosingMode::kPrecise, ClosingMode::kDiscrete};
+      else if (const std::optional<ClosingMode> mode = parse_closing_mode(m))
+        o.modes = {*mode};
+      else
+        usage_error("--mode expects precise, discrete or both, got '" + m + "'");
     } else if (a == "--speed-scale") {
       o.speeds.clear();
       std::stringstream ss(value());
       for (std::string item; std::getline(ss, item, ',');) {
         char* end = nullptr;
         const double s = std::strtod(item.c_str(), &end);
-        if (item.empty() || *end != '\0' || !(s > 0) || !std::isfinite(s)) usage_error("--speed-scale expects positive numbers, got '" + item + "'");
+        if (item.empty() || *end != '\0' || !(s > 0) || !std::isfinite(s))
+          usage_error("--speed-scale expects positive numbers, got '" + item + "'");
         o.speeds.push_back(s);
       }
     } else {
@@ -220,7 +232,8 @@ std::optional<EvalInputs> load_inputs(const Options& opt, std::ofstream& json_ou
     std::cerr << kTool << ": " << e.what() << "\n";
     return std::nullopt;
   }
-  if (const std::string error = telegrasp::eval::prepare_outputs(opt.json_path, json_out, opt.svg_dir); !error.empty()) {
+  if (const std::string error = telegrasp::eval::prepare_outputs(opt.json_path, json_out, opt.svg_dir);
+      !error.empty()) {
     std::cerr << kTool << ": " << error << "\n";
     return std::nullopt;
   }
@@ -233,7 +246,10 @@ std::optional<EvalInputs> load_inputs(const Options& opt, std::ofstream& json_ou
 }
 
 // One trial to run: a config (mode and speed), an object and the trial's number.
-struct Job { std::size_t config, object; int trial; };
+struct Job {
+  std::size_t config, object;
+  int trial;
+};
 
 std::vector<Config> make_configs(const Options& opt) {
   std::vector<Config> configs;
@@ -292,8 +308,10 @@ std::vector<Trial> run_jobs(const std::vector<Job>& jobs, const std::vector<Conf
       std::ostringstream line;
       line << "[" << done << "/" << jobs.size() << "] " << rec.mode << " x" << configs[job.config].speed << " "
            << rec.object << " trial " << job.trial << (rec.held_after_lift ? " held" : " NOT held");
-      if (done == jobs.size()) progress.finish(line.str());
-      else progress.show(line.str());
+      if (done == jobs.size())
+        progress.finish(line.str());
+      else
+        progress.show(line.str());
     }
   };
   std::vector<std::thread> pool;
@@ -307,7 +325,8 @@ json print_summaries(const std::vector<Config>& configs, const std::vector<Job>&
                      const std::vector<ObjectModelPtr>& models, const Options& opt) {
   json summaries = json::array();
   for (std::size_t c = 0; c < configs.size(); ++c) {
-    std::cout << "\n== mode " << closing_mode_name(configs[c].mode) << ", closing speed x" << configs[c].speed << ", skill " << opt.skill << " ==\n";
+    std::cout << "\n== mode " << closing_mode_name(configs[c].mode) << ", closing speed x" << configs[c].speed
+              << ", skill " << opt.skill << " ==\n";
     std::vector<telegrasp::report::ObjectRows> rows(models.size());
     std::vector<const Record*> all;
     for (std::size_t o = 0; o < models.size(); ++o) rows[o].object = models[o]->name;
@@ -330,11 +349,13 @@ json print_summaries(const std::vector<Config>& configs, const std::vector<Job>&
 // The configs' summaries side by side, one row each.
 void print_side_by_side(const json& summaries) {
   std::cout << "\n== side by side ==\n";
-  std::printf("%-9s %6s %7s %10s %10s %12s %10s\n", "mode", "speed", "held%", "|ND|med", "|ND|p95", "minSD_mm", "SD<-0.1");
+  std::printf("%-9s %6s %7s %10s %10s %12s %10s\n", "mode", "speed", "held%", "|ND|med", "|ND|p95", "minSD_mm",
+              "SD<-0.1");
   for (const json& s : summaries) {
     auto get = [&](const char* k) { return s[k].is_null() ? NAN : s[k].get<double>(); };
-    std::printf("%-9s %6s %7s %10s %10s %12s %10d\n", s["mode"].get<std::string>().c_str(), fmt(get("speed_scale"), 1).c_str(),
-                fmt(100 * get("held_rate"), 1).c_str(), fmt(get("nd_abs_median_mm"), 3).c_str(), fmt(get("nd_abs_p95_mm"), 3).c_str(),
+    std::printf("%-9s %6s %7s %10s %10s %12s %10d\n", s["mode"].get<std::string>().c_str(),
+                fmt(get("speed_scale"), 1).c_str(), fmt(100 * get("held_rate"), 1).c_str(),
+                fmt(get("nd_abs_median_mm"), 3).c_str(), fmt(get("nd_abs_p95_mm"), 3).c_str(),
                 fmt(get("min_blocked_signed_distance_mm"), 3).c_str(), s["blocked_below_minus_0_1mm"].get<int>());
   }
 }
@@ -360,7 +381,10 @@ bool write_json(std::ofstream& json_out, const std::string& json_path, const std
   json grasps = json::array();
   for (const Trial& t : trials) grasps.push_back(telegrasp::report::record_json(t.record));
   json_out << json{{"grasps", grasps}, {"summary", summaries[0]}, {"summaries", summaries}}.dump(1) << "\n";
-  if (!json_out.flush()) { std::cerr << kTool << ": --json " << json_path << ": cannot write\n"; return false; }
+  if (!json_out.flush()) {
+    std::cerr << kTool << ": --json " << json_path << ": cannot write\n";
+    return false;
+  }
   std::cerr << "wrote " << json_path << "\n";
   return true;
 }

@@ -80,16 +80,26 @@ Options parse(int argc, char** argv) {
   using telegrasp::cli::parse_whole;
   Options o;
   telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
-    if (a == "--objects") o.objects_dir = value();
-    else if (a == "--rig") o.rig_path = value();
-    else if (a == "--json") o.json_path = value();
-    else if (a == "--svg") o.svg_dir = value();
-    else if (a == "--poses") o.poses = static_cast<int>(parse_whole(a, value(), 1, 1000000, usage_error));
-    else if (a == "--refine") o.refine = static_cast<int>(parse_whole(a, value(), 0, 1000000, usage_error));
-    else if (a == "--min-hits") o.min_hits = static_cast<int>(parse_whole(a, value(), 1, 1000, usage_error));
-    else if (a == "--threads") o.threads = static_cast<int>(parse_whole(a, value(), 1, 64, usage_error));
-    else if (a == "--seed") o.seed = static_cast<std::uint64_t>(parse_whole(a, value(), 0, 1L << 62, usage_error));
-    else return false;
+    if (a == "--objects")
+      o.objects_dir = value();
+    else if (a == "--rig")
+      o.rig_path = value();
+    else if (a == "--json")
+      o.json_path = value();
+    else if (a == "--svg")
+      o.svg_dir = value();
+    else if (a == "--poses")
+      o.poses = static_cast<int>(parse_whole(a, value(), 1, 1000000, usage_error));
+    else if (a == "--refine")
+      o.refine = static_cast<int>(parse_whole(a, value(), 0, 1000000, usage_error));
+    else if (a == "--min-hits")
+      o.min_hits = static_cast<int>(parse_whole(a, value(), 1, 1000, usage_error));
+    else if (a == "--threads")
+      o.threads = static_cast<int>(parse_whole(a, value(), 1, 64, usage_error));
+    else if (a == "--seed")
+      o.seed = static_cast<std::uint64_t>(parse_whole(a, value(), 0, 1L << 62, usage_error));
+    else
+      return false;
     return true;
   });
   return o;
@@ -138,16 +148,18 @@ int telegrasp::eval::run_nd_bound(int argc, char** argv) {
       const std::string line = "[" + std::to_string(done) + "/" + std::to_string(models.size()) + "] " +
                                models[j]->name + ": " + std::to_string(kept[j].clean_grasps) + " clean grasps of " +
                                std::to_string(kept[j].poses_tried) + " poses";
-      if (done == models.size()) progress.finish(line);
-      else progress.show(line);
+      if (done == models.size())
+        progress.finish(line);
+      else
+        progress.show(line);
     }
   };
   std::vector<std::thread> pool;
   for (int i = 0; i < opt.threads; ++i) pool.emplace_back(worker);
   for (auto& t : pool) t.join();
 
-  std::printf("\n== nd-bound: rig %s, %d random poses + %d refinements per object, >= %d hits ==\n", rig->name().c_str(),
-              opt.poses, opt.refine, opt.min_hits);
+  std::printf("\n== nd-bound: rig %s, %d random poses + %d refinements per object, >= %d hits ==\n",
+              rig->name().c_str(), opt.poses, opt.refine, opt.min_hits);
   std::printf("%-28s %7s %7s %9s %9s %9s %5s %8s\n", "object", "tried", "clean", "|ND|mean", "|ND|med", "|ND|max",
               "hits", "blocked");
   json objects = json::array();
@@ -170,19 +182,25 @@ int telegrasp::eval::run_nd_bound(int argc, char** argv) {
                 v.size(), k.best->blocked);
     const Eigen::Isometry3d X_ObjectPalm = poses[j].inverse() * k.best->hand.state().X_WorldPalm;
     const Eigen::Quaterniond q(X_ObjectPalm.linear());
-    o["kept"] = {{"nd_mean_mm", k.nd_mean_mm}, {"hand_error_mm", k.best->metrics.hand_error_mm},
-                 {"blocked", k.best->blocked}, {"capsules", capsule_json(capsule_records(k.best->metrics, *rig))},
-                 {"p_object_palm", {X_ObjectPalm.translation().x(), X_ObjectPalm.translation().y(), X_ObjectPalm.translation().z()}},
+    o["kept"] = {{"nd_mean_mm", k.nd_mean_mm},
+                 {"hand_error_mm", k.best->metrics.hand_error_mm},
+                 {"blocked", k.best->blocked},
+                 {"capsules", capsule_json(capsule_records(k.best->metrics, *rig))},
+                 {"p_object_palm",
+                  {X_ObjectPalm.translation().x(), X_ObjectPalm.translation().y(), X_ObjectPalm.translation().z()}},
                  {"q_object_palm_wxyz", {q.w(), q.x(), q.y(), q.z()}}};
     objects.push_back(o);
     if (!opt.svg_dir.empty()) {
       const ObjectView view{ObjectId(0), poses[j], models[j].get()};
       const std::string title = models[j]->name + ", nd-bound (oracle pose): mean |ND| " + fmt(k.nd_mean_mm, 2) + " mm";
-      std::ofstream(opt.svg_dir + "/" + models[j]->name + "_nd_bound.svg") << render_svg(snapshot(k.best->hand, view, title));
+      std::ofstream(opt.svg_dir + "/" + models[j]->name + "_nd_bound.svg")
+          << render_svg(snapshot(k.best->hand, view, title));
     }
   }
-  const json summary = {{"objects", models.size()}, {"capsules_hit", pooled.size()},
-                        {"nd_abs_median_mm", percentile(pooled, 0.5)}, {"nd_abs_p95_mm", percentile(pooled, 0.95)}};
+  const json summary = {{"objects", models.size()},
+                        {"capsules_hit", pooled.size()},
+                        {"nd_abs_median_mm", percentile(pooled, 0.5)},
+                        {"nd_abs_p95_mm", percentile(pooled, 0.95)}};
   std::printf("over the kept grasps: %zu capsules hit, |ND| median %s mm, 95th percentile %s mm\n", pooled.size(),
               fmt(percentile(pooled, 0.5), 3).c_str(), fmt(percentile(pooled, 0.95), 3).c_str());
   if (!opt.json_path.empty()) {

@@ -45,11 +45,16 @@ int telegrasp::eval::run_questionnaire(int argc, char** argv) {
   namespace cli = telegrasp::cli;
   std::string input, json_path, report_path;
   cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
-    if (a == "--json") json_path = value();
-    else if (a == "--report") report_path = value();
-    else if (cli::is_option(a)) return false;
-    else if (input.empty()) input = a;
-    else usage_error("one answers file only (got '" + input + "' and '" + a + "')");
+    if (a == "--json")
+      json_path = value();
+    else if (a == "--report")
+      report_path = value();
+    else if (cli::is_option(a))
+      return false;
+    else if (input.empty())
+      input = a;
+    else
+      usage_error("one answers file only (got '" + input + "' and '" + a + "')");
     return true;
   });
   if (input.empty()) usage_error("no answers file given");

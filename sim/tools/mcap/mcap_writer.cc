@@ -121,9 +121,8 @@ std::uint32_t crc32(std::span<const std::byte> bytes, std::uint32_t crc) {
   for (; n >= 8; n -= 8, p += 8) {
     const std::uint32_t lo = c ^ (byte(0) | byte(1) << 8 | byte(2) << 16 | byte(3) << 24);
     const std::uint32_t hi = byte(4) | byte(5) << 8 | byte(6) << 16 | byte(7) << 24;
-    c = kCrc[7][lo & 0xFFu] ^ kCrc[6][(lo >> 8) & 0xFFu] ^ kCrc[5][(lo >> 16) & 0xFFu] ^
-        kCrc[4][lo >> 24] ^ kCrc[3][hi & 0xFFu] ^ kCrc[2][(hi >> 8) & 0xFFu] ^
-        kCrc[1][(hi >> 16) & 0xFFu] ^ kCrc[0][hi >> 24];
+    c = kCrc[7][lo & 0xFFu] ^ kCrc[6][(lo >> 8) & 0xFFu] ^ kCrc[5][(lo >> 16) & 0xFFu] ^ kCrc[4][lo >> 24] ^
+        kCrc[3][hi & 0xFFu] ^ kCrc[2][(hi >> 8) & 0xFFu] ^ kCrc[1][(hi >> 16) & 0xFFu] ^ kCrc[0][hi >> 24];
   }
   for (; n > 0; --n, ++p) c = kCrc[0][(c ^ byte(0)) & 0xFFu] ^ (c >> 8);
   return ~c;
@@ -175,8 +174,7 @@ struct Writer::Impl {
   }
 
   void require_open(const char* call) const {
-    if (file == nullptr)
-      throw std::logic_error(std::string("mcap: ") + call + " on closed writer of " + path);
+    if (file == nullptr) throw std::logic_error(std::string("mcap: ") + call + " on closed writer of " + path);
   }
 
   void write_raw(std::span<const std::byte> bytes) {
@@ -195,8 +193,7 @@ struct Writer::Impl {
 
   std::span<const std::byte> compress(std::span<const std::byte> records) {
     compressed.resize(ZSTD_compressBound(records.size()));
-    const std::size_t n =
-        ZSTD_compress2(zstd, compressed.data(), compressed.size(), records.data(), records.size());
+    const std::size_t n = ZSTD_compress2(zstd, compressed.data(), compressed.size(), records.data(), records.size());
     if (ZSTD_isError(n)) {
       errno = 0;
       fail(std::string("zstd failed (") + ZSTD_getErrorName(n) + ") writing");
@@ -368,8 +365,8 @@ Writer::Writer(const std::string& path, Options options) : impl_(std::make_uniqu
     throw std::invalid_argument("mcap: chunk_size_bytes must be positive for " + path);
   if (w.options.compression == Compression::kZstd) {
     if (w.options.zstd_level < 1 || w.options.zstd_level > ZSTD_maxCLevel())
-      throw std::invalid_argument("mcap: zstd_level " + std::to_string(w.options.zstd_level) +
-                                  " outside 1.." + std::to_string(ZSTD_maxCLevel()) + " for " + path);
+      throw std::invalid_argument("mcap: zstd_level " + std::to_string(w.options.zstd_level) + " outside 1.." +
+                                  std::to_string(ZSTD_maxCLevel()) + " for " + path);
     w.zstd = ZSTD_createCCtx();
     if (w.zstd == nullptr) throw std::runtime_error("mcap: cannot create a zstd context for " + path);
     ZSTD_CCtx_setParameter(w.zstd, ZSTD_c_compressionLevel, w.options.zstd_level);
@@ -427,8 +424,8 @@ SchemaId Writer::add_schema(std::string_view name, std::string_view encoding, st
   return SchemaId{id};
 }
 
-ChannelId Writer::add_channel(std::string_view topic, std::string_view message_encoding,
-                              SchemaId schema, const std::map<std::string, std::string>& metadata) {
+ChannelId Writer::add_channel(std::string_view topic, std::string_view message_encoding, SchemaId schema,
+                              const std::map<std::string, std::string>& metadata) {
   Impl& w = *impl_;
   w.require_open("add_channel");
   if (schema.value > w.schema_records.size())
@@ -457,13 +454,12 @@ ChannelId Writer::add_channel(std::string_view topic, std::string_view message_e
   return ChannelId{id};
 }
 
-void Writer::write(ChannelId channel, std::uint32_t sequence, std::uint64_t log_time_ns,
-                   std::uint64_t publish_time_ns, std::span<const std::byte> data) {
+void Writer::write(ChannelId channel, std::uint32_t sequence, std::uint64_t log_time_ns, std::uint64_t publish_time_ns,
+                   std::span<const std::byte> data) {
   Impl& w = *impl_;
   w.require_open("write");
   if (channel.value == 0 || channel.value > w.channel_records.size())
-    throw std::invalid_argument("mcap: write on unknown channel " + std::to_string(channel.value) +
-                                " in " + w.path);
+    throw std::invalid_argument("mcap: write on unknown channel " + std::to_string(channel.value) + " in " + w.path);
   const std::uint64_t offset = w.chunk.size();
   w.chunk.u8(kMessage);
   w.chunk.u64(kMessageFixedSize + data.size());
@@ -487,8 +483,8 @@ void Writer::write(ChannelId channel, std::uint32_t sequence, std::uint64_t log_
   if (w.chunk.size() >= w.options.chunk_size_bytes) w.write_chunk();
 }
 
-void Writer::write(ChannelId channel, std::uint32_t sequence, std::uint64_t log_time_ns,
-                   std::uint64_t publish_time_ns, std::string_view data) {
+void Writer::write(ChannelId channel, std::uint32_t sequence, std::uint64_t log_time_ns, std::uint64_t publish_time_ns,
+                   std::string_view data) {
   write(channel, sequence, log_time_ns, publish_time_ns, std::as_bytes(std::span(data)));
 }
 

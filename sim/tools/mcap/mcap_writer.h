@@ -67,11 +67,11 @@ struct Options {
 
 // Where one written chunk sits in the file and what it holds.
 struct ChunkInfo {
-  std::uint64_t offset = 0;         // of the Chunk record (its opcode) from the start of the file
-  std::uint64_t length = 0;         // of the Chunk record, opcode and length prefix included
+  std::uint64_t offset = 0;  // of the Chunk record (its opcode) from the start of the file
+  std::uint64_t length = 0;  // of the Chunk record, opcode and length prefix included
   std::uint64_t message_count = 0;  // Message records in the chunk
   std::uint64_t uncompressed_size = 0;  // of the chunk's records
-  std::uint64_t compressed_size = 0;    // of the chunk's records as stored
+  std::uint64_t compressed_size = 0;  // of the chunk's records as stored
   std::uint64_t message_start_time_ns = 0;
   std::uint64_t message_end_time_ns = 0;
 };
@@ -108,10 +108,10 @@ class Writer {
   // order keeps chunks from overlapping, which indexed readers prefer. Throws std::invalid_argument
   // for an unknown channel, std::logic_error after close, std::runtime_error naming the path when
   // the file cannot be written.
-  void write(ChannelId channel, std::uint32_t sequence, std::uint64_t log_time_ns,
-             std::uint64_t publish_time_ns, std::string_view data);
-  void write(ChannelId channel, std::uint32_t sequence, std::uint64_t log_time_ns,
-             std::uint64_t publish_time_ns, std::span<const std::byte> data);
+  void write(ChannelId channel, std::uint32_t sequence, std::uint64_t log_time_ns, std::uint64_t publish_time_ns,
+             std::string_view data);
+  void write(ChannelId channel, std::uint32_t sequence, std::uint64_t log_time_ns, std::uint64_t publish_time_ns,
+             std::span<const std::byte> data);
 
   // Writes the open chunk (if it holds anything) and flushes the file; the file stays open.
   void flush_chunk();

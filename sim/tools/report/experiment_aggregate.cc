@@ -170,8 +170,8 @@ std::string default_paper_results_path() { return (sim::data_dir() / "paper_resu
 std::vector<PaperRow> load_paper_results(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error(path + ": cannot open the paper's results file");
-  const std::vector<std::string> columns = {"label", "object", "time_s_experienced", "time_s_inexperienced",
-                                            "err_experienced", "err_inexperienced"};
+  const std::vector<std::string> columns = {
+      "label", "object", "time_s_experienced", "time_s_inexperienced", "err_experienced", "err_inexperienced"};
   std::vector<std::size_t> index;  // file column of each of `columns`
   std::vector<PaperRow> out;
   std::string line;
@@ -198,8 +198,7 @@ std::vector<PaperRow> load_paper_results(const std::string& path) {
     }
     auto cell = [&](std::size_t k) -> const std::string& {
       if (index[k] >= cells.size())
-        throw std::runtime_error(where + " column " + std::to_string(index[k] + 1) + " (" + columns[k] +
-                                 "): missing");
+        throw std::runtime_error(where + " column " + std::to_string(index[k] + 1) + " (" + columns[k] + "): missing");
       return cells[index[k]];
     };
     auto number_at = [&](std::size_t k) {
@@ -207,8 +206,8 @@ std::vector<PaperRow> load_paper_results(const std::string& path) {
       char* end = nullptr;
       const double v = std::strtod(text.c_str(), &end);
       if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(v) || v < 0)
-        throw std::runtime_error(where + " column " + std::to_string(index[k] + 1) + " (" + columns[k] + "): '" +
-                                 text + "' is not a non-negative number");
+        throw std::runtime_error(where + " column " + std::to_string(index[k] + 1) + " (" + columns[k] + "): '" + text +
+                                 "' is not a non-negative number");
       return v;
     };
     PaperRow row;
@@ -229,17 +228,25 @@ std::vector<PaperRow> load_paper_results(const std::string& path) {
 json aggregate_json(const ExperimentRun& run) {
   const std::vector<std::string> modes = modes_of(run), groups = groups_of(run), objects = objects_of(run);
   json out;
-  out["run"] = {{"protocol", run.protocol},     {"command_line", run.command_line}, {"seed", run.seed},
-                {"wall_seconds", run.wall_seconds}, {"created", run.created},       {"modes", run.modes},
-                {"objects", run.objects},        {"standin_objects", run.standin_objects},
-                {"participants", run.participants}, {"records", run.records.size()}};
+  out["run"] = {{"protocol", run.protocol},
+                {"command_line", run.command_line},
+                {"seed", run.seed},
+                {"wall_seconds", run.wall_seconds},
+                {"created", run.created},
+                {"modes", run.modes},
+                {"objects", run.objects},
+                {"standin_objects", run.standin_objects},
+                {"participants", run.participants},
+                {"records", run.records.size()}};
   out["metrics"] = {
       {"time_to_grasp_s", "spawn to grasp, mean and sample sd over grasped trials"},
-      {"nd_abs_mean_mm", "per grasp: mean |ND| over the capsules that hit at the grasp tick; then mean and sample "
-                         "sd over grasps (this is what the charts plot)"},
+      {"nd_abs_mean_mm",
+       "per grasp: mean |ND| over the capsules that hit at the grasp tick; then mean and sample "
+       "sd over grasps (this is what the charts plot)"},
       {"nd_abs_pooled_mean_mm", "mean |ND| over every hit capsule of the grasped trials, at the grasp tick"},
-      {"hand_error_mean_mm", "the paper's HandError (sum over fingers of the per-finger mean |ND|) at the grasp tick, "
-                             "over grasps with a capsule that hit (without one it has no value)"}};
+      {"hand_error_mean_mm",
+       "the paper's HandError (sum over fingers of the per-finger mean |ND|) at the grasp tick, "
+       "over grasps with a capsule that hit (without one it has no value)"}};
   json by_mgo = json::array(), by_mg = json::array(), by_mo = json::array(), worst = json::array();
   for (const std::string& mode : modes) {
     for (const std::string& group : groups) {

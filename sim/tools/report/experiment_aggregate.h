@@ -27,8 +27,8 @@ double grasp_min_signed_distance(const Record& r);
 // The aggregate of some trials (one mode, group and object, or wider).
 struct Aggregate {
   int n = 0, grasped = 0, held = 0, capsules_hit = 0;
-  Stat time, nd, hand_error;   // over grasped trials (nd, hand_error: those with a hit capsule)
-  double nd_pooled = NAN;      // mean |ND| over every hit capsule of those trials
+  Stat time, nd, hand_error;  // over grasped trials (nd, hand_error: those with a hit capsule)
+  double nd_pooled = NAN;  // mean |ND| over every hit capsule of those trials
 };
 
 Aggregate aggregate(const std::vector<const Record*>& records);

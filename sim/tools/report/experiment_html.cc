@@ -39,12 +39,23 @@ std::string esc(const std::string& s) {
   std::string out;
   for (char c : s) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -63,8 +74,8 @@ std::string mean_sd(const Stat& s, int prec = 2) {
 
 struct Series {
   std::string mode, group, legend, colour;
-  std::vector<bool> present;       // per object: false draws a "no data" slot, no bar (no trials, not in the paper)
-  std::vector<double> values;      // per object; NaN draws a "no data" bar (trials, but no value)
+  std::vector<bool> present;  // per object: false draws a "no data" slot, no bar (no trials, not in the paper)
+  std::vector<double> values;  // per object; NaN draws a "no data" bar (trials, but no value)
   std::vector<std::string> cells;  // per object, the table's text
 };
 
@@ -98,17 +109,19 @@ std::string css_id(const std::string& s) {
 
 // The hatching of a "no data" slot, in a series' colour.
 std::string hatch_pattern(const std::string& id, const std::string& colour) {
-  return "<pattern id=\"" + id + "\" width=\"4\" height=\"4\" patternUnits=\"userSpaceOnUse\" "
+  return "<pattern id=\"" + id +
+         "\" width=\"4\" height=\"4\" patternUnits=\"userSpaceOnUse\" "
          "patternTransform=\"rotate(45)\"><rect width=\"4\" height=\"4\" fill=\"#ffffff\"/><line x1=\"1\" y1=\"0\" "
-         "x2=\"1\" y2=\"4\" stroke=\"" + colour + "\" stroke-width=\"1.2\"/></pattern>";
+         "x2=\"1\" y2=\"4\" stroke=\"" +
+         colour + "\" stroke-width=\"1.2\"/></pattern>";
 }
 
 // "no data" written up a hatched slot from the axis, on a white strip so it reads over the
 // hatching (drawn after the slot).
 std::string nodata_text(double x, double w, double axis_y) {
   return "<rect x=\"" + fmt(x, 2) + "\" y=\"" + fmt(axis_y - 32, 1) + "\" width=\"" + fmt(w, 2) +
-         "\" height=\"32\" fill=\"#ffffff\"/><text class=\"nodata-label\" transform=\"translate(" + fmt(x + w / 2 + 2.4, 1) +
-         "," + fmt(axis_y - 3, 1) + ") rotate(-90)\">" + kNoData + "</text>\n";
+         "\" height=\"32\" fill=\"#ffffff\"/><text class=\"nodata-label\" transform=\"translate(" +
+         fmt(x + w / 2 + 2.4, 1) + "," + fmt(axis_y - 3, 1) + ") rotate(-90)\">" + kNoData + "</text>\n";
 }
 
 std::string svg_chart(const Chart& c) {
@@ -129,8 +142,10 @@ std::string svg_chart(const Chart& c) {
   bool missing = false;
   for (const Series& s : c.series)
     for (std::size_t i = 0; i < s.values.size(); ++i) {
-      if (s.present[i] && std::isfinite(s.values[i])) max = std::max(max, s.values[i]);
-      else missing = true;
+      if (s.present[i] && std::isfinite(s.values[i]))
+        max = std::max(max, s.values[i]);
+      else
+        missing = true;
     }
   const AxisTicks axis = axis_ticks(max);
   auto y_of = [&](double v) { return top + plot_h * (1 - v / axis.top); };
@@ -138,10 +153,11 @@ std::string svg_chart(const Chart& c) {
 
   std::ostringstream o;
   // No xmlns: inline SVG in HTML needs none, and the page names no URL at all.
-  o << "<svg class=\"chart\" data-chart=\"" << esc(c.id) << "\" viewBox=\"0 0 "
-    << fmt(width, 1) << " " << fmt(height, 1) << "\" width=\"" << fmt(width, 0) << "\" height=\"" << fmt(height, 0)
-    << "\" role=\"img\"><title>" << esc(c.title) << "</title>\n<defs>";
-  for (std::size_t k = 0; k < c.series.size(); ++k) o << hatch_pattern("nd-" + id + "-" + std::to_string(k), c.series[k].colour);
+  o << "<svg class=\"chart\" data-chart=\"" << esc(c.id) << "\" viewBox=\"0 0 " << fmt(width, 1) << " "
+    << fmt(height, 1) << "\" width=\"" << fmt(width, 0) << "\" height=\"" << fmt(height, 0) << "\" role=\"img\"><title>"
+    << esc(c.title) << "</title>\n<defs>";
+  for (std::size_t k = 0; k < c.series.size(); ++k)
+    o << hatch_pattern("nd-" + id + "-" + std::to_string(k), c.series[k].colour);
   o << hatch_pattern("nd-" + id + "-legend", "#888888") << "</defs>\n";
   // Grid and y axis: a line and an exact label per tick.
   for (std::size_t t = 0; t < axis.values.size(); ++t) {
@@ -174,7 +190,8 @@ std::string svg_chart(const Chart& c) {
       if (!s.present[i]) {
         o << "<rect class=\"nodata\" x=\"" << fmt(x, 2) << "\" y=\"" << fmt(top, 2) << "\" width=\"" << fmt(bar_w, 2)
           << "\" height=\"" << fmt(plot_h, 2) << "\" fill=\"" << hatch << "\"><title>" << esc(c.objects[i]) << ", "
-          << esc(s.legend) << ": no data (" << (s.mode == "paper" ? "not in the paper" : "no trials") << ")</title></rect>\n"
+          << esc(s.legend) << ": no data (" << (s.mode == "paper" ? "not in the paper" : "no trials")
+          << ")</title></rect>\n"
           << nodata_text(x, bar_w, top + plot_h);
         continue;
       }
@@ -182,9 +199,9 @@ std::string svg_chart(const Chart& c) {
       const double h = defined ? std::max(0.0, plot_h * std::min(v, axis.top) / axis.top) : plot_h;
       o << "<rect class=\"bar\" data-chart=\"" << esc(c.id) << "\" data-mode=\"" << esc(s.mode) << "\" data-group=\""
         << esc(s.group) << "\" data-object=\"" << esc(c.objects[i]) << "\" data-value=\"" << number(v, 4) << "\" x=\""
-        << fmt(x, 2) << "\" y=\"" << fmt(top + plot_h - h, 2) << "\" width=\"" << fmt(bar_w, 2) << "\" height=\"" << fmt(h, 2)
-        << "\" fill=\"" << (defined ? s.colour : hatch) << "\"><title>" << esc(c.objects[i]) << ", " << esc(s.legend) << ": "
-        << (defined ? fmt(v, 3) : std::string(kNoData)) << "</title></rect>\n";
+        << fmt(x, 2) << "\" y=\"" << fmt(top + plot_h - h, 2) << "\" width=\"" << fmt(bar_w, 2) << "\" height=\""
+        << fmt(h, 2) << "\" fill=\"" << (defined ? s.colour : hatch) << "\"><title>" << esc(c.objects[i]) << ", "
+        << esc(s.legend) << ": " << (defined ? fmt(v, 3) : std::string(kNoData)) << "</title></rect>\n";
       if (!defined) o << nodata_text(x, bar_w, top + plot_h);
     }
     const double xc = x0 + (slot - 4) / 2 + 3, yl = top + plot_h + 10;
@@ -223,13 +240,15 @@ std::string figure(const Chart& c) {
 
 const char* kCss = R"(body{font-family:sans-serif;margin:1.5em;color:#222;max-width:none}
 h1{font-size:1.5em}h2{font-size:1.2em;margin-top:2em;border-bottom:1px solid #ccc}h3{font-size:1em}
-table{border-collapse:collapse;margin:.5em 0;font-size:.85em}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}
+table{border-collapse:collapse;margin:.5em 0;font-size:.85em}
+td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}
 th{background:#f2f2f2}td:first-child,th:first-child{text-align:left}
 .row{display:flex;flex-wrap:wrap;gap:2em;align-items:flex-start}.col{flex:0 0 auto}
 figure{margin:0 0 1.5em 0}figcaption{font-weight:bold;margin-bottom:.3em}
 svg.chart{background:#fff;display:block}svg .grid{stroke:#e0e0e0;stroke-width:.5}
 svg .axisline{stroke:#333;stroke-width:1}svg text{font-size:9px;fill:#333}svg .axis{font-size:10px}
-svg .legend{font-size:10px}svg .nodata-label{font-size:7px;fill:#333}.caveat{background:#fff8e1;border-left:4px solid #f0ad4e;padding:.5em 1em;max-width:60em}
+svg .legend{font-size:10px}svg .nodata-label{font-size:7px;fill:#333}
+.caveat{background:#fff8e1;border-left:4px solid #f0ad4e;padding:.5em 1em;max-width:60em}
 .rejected{color:#a00}code{background:#f4f4f4;padding:0 3px}
 .pictures{display:flex;flex-wrap:wrap;gap:1em}.pictures figure{margin:0;width:260px}
 .pictures figcaption{font-weight:normal;font-size:.8em;margin-top:.2em}.pictures b{font-size:1.1em}
@@ -423,9 +442,11 @@ std::string mode_times_section(const ExperimentRun& run, const PageData& d) {
   }
   std::ostringstream o;
   o << "<h3 id=\"mode-times\">Precise against discrete time to grasp</h3>\n<p>Every participant is the same simulated "
-       "person in both modes (the same seed gives the same reaction time, reach speed and pose errors) and is shown the "
+       "person in both modes (the same seed gives the same reaction time, reach speed and pose errors) and is shown "
+       "the "
        "same placements, so the hand arrives and closes at the same moments. The closing mode changes only how a "
-       "finger stops at the surface (precise: with a gap under 0.05 mm; discrete: up to one step inside), which can move "
+       "finger stops at the surface (precise: with a gap under 0.05 mm; discrete: up to one step inside), which can "
+       "move "
        "the tick the grasp rule turns true by a tick (1/90 s) or so, not the operator's timing. ";
   o << "Of the " << pairs << " grasps made in both modes (same group, participant, object and trial), "
     << pairs - static_cast<int>(diffs.size()) << " have the same time to grasp and " << diffs.size() << " differ";
@@ -433,17 +454,19 @@ std::string mode_times_section(const ExperimentRun& run, const PageData& d) {
     o << ".</p>\n";
     return o.str();
   }
-  std::stable_sort(diffs.begin(), diffs.end(), [](const Diff& a, const Diff& b) { return std::abs(a.delta) > std::abs(b.delta); });
+  std::stable_sort(diffs.begin(), diffs.end(),
+                   [](const Diff& a, const Diff& b) { return std::abs(a.delta) > std::abs(b.delta); });
   o << ", by at most " << fmt(std::abs(diffs.front().delta), 3) << " s";
   constexpr std::size_t kShown = 12;
   o << (diffs.size() > kShown ? " (the " + std::to_string(kShown) + " largest differences below)" : " (below)")
-    << ".</p>\n<table class=\"numbers\"><tr><th>group</th><th>participant</th><th>object</th><th>trial</th><th>precise (s)"
+    << ".</p>\n<table class=\"numbers\"><tr><th>group</th><th>participant</th><th>object</th><th>trial</th><th>precise "
+       "(s)"
        "</th><th>discrete (s)</th><th>discrete &minus; precise (s)</th></tr>\n";
   for (std::size_t i = 0; i < diffs.size() && i < kShown; ++i) {
     const Diff& x = diffs[i];
-    o << "<tr><td>" << esc(x.p->group) << "</td><td>" << x.p->participant << "</td><td>" << esc(x.p->object) << "</td><td>"
-      << x.p->trial << "</td><td>" << fmt(x.p->time_to_grasp_s, 3) << "</td><td>" << fmt(x.q->time_to_grasp_s, 3)
-      << "</td><td>" << (x.delta > 0 ? "+" : "") << fmt(x.delta, 3) << "</td></tr>\n";
+    o << "<tr><td>" << esc(x.p->group) << "</td><td>" << x.p->participant << "</td><td>" << esc(x.p->object)
+      << "</td><td>" << x.p->trial << "</td><td>" << fmt(x.p->time_to_grasp_s, 3) << "</td><td>"
+      << fmt(x.q->time_to_grasp_s, 3) << "</td><td>" << (x.delta > 0 ? "+" : "") << fmt(x.delta, 3) << "</td></tr>\n";
   }
   o << "</table>\n";
   return o.str();
@@ -451,7 +474,8 @@ std::string mode_times_section(const ExperimentRun& run, const PageData& d) {
 
 // The hand and object of a record at its grasp tick, in the world frame; nothing when the record
 // lacks the palm or a phalanx of `rig`.
-std::optional<sim::GraspSnapshot> record_snapshot(const Record& r, const sim::HandRig& rig, const sim::ObjectModel& model) {
+std::optional<sim::GraspSnapshot> record_snapshot(const Record& r, const sim::HandRig& rig,
+                                                  const sim::ObjectModel& model) {
   std::map<std::string, const Eigen::Isometry3d*> frames;
   for (const HandFrameRecord& f : r.grasp_tick_hand) frames[f.frame] = &f.X_ObjectFrame;
   const Eigen::Isometry3d& X_WorldObject = r.grasp_tick_X_WorldObject;
@@ -483,12 +507,16 @@ std::string pictures_section(const ExperimentRun& run, const PageData& d, const 
        "tick its grasp rule turned true: the first experienced participant's in precise mode, held after the lift "
        "(failing that, the first record by: held, precise mode, experienced, participant, trial). The hand is the "
        "server's HandSkeleton of that tick, kept in the object's frame. <b>Grey</b>: the object, its mesh decimated "
-       "to at most " << sim::PictureOptions{}.max_triangles << " triangles for drawing, flat shaded. <b>Light</b> "
+       "to at most "
+    << sim::PictureOptions{}.max_triangles
+    << " triangles for drawing, flat shaded. <b>Light</b> "
        "capsules: free phalanges; <b>dark</b>: blocked; <b>dashed</b> outline: behind the object. Pale see-through "
        "shapes: the palm and the phalanges without a capsule, for context. <b>Red</b> dots: the contacts, with a 10 mm "
        "tick along the surface normal; hollow: behind the object. Viewpoint: world z up; of the 16 views from azimuths "
-       "0, 45, ..., 315&deg; at elevations 20&deg; and 50&deg;, the one that shows the most of the hand and of where it "
-       "touches (capsule points the object does not hide, and contacts that neither the object nor a finger hides).</p>\n"
+       "0, 45, ..., 315&deg; at elevations 20&deg; and 50&deg;, the one that shows the most of the hand and of where "
+       "it "
+       "touches (capsule points the object does not hide, and contacts that neither the object nor a finger "
+       "hides).</p>\n"
        "<div class=\"pictures\">\n";
   for (const std::string& object : d.objects) {
     o << "<figure data-object=\"" << esc(object) << "\">";
@@ -496,22 +524,25 @@ std::string pictures_section(const ExperimentRun& run, const PageData& d, const 
     const auto model = in.models.find(object);
     std::optional<sim::GraspSnapshot> snap;
     if (r && model != in.models.end() && model->second && in.rig) snap = record_snapshot(*r, *in.rig, *model->second);
-    const bool standin = std::find(run.standin_objects.begin(), run.standin_objects.end(), object) != run.standin_objects.end();
+    const bool standin =
+        std::find(run.standin_objects.begin(), run.standin_objects.end(), object) != run.standin_objects.end();
     if (!snap) {
       o << "<figcaption><b>" << esc(object) << "</b><br>no picture: "
-        << (!r ? "no record has the hand at the grasp tick" : "its model or the hand's rig is not known") << "</figcaption>";
+        << (!r ? "no record has the hand at the grasp tick" : "its model or the hand's rig is not known")
+        << "</figcaption>";
     } else {
       const sim::View view = sim::readable_view(*snap);
       int blocked = 0;
       for (const auto& c : snap->capsules) blocked += c.blocked;
       int hits = 0;
       grasp_nd_abs_mean(*r, &hits);
-      o << sim::render_view_svg(*snap, view) << "<figcaption><b>" << esc(object) << "</b>" << (standin ? " (stand-in)" : "")
-        << "<br>" << esc(mode_name(r->mode)) << ", " << esc(r->group) << " participant " << r->participant << ", "
-        << (r->held_after_lift ? "held" : "grasped, not held") << "; " << fmt(r->time_to_grasp_s) << " s; HandError "
+      o << sim::render_view_svg(*snap, view) << "<figcaption><b>" << esc(object) << "</b>"
+        << (standin ? " (stand-in)" : "") << "<br>" << esc(mode_name(r->mode)) << ", " << esc(r->group)
+        << " participant " << r->participant << ", " << (r->held_after_lift ? "held" : "grasped, not held") << "; "
+        << fmt(r->time_to_grasp_s) << " s; HandError "
         << (hits ? fmt(r->grasp_tick_hand_error_mm) + " mm" : std::string(kNoData)) << "<br>" << r->contacts.size()
-        << " contact(s), " << blocked << " of " << snap->capsules.size() << " capsules blocked<br>view from " << esc(view.name)
-        << "</figcaption>";
+        << " contact(s), " << blocked << " of " << snap->capsules.size() << " capsules blocked<br>view from "
+        << esc(view.name) << "</figcaption>";
     }
     o << "</figure>\n";
   }
@@ -557,8 +588,13 @@ std::string mode_charts_section(const PageData& d) {
   for (const Kind& kind : kinds) {
     body << "<h2>" << kind.title << "</h2>\n<div class=\"row\">\n";
     for (const std::string& mode : d.modes) {
-      Chart c{std::string(kind.id) + "." + mode, kind.title + std::string(", ") + mode_name(mode), kind.y_label,
-              d.objects, d.labels, {}, {}};
+      Chart c{std::string(kind.id) + "." + mode,
+              kind.title + std::string(", ") + mode_name(mode),
+              kind.y_label,
+              d.objects,
+              d.labels,
+              {},
+              {}};
       if (kind.overall) {
         c.series.push_back(series_of(d, mode, "all", "All participants", group_colour("all", 0), kind.time));
       } else {
@@ -578,11 +614,15 @@ Chart paper_chart(const std::vector<PaperRow>& paper, const PageData& d, const s
   const bool experienced = group == "experienced";
   Chart c{std::string(time ? "paper_time." : "paper_error.") + group,
           (time ? "Time to grasp, paper vs ours, " : "Error, paper's HandError vs our mean |ND|, ") + group,
-          time ? "Time [s]" : "Error [mm]", d.objects, d.labels, {}, {}};
+          time ? "Time [s]" : "Error [mm]",
+          d.objects,
+          d.labels,
+          {},
+          {}};
   Series p{"paper", group, "paper", mode_colour("paper"), {}, {}, {}};
   for (const std::string& object : d.objects) {
     const PaperRow* row = find_paper(paper, object);
-    const double v = !row ? NAN
+    const double v = !row   ? NAN
                      : time ? (experienced ? row->time_experienced : row->time_inexperienced)
                             : (experienced ? row->err_experienced : row->err_inexperienced);
     p.present.push_back(row != nullptr);
@@ -624,7 +664,8 @@ std::string paper_section(const std::vector<PaperRow>& paper, const PageData& d)
 const Record* representative_grasp(const ExperimentRun& run, const std::string& object) {
   auto rank = [](const std::string& value, const char* first) { return value == first ? 0 : 1; };
   auto key = [&](const Record& r) {
-    return std::make_tuple(!r.held_after_lift, rank(r.mode, "precise"), rank(r.group, "experienced"), r.participant, r.trial);
+    return std::make_tuple(!r.held_after_lift, rank(r.mode, "precise"), rank(r.group, "experienced"), r.participant,
+                           r.trial);
   };
   const Record* best = nullptr;
   for (const Record& r : run.records)
@@ -646,8 +687,8 @@ std::string html_report(const ExperimentRun& run, const std::vector<PaperRow>& p
 }
 
 std::string questionnaire_html_report(const QuestionnaireSummary& questionnaire) {
-  return page("telegrasp questionnaire", "<h1>telegrasp: questionnaire scores</h1>\n" +
-                                             questionnaire_section(questionnaire));
+  return page("telegrasp questionnaire",
+              "<h1>telegrasp: questionnaire scores</h1>\n" + questionnaire_section(questionnaire));
 }
 
 }  // namespace telegrasp::report

@@ -32,21 +32,21 @@ namespace telegrasp::report {
 
 /// One protocol run, as the protocol runner collected it.
 struct ExperimentRun {
-  std::string protocol;                       ///< "paper".
+  std::string protocol;  ///< "paper".
   std::string command_line;
   std::uint64_t seed = 0;
   double wall_seconds = 0;
-  std::string created;                        ///< ISO 8601 date-time.
-  std::vector<std::string> modes;             ///< "precise", "discrete", in run order.
-  std::vector<std::string> objects;           ///< The protocol's objects, in order.
-  std::vector<std::string> standin_objects;   ///< Objects that fell back to a built-in stand-in.
-  std::map<std::string, int> participants;    ///< Group -> number of participants.
-  std::vector<Record> records;                ///< With group, participant and mode set.
+  std::string created;  ///< ISO 8601 date-time.
+  std::vector<std::string> modes;  ///< "precise", "discrete", in run order.
+  std::vector<std::string> objects;  ///< The protocol's objects, in order.
+  std::vector<std::string> standin_objects;  ///< Objects that fell back to a built-in stand-in.
+  std::map<std::string, int> participants;  ///< Group -> number of participants.
+  std::vector<Record> records;  ///< With group, participant and mode set.
 };
 
 /// One object of the paper's published results (time in s, error as the paper plotted it, mm).
 struct PaperRow {
-  std::string label;   ///< The paper's object letter, a..ad.
+  std::string label;  ///< The paper's object letter, a..ad.
   std::string object;  ///< YCB name, e.g. "014_lemon".
   double time_experienced = 0, time_inexperienced = 0, err_experienced = 0, err_inexperienced = 0;
 };

@@ -35,9 +35,9 @@ std::string write_csv(const ExperimentRun& run, const std::string& path) {
     grasps << csv::field(r.mode) << ',' << csv::field(r.group) << ',' << r.participant << ',' << csv::field(r.object)
            << ',' << r.trial << ',' << (r.grasped ? 1 : 0) << ',' << (r.held_after_lift ? 1 : 0) << ',' << r.attempts
            << ',' << (r.grasped ? number(r.time_to_grasp_s, 4) : "") << ','
-           << (r.grasped && hits ? number(r.grasp_tick_hand_error_mm, 4) : "") << ',' << (r.grasped ? number(nd, 4) : "")
-           << ',' << hits << ',' << (r.grasped ? number(grasp_min_signed_distance(r), 4) : "") << ','
-           << r.contacts.size() << '\n';
+           << (r.grasped && hits ? number(r.grasp_tick_hand_error_mm, 4) : "") << ','
+           << (r.grasped ? number(nd, 4) : "") << ',' << hits << ','
+           << (r.grasped ? number(grasp_min_signed_distance(r), 4) : "") << ',' << r.contacts.size() << '\n';
   }
   write_text_file(path, grasps.str());
 

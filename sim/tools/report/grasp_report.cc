@@ -11,8 +11,11 @@ using nlohmann::json;
 json capsule_json(const std::vector<CapsuleMetricRecord>& capsules) {
   json out = json::array();
   for (const auto& c : capsules)
-    out.push_back({{"phalanx", c.phalanx}, {"hit", c.hit}, {"blocked", c.blocked},
-                   {"nd_mm", c.hit ? json(c.nd_mm) : json(nullptr)}, {"signed_distance_mm", c.signed_distance_mm}});
+    out.push_back({{"phalanx", c.phalanx},
+                   {"hit", c.hit},
+                   {"blocked", c.blocked},
+                   {"nd_mm", c.hit ? json(c.nd_mm) : json(nullptr)},
+                   {"signed_distance_mm", c.signed_distance_mm}});
   return out;
 }
 
@@ -24,7 +27,6 @@ double percentile(std::vector<double> v, double p) {
   const double f = idx - static_cast<double>(i);
   return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
 }
-
 
 std::vector<CapsuleMetricRecord> capsule_records(const sim::GraspMetrics& metrics, const sim::HandRig& rig) {
   std::vector<CapsuleMetricRecord> out;
@@ -83,33 +85,43 @@ std::string fmt(double v, int prec) {
 }
 
 void print_object_table(const std::vector<ObjectRows>& objects) {
-  std::printf("%-26s %6s %6s %8s %9s %9s %10s %9s\n", "object", "held", "grasp", "time_s", "|ND|med", "|ND|p95", "minSD_mm", "HErr_mm");
+  std::printf("%-26s %6s %6s %8s %9s %9s %10s %9s\n", "object", "held", "grasp", "time_s", "|ND|med", "|ND|p95",
+              "minSD_mm", "HErr_mm");
   for (const ObjectRows& o : objects) {
     const json s = summarize(o.records);
     auto get = [&](const char* k) { return s[k].is_null() ? NAN : s[k].get<double>(); };
     const int n = static_cast<int>(o.records.size());
     std::printf("%-26s %3d/%-2d %3d/%-2d %8s %9s %9s %10s %9s\n", o.object.c_str(), s["held_after_lift"].get<int>(), n,
-                s["grasped"].get<int>(), n, fmt(get("time_to_grasp_mean_s")).c_str(), fmt(get("nd_abs_median_mm"), 3).c_str(),
-                fmt(get("nd_abs_p95_mm"), 3).c_str(), fmt(get("min_blocked_signed_distance_mm"), 3).c_str(),
-                fmt(get("hand_error_mean_mm")).c_str());
+                s["grasped"].get<int>(), n, fmt(get("time_to_grasp_mean_s")).c_str(),
+                fmt(get("nd_abs_median_mm"), 3).c_str(), fmt(get("nd_abs_p95_mm"), 3).c_str(),
+                fmt(get("min_blocked_signed_distance_mm"), 3).c_str(), fmt(get("hand_error_mean_mm")).c_str());
   }
 }
 
 json record_json(const Record& r) {
   const bool known_mode = !r.mode.empty();
-  json out = {{"object", r.object}, {"trial", r.trial}, {"mode", known_mode ? json(r.mode) : json(nullptr)},
-          {"speed_scale", known_mode ? json(r.speed_scale) : json(nullptr)},
-          {"grasped", r.grasped}, {"held_after_lift", r.held_after_lift}, {"attempts", r.attempts},
-          {"time_to_grasp_s", r.grasped ? json(r.time_to_grasp_s) : json(nullptr)},
-          {"hand_error_mm", r.grasped ? json(r.hand_error_mm) : json(nullptr)}, {"capsules", capsule_json(r.capsules)},
-          {"grasp_tick", {{"hand_error_mm", r.grasped ? json(r.grasp_tick_hand_error_mm) : json(nullptr)},
-                          {"capsules", capsule_json(r.grasp_tick_capsules)}}}};
+  json out = {{"object", r.object},
+              {"trial", r.trial},
+              {"mode", known_mode ? json(r.mode) : json(nullptr)},
+              {"speed_scale", known_mode ? json(r.speed_scale) : json(nullptr)},
+              {"grasped", r.grasped},
+              {"held_after_lift", r.held_after_lift},
+              {"attempts", r.attempts},
+              {"time_to_grasp_s", r.grasped ? json(r.time_to_grasp_s) : json(nullptr)},
+              {"hand_error_mm", r.grasped ? json(r.hand_error_mm) : json(nullptr)},
+              {"capsules", capsule_json(r.capsules)},
+              {"grasp_tick",
+               {{"hand_error_mm", r.grasped ? json(r.grasp_tick_hand_error_mm) : json(nullptr)},
+                {"capsules", capsule_json(r.grasp_tick_capsules)}}}};
   if (!r.group.empty()) {
     auto vec = [](const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); };
     json contacts = json::array();
     for (const ContactPointRecord& c : r.contacts)
-      contacts.push_back({{"phalanx", c.phalanx}, {"p_WorldContact_m", vec(c.p_WorldContact)}, {"n_World", vec(c.n_World)},
-                          {"p_ObjectContact_m", vec(c.p_ObjectContact)}, {"n_Object", vec(c.n_Object)}});
+      contacts.push_back({{"phalanx", c.phalanx},
+                          {"p_WorldContact_m", vec(c.p_WorldContact)},
+                          {"n_World", vec(c.n_World)},
+                          {"p_ObjectContact_m", vec(c.p_ObjectContact)},
+                          {"n_Object", vec(c.n_Object)}});
     out["group"] = r.group;
     out["participant"] = r.participant;
     out["contacts"] = std::move(contacts);
@@ -118,8 +130,9 @@ json record_json(const Record& r) {
       auto round6 = [](double v) { return std::round(v * 1e6) / 1e6 + 0.0; };  // + 0.0: no "-0.0"
       auto pose = [&](const Eigen::Isometry3d& X) {
         const Eigen::Quaterniond q(X.linear());
-        return json{{"p", json::array({round6(X.translation().x()), round6(X.translation().y()), round6(X.translation().z())})},
-                    {"q_wxyz", json::array({round6(q.w()), round6(q.x()), round6(q.y()), round6(q.z())})}};
+        return json{
+            {"p", json::array({round6(X.translation().x()), round6(X.translation().y()), round6(X.translation().z())})},
+            {"q_wxyz", json::array({round6(q.w()), round6(q.x()), round6(q.y()), round6(q.z())})}};
       };
       json frames = json::array();
       for (const HandFrameRecord& f : r.grasp_tick_hand) {
@@ -151,7 +164,8 @@ Record record_from_json(const json& j) {
     std::vector<CapsuleMetricRecord> out;
     for (const json& c : arr)
       out.push_back({c.at("phalanx").get<std::string>(), c.at("hit").get<bool>(), c.at("blocked").get<bool>(),
-                     c.at("nd_mm").is_null() ? 0.0 : c.at("nd_mm").get<double>(), c.at("signed_distance_mm").get<double>()});
+                     c.at("nd_mm").is_null() ? 0.0 : c.at("nd_mm").get<double>(),
+                     c.at("signed_distance_mm").get<double>()});
     return out;
   };
   r.capsules = capsules(j.at("capsules"));
@@ -159,17 +173,20 @@ Record record_from_json(const json& j) {
   if (!j.contains("group")) return r;  // not a protocol record
   r.group = j.at("group").get<std::string>();
   r.participant = j.at("participant").get<int>();
-  auto vec = [](const json& v) { return Eigen::Vector3d(v.at(0).get<double>(), v.at(1).get<double>(), v.at(2).get<double>()); };
+  auto vec = [](const json& v) {
+    return Eigen::Vector3d(v.at(0).get<double>(), v.at(1).get<double>(), v.at(2).get<double>());
+  };
   for (const json& c : j.at("contacts"))
-    r.contacts.push_back({c.at("phalanx").get<std::string>(), vec(c.at("p_WorldContact_m")), vec(c.at("n_World")), vec(c.at("p_ObjectContact_m")),
-                          vec(c.at("n_Object"))});
+    r.contacts.push_back({c.at("phalanx").get<std::string>(), vec(c.at("p_WorldContact_m")), vec(c.at("n_World")),
+                          vec(c.at("p_ObjectContact_m")), vec(c.at("n_Object"))});
   if (!j.contains("grasp_tick_hand")) return r;
   auto pose = [&](const json& p) {
     const json& q = p.at("q_wxyz");
     Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-    X.linear() = Eigen::Quaterniond(q.at(0).get<double>(), q.at(1).get<double>(), q.at(2).get<double>(), q.at(3).get<double>())
-                     .normalized()
-                     .toRotationMatrix();
+    X.linear() =
+        Eigen::Quaterniond(q.at(0).get<double>(), q.at(1).get<double>(), q.at(2).get<double>(), q.at(3).get<double>())
+            .normalized()
+            .toRotationMatrix();
     X.translation() = vec(p.at("p"));
     return X;
   };

@@ -37,19 +37,19 @@ struct HandFrameRecord {
 /// One grasp trial.
 struct Record {
   std::string object;
-  std::string mode;                       ///< Closing mode; "" if unknown (written as null).
-  double speed_scale = 1;                 ///< Written as null when `mode` is "".
+  std::string mode;  ///< Closing mode; "" if unknown (written as null).
+  double speed_scale = 1;  ///< Written as null when `mode` is "".
   int trial = 0, attempts = 0;
   bool grasped = false, held_after_lift = false;
   double time_to_grasp_s = 0;
-  double hand_error_mm = 0;               ///< The settled hand while held (end of the hold), else the grasp tick's.
+  double hand_error_mm = 0;  ///< The settled hand while held (end of the hold), else the grasp tick's.
   std::vector<CapsuleMetricRecord> capsules;
-  double grasp_tick_hand_error_mm = 0;    ///< The tick the grasp rule turned true.
+  double grasp_tick_hand_error_mm = 0;  ///< The tick the grasp rule turned true.
   std::vector<CapsuleMetricRecord> grasp_tick_capsules;
   // Protocol runs (telegrasp-eval --protocol) only; written when `group` is not empty.
-  std::string group;                      ///< Operator group, e.g. "experienced".
-  int participant = 0;                    ///< 1-based, unique in a run.
-  std::vector<ContactPointRecord> contacts;    ///< At the grasp tick.
+  std::string group;  ///< Operator group, e.g. "experienced".
+  int participant = 0;  ///< 1-based, unique in a run.
+  std::vector<ContactPointRecord> contacts;  ///< At the grasp tick.
   /// The hand at the grasp tick (palm, then every phalanx in rig order) in the object's frame,
   /// from the server's HandSkeleton of that tick; empty when unknown. Written when not empty.
   std::vector<HandFrameRecord> grasp_tick_hand;

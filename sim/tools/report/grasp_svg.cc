@@ -17,7 +17,7 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kNormalTick = 0.010;  // m: the drawn length of a contact normal
-constexpr int kCapsuleSamples = 5;     // points along a capsule tested for being behind the object
+constexpr int kCapsuleSamples = 5;  // points along a capsule tested for being behind the object
 
 std::string f1(double x) {
   char b[32];
@@ -29,9 +29,12 @@ std::string f1(double x) {
 std::string esc(const std::string& s) {
   std::string out;
   for (char c : s) {
-    if (c == '<') out += "&lt;";
-    else if (c == '&') out += "&amp;";
-    else out += c;
+    if (c == '<')
+      out += "&lt;";
+    else if (c == '&')
+      out += "&amp;";
+    else
+      out += c;
   }
   return out;
 }
@@ -134,7 +137,8 @@ std::vector<Eigen::Vector3d> palm_corners(const GraspSnapshot::Palm& palm) {
   std::vector<Eigen::Vector3d> out;
   const Eigen::Vector3d& h = palm.half_extent;
   for (int k = 0; k < 8; ++k)
-    out.push_back(palm.X_WorldPalm * Eigen::Vector3d(k & 1 ? h.x() : -h.x(), k & 2 ? h.y() : -h.y(), k & 4 ? h.z() : -h.z()));
+    out.push_back(palm.X_WorldPalm *
+                  Eigen::Vector3d(k & 1 ? h.x() : -h.x(), k & 2 ? h.y() : -h.y(), k & 4 ? h.z() : -h.z()));
   return out;
 }
 
@@ -160,8 +164,9 @@ std::string point(const Eigen::Vector2d& p) { return f1(p.x()) + " " + f1(p.y())
 std::string stadium_path(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double r) {
   const Eigen::Vector2d d = b - a;
   if (d.norm() < 1e-6)
-    return "M" + point(a + Eigen::Vector2d(r, 0)) + "A" + f1(r) + " " + f1(r) + " 0 1 0 " + point(a - Eigen::Vector2d(r, 0)) +
-           "A" + f1(r) + " " + f1(r) + " 0 1 0 " + point(a + Eigen::Vector2d(r, 0)) + "Z";
+    return "M" + point(a + Eigen::Vector2d(r, 0)) + "A" + f1(r) + " " + f1(r) + " 0 1 0 " +
+           point(a - Eigen::Vector2d(r, 0)) + "A" + f1(r) + " " + f1(r) + " 0 1 0 " + point(a + Eigen::Vector2d(r, 0)) +
+           "Z";
   const Eigen::Vector2d n = Eigen::Vector2d(-d.y(), d.x()).normalized() * r;
   const std::string arc = "A" + f1(r) + " " + f1(r) + " 0 0 0 ";
   return "M" + point(a + n) + "L" + point(b + n) + arc + point(b - n) + "L" + point(a - n) + arc + point(a + n) + "Z";
@@ -230,7 +235,8 @@ std::string draw_view(const GraspSnapshot& snap, const DrawingMesh& object, cons
   // Phalanges without a capsule: light, see-through, as thick as their finger.
   for (const auto& bone : snap.bones) {
     Part part;
-    part.hidden = occluder.hides(bone.a + bone.radius * view.toward) && occluder.hides(bone.b + bone.radius * view.toward);
+    part.hidden =
+        occluder.hides(bone.a + bone.radius * view.toward) && occluder.hides(bone.b + bone.radius * view.toward);
     part.depth = ((bone.a + bone.b) / 2).dot(view.toward);
     const Eigen::Vector2d p = screen(bone.a), q = screen(bone.b);
     part.svg = "<line class=\"bone\" x1=\"" + f1(p.x()) + "\" y1=\"" + f1(p.y()) + "\" x2=\"" + f1(q.x()) + "\" y2=\"" +
@@ -293,9 +299,9 @@ std::string draw_view(const GraspSnapshot& snap, const DrawingMesh& object, cons
     const Eigen::Vector2d p = screen(c.p), q = screen(c.p + kNormalTick * c.n);
     o << "<line class=\"normal\" x1=\"" << f1(p.x()) << "\" y1=\"" << f1(p.y()) << "\" x2=\"" << f1(q.x()) << "\" y2=\""
       << f1(q.y()) << "\" stroke=\"#d00000\" stroke-width=\"1.4\"" << (hidden ? " stroke-dasharray=\"2 1.5\"" : "")
-      << "/>\n<circle class=\"contact" << (hidden ? " hidden" : "") << "\" cx=\"" << f1(p.x()) << "\" cy=\"" << f1(p.y())
-      << "\" r=\"3\" fill=\"" << (hidden ? "#ffffff" : "#d00000") << "\" stroke=\"" << (hidden ? "#d00000" : "#ffffff")
-      << "\" stroke-width=\"" << (hidden ? "1.4" : "0.8") << "\"/>\n";
+      << "/>\n<circle class=\"contact" << (hidden ? " hidden" : "") << "\" cx=\"" << f1(p.x()) << "\" cy=\""
+      << f1(p.y()) << "\" r=\"3\" fill=\"" << (hidden ? "#ffffff" : "#d00000") << "\" stroke=\""
+      << (hidden ? "#d00000" : "#ffffff") << "\" stroke-width=\"" << (hidden ? "1.4" : "0.8") << "\"/>\n";
   }
   return o.str();
 }
@@ -365,7 +371,8 @@ View readable_view(const GraspSnapshot& snap) {
       int score = 0;
       for (const auto& c : snap.capsules)
         for (const auto& p : capsule_samples(c, view)) score += !occluder.hides(p);
-      for (const auto& c : snap.contacts) score += 4 * !(occluder.hides(c.p) || capsule_hides(snap.capsules, c.p, view));
+      for (const auto& c : snap.contacts)
+        score += 4 * !(occluder.hides(c.p) || capsule_hides(snap.capsules, c.p, view));
       if (score > best_score) best_score = score, best = view;
     }
   return best;
@@ -375,7 +382,8 @@ DrawingMesh decimate_for_drawing(const TriangleMesh& mesh, int max_triangles) {
   // Each original triangle's area-weighted normal (its cross product), summed into the drawn
   // triangle it becomes: a clustered triangle can fold over, its source cannot.
   auto cross = [&](const std::array<std::uint32_t, 3>& t) {
-    return Eigen::Vector3d((mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]));
+    return Eigen::Vector3d(
+        (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]));
   };
   auto finish = [](DrawingMesh& out) {
     for (Eigen::Vector3d& n : out.normals) n = n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::Zero();
@@ -398,7 +406,8 @@ DrawingMesh decimate_for_drawing(const TriangleMesh& mesh, int max_triangles) {
     std::vector<int> count;
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
       const Eigen::Vector3d c = ((mesh.vertices[i] - lo) / size).array().floor();
-      const std::int64_t key = (static_cast<std::int64_t>(c.x()) * n + static_cast<std::int64_t>(c.y())) * n + static_cast<std::int64_t>(c.z());
+      const std::int64_t key = (static_cast<std::int64_t>(c.x()) * n + static_cast<std::int64_t>(c.y())) * n +
+                               static_cast<std::int64_t>(c.z());
       const auto [it, added] = cluster_of_cell.emplace(key, static_cast<std::uint32_t>(sum.size()));
       if (added) sum.emplace_back(Eigen::Vector3d::Zero()), count.push_back(0);
       cluster[i] = it->second;
@@ -432,17 +441,20 @@ std::string render_view_svg(const GraspSnapshot& snap, const View& view, const P
   // No xmlns: inline SVG in HTML needs none, and the page names no URL at all.
   svg << "<svg class=\"grasp\" viewBox=\"0 0 " << f1(options.width_px) << " " << f1(options.height_px) << "\" width=\""
       << f1(options.width_px) << "\" height=\"" << f1(options.height_px) << "\" role=\"img\"><title>"
-      << esc(snap.title + " (" + view.name + ")") << "</title>\n<rect width=\"100%\" height=\"100%\" fill=\"#fbfbfb\"/>\n"
+      << esc(snap.title + " (" + view.name + ")")
+      << "</title>\n<rect width=\"100%\" height=\"100%\" fill=\"#fbfbfb\"/>\n"
       << draw_view(snap, drawn, view, 0, 0, options.width_px, options.height_px) << "</svg>\n";
   return svg.str();
 }
 
 std::string render_svg(const GraspSnapshot& snap) {
   constexpr double kViewPx = 300;
-  const View views[] = {{"top (x right, y up)", Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()},
-                        {"front (x right, z up)", Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitY()},
-                        {"side (y right, z up)", Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitX()}};
-  const DrawingMesh drawn = snap.model ? decimate_for_drawing(snap.model->mesh, PictureOptions{}.max_triangles) : DrawingMesh{};
+  const View views[] = {
+      {"top (x right, y up)", Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()},
+      {"front (x right, z up)", Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitY()},
+      {"side (y right, z up)", Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitX()}};
+  const DrawingMesh drawn =
+      snap.model ? decimate_for_drawing(snap.model->mesh, PictureOptions{}.max_triangles) : DrawingMesh{};
   std::ostringstream svg;
   const double width = 3 * kViewPx + 40, height = kViewPx + 84;
   svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
@@ -456,7 +468,8 @@ std::string render_svg(const GraspSnapshot& snap) {
         << draw_view(snap, drawn, views[vi], ox, oy, kViewPx, kViewPx) << "</g>\n";
   }
   svg << "<text x=\"10\" y=\"" << height - 8
-      << "\" fill=\"#555\">capsules: light = free, dark = blocked, dashed = behind the object; red = contacts and their "
+      << "\" fill=\"#555\">capsules: light = free, dark = blocked, dashed = behind the object; red = contacts and "
+         "their "
          "normals (hollow = behind); grey = object</text>\n</svg>\n";
   return svg.str();
 }

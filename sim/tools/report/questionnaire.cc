@@ -81,8 +81,10 @@ json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 json stat_json(const ScoreStat& s) { return {{"mean", num(s.mean)}, {"sd", num(s.sd)}, {"n", s.n}}; }
 
 json scores_json(const QuestionnaireScores& s) {
-  return {{"motor_control", s.motor_control}, {"finger_movement_realism", s.finger_movement_realism},
-          {"interaction_realism", s.interaction_realism}, {"embodiment", s.embodiment}};
+  return {{"motor_control", s.motor_control},
+          {"finger_movement_realism", s.finger_movement_realism},
+          {"interaction_realism", s.interaction_realism},
+          {"embodiment", s.embodiment}};
 }
 
 // The next line of `in` that is neither blank nor a comment ('#'), split into cells; counts every
@@ -299,8 +301,7 @@ void print_questionnaire(const QuestionnaireSummary& s, std::ostream& out) {
         << with_sd(g.embodiment) << paper_value(&QuestionnaireScores::embodiment) << "\n";
   }
   out << "Paper (Oprea et al. 2019, Table 2): embodiment 1.97 experienced, 2.19 inexperienced.\n";
-  if (!s.rejected.empty())
-    out << s.rejected.size() << " row(s) rejected and not scored (see stderr).\n";
+  if (!s.rejected.empty()) out << s.rejected.size() << " row(s) rejected and not scored (see stderr).\n";
 }
 
 }  // namespace telegrasp::report

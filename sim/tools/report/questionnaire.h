@@ -17,10 +17,10 @@ inline constexpr int kQuestionCount = 14;
 
 /// The four scores of one participant, each in -3..3.
 struct QuestionnaireScores {
-  double motor_control = 0;            ///< ((Q1 + Q2) - (Q3 + Q4)) / 4; Q3, Q4 reversed.
+  double motor_control = 0;  ///< ((Q1 + Q2) - (Q3 + Q4)) / 4; Q3, Q4 reversed.
   double finger_movement_realism = 0;  ///< (Q5 + Q6 + Q7) / 3.
-  double interaction_realism = 0;      ///< ((Q8 + Q9) - (Q10 + Q11) + Q12 + Q13 + Q14) / 7; Q10, Q11 reversed.
-  double embodiment = 0;               ///< (MC + FMR + 2 * IR) / 4.
+  double interaction_realism = 0;  ///< ((Q8 + Q9) - (Q10 + Q11) + Q12 + Q13 + Q14) / 7; Q10, Q11 reversed.
+  double embodiment = 0;  ///< (MC + FMR + 2 * IR) / 4.
 };
 
 /// Scores one participant's answers (answers[i] is Q(i+1), each -3..3; not checked here).
@@ -50,16 +50,16 @@ struct QuestionnaireGroup {
 /// A row that was not scored, with the message naming file, line, participant and column.
 struct RejectedRow {
   int line = 0;
-  std::string id;       ///< "" when the id itself is missing.
+  std::string id;  ///< "" when the id itself is missing.
   std::string message;  ///< e.g. "answers.csv line 5 (participant p3): Q7 = 4 is outside -3..3".
 };
 
 /// Everything read from one answers file.
 struct QuestionnaireSummary {
-  std::string source;                                  ///< The file name as given.
+  std::string source;  ///< The file name as given.
   std::vector<QuestionnaireParticipant> participants;  ///< Valid rows, in file order.
-  std::vector<QuestionnaireGroup> groups;              ///< In order of first appearance.
-  std::vector<RejectedRow> rejected;                   ///< In file order.
+  std::vector<QuestionnaireGroup> groups;  ///< In order of first appearance.
+  std::vector<RejectedRow> rejected;  ///< In file order.
 };
 
 /// The paper's Table 2 (average score per aspect and group), for comparison.

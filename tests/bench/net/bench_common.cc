@@ -80,7 +80,8 @@ Watchdog::Watchdog(double seconds) {
       const bool stuck = stop_seen && now - *stop_seen > std::chrono::seconds(15);
       if (!overdue && !stuck) continue;
       std::fprintf(stderr, "telegrasp-bench: watchdog: %s; killing the children and exiting\n",
-                   overdue ? "the run exceeded its time limit (a hang, e.g. inside Fast DDS)" : "no clean stop 15 s after the signal");
+                   overdue ? "the run exceeded its time limit (a hang, e.g. inside Fast DDS)"
+                           : "no clean stop 15 s after the signal");
       const std::vector<int> children = ChildProcess::live_pids();
       for (int pid : children) ::kill(pid, SIGTERM);
       std::this_thread::sleep_for(std::chrono::seconds(3));
@@ -242,8 +243,8 @@ std::vector<StatusCollector::Record> StatusCollector::since(std::int64_t t_ns) c
   return out;
 }
 
-std::optional<StatusCollector::Record> StatusCollector::wait_for(std::int64_t after_ns, double timeout_s,
-                                                                 const std::function<bool(const msg::ServerStatus&)>& pred) {
+std::optional<StatusCollector::Record> StatusCollector::wait_for(
+    std::int64_t after_ns, double timeout_s, const std::function<bool(const msg::ServerStatus&)>& pred) {
   const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
   std::unique_lock lock(mutex_);
   std::size_t checked = 0;
@@ -259,25 +260,28 @@ std::optional<StatusCollector::Record> StatusCollector::wait_for(std::int64_t af
 
 void start_server(ChildProcess& child, const ServerOptions& o, StatusCollector& collector, double timeout_s) {
   if (::access(o.path.c_str(), X_OK) != 0)
-    throw std::runtime_error("--server: " + o.path + " is not an executable file (build the telegrasp-server target, or pass --server PATH)");
+    throw std::runtime_error("--server: " + o.path +
+                             " is not an executable file (build the telegrasp-server target, or pass --server PATH)");
   const auto argv = server_argv(o);
   // A server already on the domain would mix its inputs and outputs with ours.
   wait_until([&] { return collector.foreign() > 0; }, 1.5);
   if (collector.foreign() > 0)
-    throw std::runtime_error("another telegrasp-server already publishes ServerStatus on domain " + std::to_string(o.domain) +
-                             "; pick a free one with --domain");
+    throw std::runtime_error("another telegrasp-server already publishes ServerStatus on domain " +
+                             std::to_string(o.domain) + "; pick a free one with --domain");
   child.start(argv, o.log_path);
   collector.set_server_pid(child.pid());
   const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
   while (collector.count() == 0) {
     if (!child.running())
-      throw std::runtime_error("telegrasp-server exited (" + child.exit_description() + ") before sending a ServerStatus; command: " +
-                               join_command(argv) + "\n  log " + o.log_path + ":\n" + child.log_tail());
+      throw std::runtime_error("telegrasp-server exited (" + child.exit_description() +
+                               ") before sending a ServerStatus; command: " + join_command(argv) + "\n  log " +
+                               o.log_path + ":\n" + child.log_tail());
     if (stop_requested()) throw std::runtime_error("interrupted while waiting for telegrasp-server");
     if (Clock::now() >= end)
-      throw std::runtime_error("telegrasp-server sent no ServerStatus within " + std::to_string(static_cast<int>(timeout_s)) +
-                               " s on domain " + std::to_string(o.domain) + "; command: " + join_command(argv) + "\n  log " +
-                               o.log_path + ":\n" + child.log_tail());
+      throw std::runtime_error("telegrasp-server sent no ServerStatus within " +
+                               std::to_string(static_cast<int>(timeout_s)) + " s on domain " +
+                               std::to_string(o.domain) + "; command: " + join_command(argv) + "\n  log " + o.log_path +
+                               ":\n" + child.log_tail());
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
 }
@@ -314,7 +318,8 @@ msg::Quat wobble_quaternion(double angle) {
   return q;
 }
 
-msg::ControllerState controller_sample(const std::string& client_id, int client, int side, std::uint64_t seq, double t) {
+msg::ControllerState controller_sample(const std::string& client_id, int client, int side, std::uint64_t seq,
+                                       double t) {
   constexpr double kTwoPi = 2 * std::numbers::pi;
   const double phase = 0.37 * client + 1.3 * side;
   msg::ControllerState s;
@@ -324,7 +329,8 @@ msg::ControllerState controller_sample(const std::string& client_id, int client,
   msg::Pose3 palm;
   msg::Vec3 p;
   p.x(-1.85 + 0.11 * (client % 16) + 0.05 * std::sin(kTwoPi * 0.3 * t + phase));
-  p.y(-1.75 + 0.45 * (client / 16 % 8) + (side == idl::kHandLeft ? -0.1 : 0.1) + 0.05 * std::cos(kTwoPi * 0.4 * t + phase));
+  p.y(-1.75 + 0.45 * (client / 16 % 8) + (side == idl::kHandLeft ? -0.1 : 0.1) +
+      0.05 * std::cos(kTwoPi * 0.4 * t + phase));
   p.z(0.45 + 0.1 * std::sin(kTwoPi * 0.5 * t + phase));
   palm.position(p);
   palm.orientation(wobble_quaternion(0.6 * std::sin(kTwoPi * 0.25 * t + phase)));
@@ -339,8 +345,10 @@ std::string join_command(const std::vector<std::string>& argv) {
   std::string out;
   for (const auto& a : argv) {
     if (!out.empty()) out += ' ';
-    if (a.find_first_of(" \t\"'$\\") == std::string::npos && !a.empty()) out += a;
-    else out += "'" + a + "'";
+    if (a.find_first_of(" \t\"'$\\") == std::string::npos && !a.empty())
+      out += a;
+    else
+      out += "'" + a + "'";
   }
   return out;
 }

@@ -62,18 +62,30 @@ struct CommonOptions {
 template <class Value>
 bool parse_common_option(const char* tool, const std::string& f, const Value& value, CommonOptions& o,
                          void (*usage_error)(const std::string&)) {
-  if (f == "--sample-hz") o.sample_hz = cli::parse_number(f, value(), 1, 1000, usage_error);
-  else if (f == "--hz") warn_deprecated_hz(tool), o.sample_hz = cli::parse_number(f, value(), 1, 1000, usage_error);
-  else if (f == "--tick-hz") o.tick_hz = cli::parse_number(f, value(), 1, 2000, usage_error);
-  else if (f == "--json") o.json = value();
-  else if (f == "--profile") o.profile = cli::parse_profile(f, value(), usage_error);
-  else if (f == "--profiles") o.profiles_file = value();
-  else if (f == "--domain") o.domain = cli::parse_domain(f, value(), usage_error);
-  else if (f == "--server") o.server = value();
-  else if (f == "--server-arg") o.server_args.push_back(value());
-  else if (f == "--server-log") o.server_log = value();
-  else if (f == "--no-late-latch") o.late_latch = false;
-  else return false;
+  if (f == "--sample-hz")
+    o.sample_hz = cli::parse_number(f, value(), 1, 1000, usage_error);
+  else if (f == "--hz")
+    warn_deprecated_hz(tool), o.sample_hz = cli::parse_number(f, value(), 1, 1000, usage_error);
+  else if (f == "--tick-hz")
+    o.tick_hz = cli::parse_number(f, value(), 1, 2000, usage_error);
+  else if (f == "--json")
+    o.json = value();
+  else if (f == "--profile")
+    o.profile = cli::parse_profile(f, value(), usage_error);
+  else if (f == "--profiles")
+    o.profiles_file = value();
+  else if (f == "--domain")
+    o.domain = cli::parse_domain(f, value(), usage_error);
+  else if (f == "--server")
+    o.server = value();
+  else if (f == "--server-arg")
+    o.server_args.push_back(value());
+  else if (f == "--server-log")
+    o.server_log = value();
+  else if (f == "--no-late-latch")
+    o.late_latch = false;
+  else
+    return false;
   return true;
 }
 
@@ -143,13 +155,13 @@ bool wait_until(const std::function<bool()>& ready, double timeout_s);
 // The server.
 
 struct ServerOptions {
-  std::string path;                 ///< telegrasp-server executable.
+  std::string path;  ///< telegrasp-server executable.
   int domain = 0;
   std::string profile = "loopback";
-  std::string profiles_file;        ///< "" = the server's default.
+  std::string profiles_file;  ///< "" = the server's default.
   bool late_latch = true;
-  double tick_hz = 0;               ///< The server's --tick-hz; 0 = its default.
-  std::vector<std::string> extra;   ///< More arguments (--server-arg).
+  double tick_hz = 0;  ///< The server's --tick-hz; 0 = its default.
+  std::vector<std::string> extra;  ///< More arguments (--server-arg).
   std::string log_path;
 };
 
@@ -165,10 +177,10 @@ class StatusCollector : public dds::DataReaderListener {
  public:
   struct Record {
     std::int64_t received_ns = 0;
-    std::int64_t server_cpu_us = -1;      ///< whole process
+    std::int64_t server_cpu_us = -1;  ///< whole process
     std::int64_t sim_thread_cpu_us = -1;  ///< the server's main thread (its simulation thread)
-    std::int64_t self_cpu_us = -1;        ///< the benchmark process
-    std::int64_t machine_busy_us = -1;    ///< every process of the machine
+    std::int64_t self_cpu_us = -1;  ///< the benchmark process
+    std::int64_t machine_busy_us = -1;  ///< every process of the machine
     msg::ServerStatus status;
   };
   void set_server_pid(pid_t pid) { server_pid_ = pid; }

@@ -92,11 +92,16 @@ Options parse(int argc, char** argv) {
   Options o;
   cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& f, const auto& value) {
     if (parse_common_option(kTool, f, value, o, usage_error)) return true;
-    if (f == "--step") o.step = static_cast<int>(cli::parse_whole(f, value(), 2, 4096, usage_error));
-    else if (f == "--max") o.max = static_cast<int>(cli::parse_whole(f, value(), 2, 4096, usage_error));
-    else if (f == "--seconds-per-step") o.seconds_per_step = cli::parse_number(f, value(), 1, 600, usage_error);
-    else if (f == "--publishers") o.publishers = static_cast<int>(cli::parse_whole(f, value(), 1, 64, usage_error));
-    else return false;
+    if (f == "--step")
+      o.step = static_cast<int>(cli::parse_whole(f, value(), 2, 4096, usage_error));
+    else if (f == "--max")
+      o.max = static_cast<int>(cli::parse_whole(f, value(), 2, 4096, usage_error));
+    else if (f == "--seconds-per-step")
+      o.seconds_per_step = cli::parse_number(f, value(), 1, 600, usage_error);
+    else if (f == "--publishers")
+      o.publishers = static_cast<int>(cli::parse_whole(f, value(), 1, 64, usage_error));
+    else
+      return false;
     return true;
   });
   if (o.step % 2 != 0)
@@ -112,7 +117,8 @@ Options parse(int argc, char** argv) {
 /// the server sees a steady stream rather than one burst per period.
 class Publishers {
  public:
-  Publishers(int count, int domain, const std::string& profile, const std::string& profiles_file, double hz, int max_hands)
+  Publishers(int count, int domain, const std::string& profile, const std::string& profiles_file, double hz,
+             int max_hands)
       : hz_(hz) {
     for (int p = 0; p < count; ++p) {
       participants_.push_back(std::make_unique<idl::DdsParticipant>(domain, profile, profiles_file));
@@ -123,11 +129,13 @@ class Publishers {
   ~Publishers() { stop(); }
 
   bool matched(double timeout_s) {
-    return wait_until([&] {
-      for (auto* w : writers_)
-        if (matched_readers(w) == 0) return false;
-      return true;
-    }, timeout_s);
+    return wait_until(
+        [&] {
+          for (auto* w : writers_)
+            if (matched_readers(w) == 0) return false;
+          return true;
+        },
+        timeout_s);
   }
   void start() {
     t0_ = Clock::now();
@@ -209,9 +217,13 @@ struct Step {
   /// falls (samples batch up per wake-up, inputs get dropped), so such levels say little about it.
   bool saturated() const { return machine_cpu_pct() >= 80.0 * std::thread::hardware_concurrency(); }
   /// Inputs the publishers wrote that the server never accepted, %.
-  double input_loss_pct() const { return published_per_hand_hz > 0 ? 100 * (1 - accepted_per_hand_hz / published_per_hand_hz) : 0; }
+  double input_loss_pct() const {
+    return published_per_hand_hz > 0 ? 100 * (1 - accepted_per_hand_hz / published_per_hand_hz) : 0;
+  }
   double cpu_us_per_tick() const { return ticks ? server_cpu_us / static_cast<double>(ticks) : 0; }
-  double cpu_us_per_hand_tick() const { return hands && ticks ? server_cpu_us / (static_cast<double>(hands) * static_cast<double>(ticks)) : 0; }
+  double cpu_us_per_hand_tick() const {
+    return hands && ticks ? server_cpu_us / (static_cast<double>(hands) * static_cast<double>(ticks)) : 0;
+  }
 };
 
 /// Measures the current level between two ServerStatus samples about `seconds` apart.
@@ -224,16 +236,20 @@ Step measure(int hands, int attempt, const Options& o, StatusCollector& status, 
   const auto start = status.wait_for(t_set, 6, [&](const msg::ServerStatus& s) { return s.hands() == hands; });
   if (!start) {
     const auto last = status.latest();
-    st.why = "the server did not report " + std::to_string(hands) + " hands within 6 s (last status: " +
-             (last ? std::to_string(last->status.hands()) : std::string("none")) + ")";
+    st.why = "the server did not report " + std::to_string(hands) +
+             " hands within 6 s (last status: " + (last ? std::to_string(last->status.hands()) : std::string("none")) +
+             ")";
     return st;
   }
   const std::uint64_t written0 = pubs.written(), skipped0 = pubs.skipped_periods();
   const auto threads0 = threads_cpu_us(server);
   const std::int64_t threads_t0 = now_ns();
-  const auto end = status.wait_for(start->received_ns + static_cast<std::int64_t>((o.seconds_per_step - 0.5) * 1e9), o.seconds_per_step + 5);
+  const auto end = status.wait_for(start->received_ns + static_cast<std::int64_t>((o.seconds_per_step - 0.5) * 1e9),
+                                   o.seconds_per_step + 5);
   if (!end) {
-    st.why = stop_requested() ? "interrupted" : "no ServerStatus for " + std::to_string(static_cast<int>(o.seconds_per_step + 5)) + " s";
+    st.why = stop_requested()
+                 ? "interrupted"
+                 : "no ServerStatus for " + std::to_string(static_cast<int>(o.seconds_per_step + 5)) + " s";
     return st;
   }
   const std::uint64_t written1 = pubs.written(), skipped1 = pubs.skipped_periods();
@@ -244,7 +260,8 @@ Step measure(int hands, int attempt, const Options& o, StatusCollector& status, 
     const double d = static_cast<double>(us - (it == threads0.end() ? 0 : it->second));
     if (d > 0) st.threads_cpu_pct.emplace_back(tid, d / (threads_s * 1e6) * 100);
   }
-  std::sort(st.threads_cpu_pct.begin(), st.threads_cpu_pct.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+  std::sort(st.threads_cpu_pct.begin(), st.threads_cpu_pct.end(),
+            [](const auto& a, const auto& b) { return a.second > b.second; });
   st.window_s = static_cast<double>(end->received_ns - start->received_ns) * 1e-9;
   st.ticks = end->status.tick() - start->status.tick();
   st.missed = end->status.missed_ticks() - start->status.missed_ticks();
@@ -267,7 +284,8 @@ Step measure(int hands, int attempt, const Options& o, StatusCollector& status, 
   st.skipped_periods = skipped1 - skipped0;
   if (hands > 0) {
     st.published_per_hand_hz = static_cast<double>(written1 - written0) / (hands * st.window_s);
-    st.accepted_per_hand_hz = static_cast<double>(end->status.inputs_accepted() - start->status.inputs_accepted()) / (hands * st.window_s);
+    st.accepted_per_hand_hz =
+        static_cast<double>(end->status.inputs_accepted() - start->status.inputs_accepted()) / (hands * st.window_s);
   }
   std::vector<std::string> why;
   if (st.missed > 0) why.push_back(std::to_string(st.missed) + " ticks missed");
@@ -286,25 +304,30 @@ Step measure(int hands, int attempt, const Options& o, StatusCollector& status, 
 }
 
 void print_header() {
-  std::cout << std::right << std::setw(6) << "hands" << std::setw(4) << "try" << std::setw(7) << "ticks" << std::setw(7) << "missed"
-            << std::setw(10) << "tick p50" << std::setw(10) << "tick max" << std::setw(9) << "srv cpu" << std::setw(9) << "sim thr"
-            << std::setw(9) << "pub cpu" << std::setw(8) << "others" << std::setw(11) << "us/tick" << std::setw(13) << "us/hand/tick" << std::setw(9) << "pub Hz"
-            << std::setw(9) << "acc Hz" << std::setw(9) << "machine" << "  result\n";
+  std::cout << std::right << std::setw(6) << "hands" << std::setw(4) << "try" << std::setw(7) << "ticks" << std::setw(7)
+            << "missed" << std::setw(10) << "tick p50" << std::setw(10) << "tick max" << std::setw(9) << "srv cpu"
+            << std::setw(9) << "sim thr" << std::setw(9) << "pub cpu" << std::setw(8) << "others" << std::setw(11)
+            << "us/tick" << std::setw(13) << "us/hand/tick" << std::setw(9) << "pub Hz" << std::setw(9) << "acc Hz"
+            << std::setw(9) << "machine"
+            << "  result\n";
 }
 
 void print_step(const Step& s) {
-  std::cout << std::right << std::fixed << std::setw(6) << s.hands << std::setw(4) << s.attempt << std::setw(7) << s.ticks << std::setw(7)
-            << s.missed << std::setprecision(0) << std::setw(10) << s.tick_us_p50 << std::setw(10) << s.tick_us_max << std::setprecision(1)
-            << std::setw(8) << (s.window_s > 0 ? s.server_cpu_pct() : 0) << "%" << std::setw(8) << (s.window_s > 0 ? s.sim_cpu_pct() : 0)
-            << "%" << std::setw(8) << (s.window_s > 0 ? s.pub_cpu_pct() : 0) << "%" << std::setw(7) << (s.window_s > 0 ? s.other_cpu_pct() : 0) << "%" << std::setprecision(0) << std::setw(11)
-            << s.cpu_us_per_tick() << std::setprecision(2) << std::setw(13) << s.cpu_us_per_hand_tick() << std::setprecision(1)
-            << std::setw(9) << s.published_per_hand_hz << std::setw(9) << s.accepted_per_hand_hz << std::setw(8)
-            << (s.window_s > 0 ? s.machine_cpu_pct() : 0) << (s.saturated() ? "*" : "%") << "  "
+  std::cout << std::right << std::fixed << std::setw(6) << s.hands << std::setw(4) << s.attempt << std::setw(7)
+            << s.ticks << std::setw(7) << s.missed << std::setprecision(0) << std::setw(10) << s.tick_us_p50
+            << std::setw(10) << s.tick_us_max << std::setprecision(1) << std::setw(8)
+            << (s.window_s > 0 ? s.server_cpu_pct() : 0) << "%" << std::setw(8)
+            << (s.window_s > 0 ? s.sim_cpu_pct() : 0) << "%" << std::setw(8) << (s.window_s > 0 ? s.pub_cpu_pct() : 0)
+            << "%" << std::setw(7) << (s.window_s > 0 ? s.other_cpu_pct() : 0) << "%" << std::setprecision(0)
+            << std::setw(11) << s.cpu_us_per_tick() << std::setprecision(2) << std::setw(13) << s.cpu_us_per_hand_tick()
+            << std::setprecision(1) << std::setw(9) << s.published_per_hand_hz << std::setw(9) << s.accepted_per_hand_hz
+            << std::setw(8) << (s.window_s > 0 ? s.machine_cpu_pct() : 0) << (s.saturated() ? "*" : "%") << "  "
             << (s.sustained ? "sustained" : "NOT sustained: " + s.why) << "\n";
   std::cout.flush();
   std::cerr << "  server threads (tid: % of one core):";
   for (std::size_t i = 0; i < s.threads_cpu_pct.size() && i < 6; ++i)
-    std::cerr << " " << s.threads_cpu_pct[i].first << ": " << std::fixed << std::setprecision(1) << s.threads_cpu_pct[i].second;
+    std::cerr << " " << s.threads_cpu_pct[i].first << ": " << std::fixed << std::setprecision(1)
+              << s.threads_cpu_pct[i].second;
   std::cerr << "\n";
 }
 
@@ -348,7 +371,8 @@ int run(const Options& o) {
   load_profiles(o.profiles_file, o.profile);
   std::string loadavg;
   std::getline(std::ifstream("/proc/loadavg"), loadavg);
-  const std::string tmp = std::filesystem::temp_directory_path() / ("telegrasp-bench-scale-" + std::to_string(::getpid()));
+  const std::string tmp =
+      std::filesystem::temp_directory_path() / ("telegrasp-bench-scale-" + std::to_string(::getpid()));
   const bool own_server_log = o.server_log.empty();
   const std::string config = tmp + "-server.conf";
   struct RemoveOnExit {
@@ -357,7 +381,8 @@ int run(const Options& o) {
   } remove_config{config};
   {
     std::ofstream c(config);
-    c << "# written by telegrasp-bench-scale: room for every hand of the run\nmax_hands: " << std::max(o.max, 256) << "\n";
+    c << "# written by telegrasp-bench-scale: room for every hand of the run\nmax_hands: " << std::max(o.max, 256)
+      << "\n";
     if (!c) throw std::runtime_error("cannot write " + config);
   }
   ServerOptions so;
@@ -386,11 +411,13 @@ int run(const Options& o) {
   std::string stop_reason;
   {
     Publishers pubs(o.publishers, o.domain, o.profile, o.profiles_file, o.sample_hz, o.max);
-    if (!pubs.matched(15)) throw std::runtime_error("the publisher participants did not match the server's ControllerState reader within 15 s");
+    if (!pubs.matched(15))
+      throw std::runtime_error(
+          "the publisher participants did not match the server's ControllerState reader within 15 s");
     pubs.start();
-    std::cout << "telegrasp-bench-scale: " << o.publishers << " publisher threads at " << o.sample_hz << " Hz, +" << o.step << " hands per "
-              << o.seconds_per_step << " s level, up to " << o.max << "; late latching " << (o.late_latch ? "on" : "off")
-              << "; CPU in % of one core\n";
+    std::cout << "telegrasp-bench-scale: " << o.publishers << " publisher threads at " << o.sample_hz << " Hz, +"
+              << o.step << " hands per " << o.seconds_per_step << " s level, up to " << o.max << "; late latching "
+              << (o.late_latch ? "on" : "off") << "; CPU in % of one core\n";
     print_header();
     for (int hands = 0;; hands = std::min(hands + o.step, o.max)) {
       pubs.set_hands(hands);
@@ -453,13 +480,15 @@ int run(const Options& o) {
   const double per_hand_tick = at_sustained ? steps[*at_sustained].cpu_us_per_hand_tick() : 0;
   const double per_hand_tick_unsaturated = at_unsaturated ? steps[*at_unsaturated].cpu_us_per_hand_tick() : 0;
 
-  std::cout << "hands sustained at " << o.sample_hz << " Hz with no missed tick: " << hands_sustained << " (stop: " << stop_reason << ")\n"
+  std::cout << "hands sustained at " << o.sample_hz << " Hz with no missed tick: " << hands_sustained
+            << " (stop: " << stop_reason << ")\n"
             << std::setprecision(2) << "server CPU per hand per tick at that level: " << per_hand_tick
-            << " us (all threads, fixed cost included); marginal " << slope << " us/hand/tick over a fixed " << std::setprecision(0)
-            << intercept << " us/tick (least squares over the sustained, unsaturated levels)\n"
-            << std::setprecision(2) << "largest unsaturated level (machine < 80% busy; * marks saturated levels): " << hands_unsaturated
-            << " hands, " << per_hand_tick_unsaturated << " us/hand/tick; largest sustained level with <= 1% inputs lost: "
-            << hands_lossless << " hands\n"
+            << " us (all threads, fixed cost included); marginal " << slope << " us/hand/tick over a fixed "
+            << std::setprecision(0) << intercept << " us/tick (least squares over the sustained, unsaturated levels)\n"
+            << std::setprecision(2)
+            << "largest unsaturated level (machine < 80% busy; * marks saturated levels): " << hands_unsaturated
+            << " hands, " << per_hand_tick_unsaturated
+            << " us/hand/tick; largest sustained level with <= 1% inputs lost: " << hands_lossless << " hands\n"
             << "target >= 128 hands: " << (hands_sustained >= 128 ? "met" : "NOT met") << "\n";
 
   if (!o.json.empty()) {

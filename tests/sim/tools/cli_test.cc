@@ -72,9 +72,12 @@ TEST(CliTest, OptionLoopHandsOverEachArgumentInOrderWithItsValue) {
   Argv a({"--name", "x", "FILE", "--flag", "--tag", "1", "--tag", "2"});
   std::vector<std::string> seen;
   for_each_option(a.argc(), a.pointers.data(), "usage", refuse, [&](const std::string& arg, const auto& value) {
-    if (arg == "--name" || arg == "--tag") seen.push_back(arg + "=" + value());
-    else if (arg == "--flag" || !is_option(arg)) seen.push_back(arg);
-    else return false;
+    if (arg == "--name" || arg == "--tag")
+      seen.push_back(arg + "=" + value());
+    else if (arg == "--flag" || !is_option(arg))
+      seen.push_back(arg);
+    else
+      return false;
     return true;
   });
   EXPECT_EQ(seen, (std::vector<std::string>{"--name=x", "FILE", "--flag", "--tag=1", "--tag=2"}));

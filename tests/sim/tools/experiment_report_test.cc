@@ -382,12 +382,12 @@ TEST(ExperimentReportTest, RepresentativeGraspFollowsTheStatedOrder) {
     if (hand) give_hand(r, rig);
     run.records.push_back(r);
   };
-  add("precise", "experienced", 1, true, false);   // no hand: never drawn
-  add("precise", "experienced", 1, false, true);   // not held
-  add("discrete", "experienced", 2, true, true);   // not precise
+  add("precise", "experienced", 1, true, false);  // no hand: never drawn
+  add("precise", "experienced", 1, false, true);  // not held
+  add("discrete", "experienced", 2, true, true);  // not precise
   add("precise", "inexperienced", 5, true, true);  // not experienced
-  add("precise", "experienced", 3, true, true);    // the one
-  add("precise", "experienced", 4, true, true);    // a later participant
+  add("precise", "experienced", 3, true, true);  // the one
+  add("precise", "experienced", 4, true, true);  // a later participant
   const Record* r = representative_grasp(run, "014_lemon");
   ASSERT_NE(r, nullptr);
   EXPECT_EQ(r, &run.records[4]);
@@ -400,9 +400,10 @@ TEST(ExperimentReportTest, HtmlDrawsOneGraspPerObjectWithoutUrls) {
   ExperimentRun run = handmade_run();
   GraspPictureInputs pictures;
   pictures.rig = std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")));
-  pictures.models["014_lemon"] = sim::make_object_model("014_lemon", sim::testing::uv_sphere_mesh(0.027, 24, 24), 0.05, "test");
-  pictures.models["003_cracker_box"] =
-      sim::make_object_model("003_cracker_box", sim::testing::box_mesh(Eigen::Vector3d(0.08, 0.03, 0.105)), 0.4, "test");
+  pictures.models["014_lemon"] =
+      sim::make_object_model("014_lemon", sim::testing::uv_sphere_mesh(0.027, 24, 24), 0.05, "test");
+  pictures.models["003_cracker_box"] = sim::make_object_model(
+      "003_cracker_box", sim::testing::box_mesh(Eigen::Vector3d(0.08, 0.03, 0.105)), 0.4, "test");
   for (Record& r : run.records)
     if (r.object != "999_custom" && r.grasped) give_hand(r, *pictures.rig);
   const std::string html = html_report(run, paper(), nullptr, &pictures);
@@ -475,7 +476,8 @@ TEST(PaperResultsTest, ShippedFileHasThirtyObjectsInThePapersOrder) {
 }
 
 TEST(PaperResultsTest, BadNumberNamesFileLineAndColumn) {
-  const auto path = std::filesystem::temp_directory_path() / ("telegrasp_paper_bad_" + std::to_string(::getpid()) + ".csv");
+  const auto path =
+      std::filesystem::temp_directory_path() / ("telegrasp_paper_bad_" + std::to_string(::getpid()) + ".csv");
   {
     std::ofstream out(path);
     out << "label,object,time_s_experienced,time_s_inexperienced,err_experienced,err_inexperienced\n"
@@ -486,8 +488,9 @@ TEST(PaperResultsTest, BadNumberNamesFileLineAndColumn) {
     load_paper_results(path.string());
     FAIL() << "expected an error for 1.8x3";
   } catch (const std::runtime_error& e) {
-    EXPECT_EQ(std::string(e.what()), path.string() + " line 3 column 4 (time_s_inexperienced): '1.8x3' is not a "
-                                                     "non-negative number");
+    EXPECT_EQ(std::string(e.what()), path.string() +
+                                         " line 3 column 4 (time_s_inexperienced): '1.8x3' is not a "
+                                         "non-negative number");
   }
   {
     std::ofstream out(path);
@@ -520,9 +523,11 @@ TEST(GraspRecordJsonTest, RoundTrips) {
   r.participant = 4;
   r.contacts = {{"palm", {0.1, 0.2, 0.3}, {0, 0, 1}, {-0.01, 0.02, 0.03}, {1, 0, 0}}};
   // The hand at the grasp tick, in the object's frame (written rounded to 1e-6).
-  r.grasp_tick_X_WorldObject = Eigen::Translation3d(0.45, -0.05, 0.027) * Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ());
-  r.grasp_tick_hand = {{"palm", Eigen::Translation3d(0.01, 0.02, 0.06) * Eigen::AngleAxisd(-2.0, Eigen::Vector3d(1, 1, 0).normalized())},
-                       {"index_dist", Eigen::Isometry3d(Eigen::Translation3d(0.03, 0.0, 0.01))}};
+  r.grasp_tick_X_WorldObject =
+      Eigen::Translation3d(0.45, -0.05, 0.027) * Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ());
+  r.grasp_tick_hand = {
+      {"palm", Eigen::Translation3d(0.01, 0.02, 0.06) * Eigen::AngleAxisd(-2.0, Eigen::Vector3d(1, 1, 0).normalized())},
+      {"index_dist", Eigen::Isometry3d(Eigen::Translation3d(0.03, 0.0, 0.01))}};
   const Record back = record_from_json(record_json(r));
   EXPECT_EQ(record_json(back), record_json(r));
   EXPECT_EQ(back.participant, 4);

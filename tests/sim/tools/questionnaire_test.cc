@@ -136,8 +136,9 @@ TEST(QuestionnaireParseTest, ColumnsInAnyOrderCommentsAndBlankLines) {
   for (int q = kQuestionCount; q >= 1; --q) h += ",q" + std::to_string(q);
   h += ",Group,ID\r\n";
   std::string r = "\"late, tired\"";
-  for (int q = kQuestionCount; q >= 1; --q) r += "," + (kMixed[static_cast<std::size_t>(q - 1)] > 0 ? std::string("+") : "") +
-                                                std::to_string(kMixed[static_cast<std::size_t>(q - 1)]);
+  for (int q = kQuestionCount; q >= 1; --q)
+    r += "," + (kMixed[static_cast<std::size_t>(q - 1)] > 0 ? std::string("+") : "") +
+         std::to_string(kMixed[static_cast<std::size_t>(q - 1)]);
   r += ",experienced,p9\r\n";
   std::istringstream in("# answers of the pilot\n\n" + h + "\n# first participant\n" + r);
   const QuestionnaireSummary s = score_questionnaire(in, "pilot.csv");
@@ -161,18 +162,18 @@ TEST(QuestionnaireParseTest, RejectsBadRowsNamingLineAndColumnAndScoresTheRest) 
   std::string answer_word = row("p8", "experienced", kMixed);
   answer_word.replace(answer_word.rfind(",3"), 2, ",agree");  // Q14
 
-  std::istringstream in(header() +                                 // line 1
-                        row("p1", "experienced", kAllThree) +      // line 2: valid
-                        "\n" +                                     // line 3: skipped
-                        "# a comment\n" +                          // line 4: skipped
-                        row("p3", "experienced", q7_out) +         // line 5
-                        q2_missing +                               // line 6
-                        q9_fraction +                              // line 7
-                        row("p1", "inexperienced", kIdeal) +       // line 8: duplicate id
-                        short_row +                                // line 9
-                        no_group +                                 // line 10
-                        answer_word +                              // line 11
-                        row("p2", "inexperienced", kIdeal));       // line 12: valid
+  std::istringstream in(header() +  // line 1
+                        row("p1", "experienced", kAllThree) +  // line 2: valid
+                        "\n" +  // line 3: skipped
+                        "# a comment\n" +  // line 4: skipped
+                        row("p3", "experienced", q7_out) +  // line 5
+                        q2_missing +  // line 6
+                        q9_fraction +  // line 7
+                        row("p1", "inexperienced", kIdeal) +  // line 8: duplicate id
+                        short_row +  // line 9
+                        no_group +  // line 10
+                        answer_word +  // line 11
+                        row("p2", "inexperienced", kIdeal));  // line 12: valid
   const QuestionnaireSummary s = score_questionnaire(in, "answers.csv");
 
   ASSERT_EQ(s.participants.size(), 2u);

@@ -23,16 +23,16 @@ enum Topics : unsigned {
   kGraspEvents = 1u << 3,
   kSceneStates = 1u << 4,
   kServerStatuses = 1u << 5,
-  kObjectGeometries = 1u << 6,         ///< Each model's mesh and mass, once per model (late joiners too).
+  kObjectGeometries = 1u << 6,  ///< Each model's mesh and mass, once per model (late joiners too).
   kAllTopics = (1u << 7) - 1,
 };
 
 struct ClientOptions {
-  std::string client_id;               ///< Names this client's hands; 1..64 characters.
-  int domain = 0;                      ///< DDS domain, 0..232.
-  std::string profile = "loopback";    ///< Participant profile: loopback, lan, wan.
-  std::string profiles_file;           ///< "": $TELEGRASP_PROFILES, else the shipped file.
-  unsigned topics = kAllTopics;        ///< Outputs to subscribe to.
+  std::string client_id;  ///< Names this client's hands; 1..64 characters.
+  int domain = 0;  ///< DDS domain, 0..232.
+  std::string profile = "loopback";  ///< Participant profile: loopback, lan, wan.
+  std::string profiles_file;  ///< "": $TELEGRASP_PROFILES, else the shipped file.
+  unsigned topics = kAllTopics;  ///< Outputs to subscribe to.
 };
 
 /// One DDS participant with a writer per input topic and a reader per subscribed output.

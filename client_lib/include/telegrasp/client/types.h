@@ -29,12 +29,12 @@ struct HandKey {
 struct ControllerSample {
   HandSide side = HandSide::kRight;
   Eigen::Isometry3d X_WorldPalm = Eigen::Isometry3d::Identity();
-  double trigger = 0;                  ///< 0 open .. 1 closed.
-  std::vector<double> curls;           ///< Empty, or five values in [0, 1] (thumb first).
-  std::uint32_t buttons = 0;           ///< BUTTON_* bits of the IDL.
-  bool tracking_valid = true;          ///< False: the server keeps the last pose.
-  std::uint64_t sequence_number = 0;   ///< 0: Client::publish numbers the hand's samples 1, 2, 3 ...
-  std::int64_t client_time_ns = 0;     ///< 0: Client::publish stamps steady_clock now.
+  double trigger = 0;  ///< 0 open .. 1 closed.
+  std::vector<double> curls;  ///< Empty, or five values in [0, 1] (thumb first).
+  std::uint32_t buttons = 0;  ///< BUTTON_* bits of the IDL.
+  bool tracking_valid = true;  ///< False: the server keeps the last pose.
+  std::uint64_t sequence_number = 0;  ///< 0: Client::publish numbers the hand's samples 1, 2, 3 ...
+  std::int64_t client_time_ns = 0;  ///< 0: Client::publish stamps steady_clock now.
   /// For a server in lockstep: the tick of the newest SceneState this sample answers (the server's
   /// next tick waits for it). Client::publish adds how many commands this client sent before it.
   std::uint64_t lockstep_tick = 0;
@@ -45,31 +45,31 @@ struct HandSkeleton {
   std::string rig;
   std::uint64_t tick = 0;
   double time = 0;
-  std::uint64_t input_sequence = 0;    ///< Newest controller sample this skeleton reflects.
+  std::uint64_t input_sequence = 0;  ///< Newest controller sample this skeleton reflects.
   std::int64_t input_client_time_ns = 0;
-  bool late_latched = false;           ///< Re-posed on that sample's arrival, fingers of the last tick.
-  bool frozen = false;                 ///< The client went silent; the hand keeps its last input.
+  bool late_latched = false;  ///< Re-posed on that sample's arrival, fingers of the last tick.
+  bool frozen = false;  ///< The client went silent; the hand keeps its last input.
   Eigen::Isometry3d X_WorldPalm = Eigen::Isometry3d::Identity();
   std::vector<Eigen::Isometry3d> X_WorldPhalanx;  ///< Rig order.
-  std::vector<double> joint_angles;               ///< rad, rig order.
+  std::vector<double> joint_angles;  ///< rad, rig order.
 };
 
 struct GraspState {
   HandKey hand;
   std::uint64_t tick = 0;
   double time = 0;
-  int selected_object = -1;            ///< -1: none.
-  int grasped_object = -1;             ///< -1: none.
+  int selected_object = -1;  ///< -1: none.
+  int grasped_object = -1;  ///< -1: none.
   double trigger = 0;
-  std::vector<bool> blocked;           ///< Per phalanx, rig order.
+  std::vector<bool> blocked;  ///< Per phalanx, rig order.
   bool palm_contact = false;
 };
 
 struct ContactPoint {
-  int phalanx = -1;                    ///< Rig index; -1 for the palm.
+  int phalanx = -1;  ///< Rig index; -1 for the palm.
   Eigen::Vector3d p_WorldContact{0, 0, 0}, n_World{0, 0, 0};
   Eigen::Vector3d p_ObjectContact{0, 0, 0}, n_Object{0, 0, 0};
-  double nd = 0;                       ///< The paper's ND, m; meaningful only if nd_hit.
+  double nd = 0;  ///< The paper's ND, m; meaningful only if nd_hit.
   bool nd_hit = false;
 };
 
@@ -87,9 +87,9 @@ struct ContactSet {
 struct CapsuleMetric {
   int phalanx = -1;
   std::string phalanx_name;
-  bool hit = false;                    ///< False: "no hit", kept apart from nd = 0.
-  double nd = 0;                       ///< m
-  double signed_distance = 0;          ///< m
+  bool hit = false;  ///< False: "no hit", kept apart from nd = 0.
+  double nd = 0;  ///< m
+  double signed_distance = 0;  ///< m
   bool blocked = false;
 };
 
@@ -98,7 +98,7 @@ using CapsuleReport [[deprecated("use CapsuleMetric")]] = CapsuleMetric;
 
 struct GraspEvent {
   enum class Kind { kGrasp, kRelease };
-  std::uint64_t event_id = 0;          ///< Unique and increasing per server run.
+  std::uint64_t event_id = 0;  ///< Unique and increasing per server run.
   Kind kind = Kind::kGrasp;
   HandKey hand;
   int object_id = -1;
@@ -108,9 +108,9 @@ struct GraspEvent {
   double object_spawn_time = 0;
   Eigen::Isometry3d X_WorldObject = Eigen::Isometry3d::Identity();
   std::uint64_t input_sequence = 0;
-  double hand_error_mm = 0;            ///< Grasp events.
-  int capsules_without_hit = 0;        ///< Grasp events.
-  std::vector<CapsuleMetric> capsules; ///< Grasp events.
+  double hand_error_mm = 0;  ///< Grasp events.
+  int capsules_without_hit = 0;  ///< Grasp events.
+  std::vector<CapsuleMetric> capsules;  ///< Grasp events.
   std::vector<ContactPoint> contacts;  ///< Grasp events.
   Eigen::Vector3d v_WorldObject{0, 0, 0};  ///< Release events: velocity handed to physics.
   Eigen::Vector3d w_WorldObject{0, 0, 0};
@@ -122,7 +122,7 @@ struct ObjectState {
   Eigen::Isometry3d X_WorldObject = Eigen::Isometry3d::Identity();
   Eigen::Vector3d v_WorldObject{0, 0, 0};
   bool held = false;
-  HandKey holder;                      ///< When held.
+  HandKey holder;  ///< When held.
   double spawn_time = 0;
 };
 
@@ -135,9 +135,9 @@ struct SceneState {
 struct SceneCommand {
   enum class Kind { kSpawn, kRemove, kReset };
   Kind kind = Kind::kSpawn;
-  std::string model;                   ///< kSpawn: a name from ServerStatus::models.
-  int object_id = -1;                  ///< kRemove.
-  bool on_table = true;                ///< kSpawn: rest on the table at (x, y, yaw), else at X_WorldObject.
+  std::string model;  ///< kSpawn: a name from ServerStatus::models.
+  int object_id = -1;  ///< kRemove.
+  bool on_table = true;  ///< kSpawn: rest on the table at (x, y, yaw), else at X_WorldObject.
   double x = 0.45, y = 0, yaw = 0;
   Eigen::Isometry3d X_WorldObject = Eigen::Isometry3d::Identity();
 };
@@ -152,7 +152,7 @@ struct ServerStatus {
   std::uint64_t inputs_accepted = 0, inputs_rejected = 0;
   std::map<std::string, std::uint64_t> rejected;  ///< Per reason, since the server started.
   std::uint64_t commands_accepted = 0, commands_rejected = 0;
-  std::vector<std::string> models;     ///< Model names a spawn command accepts.
+  std::vector<std::string> models;  ///< Model names a spawn command accepts.
 };
 
 /// One model's shape and mass as the server publishes it (ObjectGeometry), so a client needs no
@@ -160,16 +160,16 @@ struct ServerStatus {
 /// ObjectState::X_WorldObject and ContactPoint::p_ObjectContact. Client::object_geometry shares
 /// one immutable copy per mesh.
 struct ObjectGeometry {
-  std::string model;                   ///< The model name, as in ObjectState::name.
-  std::uint64_t content_hash = 0;      ///< FNV-1a 64 of the mesh as published (see telegrasp.idl); checked on arrival.
-  std::vector<Eigen::Vector3f> vertices;                 ///< m, model frame.
-  std::vector<std::array<std::uint32_t, 3>> triangles;   ///< Vertex indices, counter-clockwise seen from outside.
-  std::uint32_t vertex_count = 0;      ///< Of the whole mesh, also when it is omitted.
+  std::string model;  ///< The model name, as in ObjectState::name.
+  std::uint64_t content_hash = 0;  ///< FNV-1a 64 of the mesh as published (see telegrasp.idl); checked on arrival.
+  std::vector<Eigen::Vector3f> vertices;  ///< m, model frame.
+  std::vector<std::array<std::uint32_t, 3>> triangles;  ///< Vertex indices, counter-clockwise seen from outside.
+  std::uint32_t vertex_count = 0;  ///< Of the whole mesh, also when it is omitted.
   std::uint32_t triangle_count = 0;
-  bool mesh_omitted = false;           ///< Over the server's size limit: vertices and triangles are empty.
+  bool mesh_omitted = false;  ///< Over the server's size limit: vertices and triangles are empty.
   Eigen::Vector3d p_ObjectMin{0, 0, 0}, p_ObjectMax{0, 0, 0};  ///< Bounds of the mesh, model frame.
   double mass_kg = 0;
-  double volume_m3 = 0;                ///< Enclosed by the mesh.
+  double volume_m3 = 0;  ///< Enclosed by the mesh.
   Eigen::Vector3d inertia_diagonal{0, 0, 0};  ///< kg m^2, about the centre of mass along the model axes.
   Eigen::Vector3d p_ObjectSourceOrigin{0, 0, 0};  ///< Where the source mesh file's origin lies, model frame.
 };

@@ -67,7 +67,8 @@ class DdsParticipant {
   }
 
   eprosima::fastdds::dds::Topic* topic(const std::string& name, TypeFactory type);
-  eprosima::fastdds::dds::DataWriter* make_writer(const std::string& topic, TypeFactory type, const std::string& qos_of);
+  eprosima::fastdds::dds::DataWriter* make_writer(const std::string& topic, TypeFactory type,
+                                                  const std::string& qos_of);
   eprosima::fastdds::dds::DataReader* make_reader(const std::string& topic, TypeFactory type,
                                                   eprosima::fastdds::dds::DataReaderListener* listener,
                                                   const std::string& qos_of);

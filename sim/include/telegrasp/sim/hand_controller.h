@@ -20,7 +20,7 @@ namespace telegrasp::sim {
 
 /// How a closing finger finds the surface.
 enum class ClosingMode {
-  kPrecise,   ///< Conservative advancement within each step: contact within the tolerance, no tunnelling.
+  kPrecise,  ///< Conservative advancement within each step: contact within the tolerance, no tunnelling.
   kDiscrete,  ///< The paper's: move a whole step, then test overlap (may sink by up to one step).
 };
 
@@ -33,7 +33,7 @@ const char* closing_mode_name(ClosingMode mode);
 /// How "nearest object" is measured for object selection.
 enum class SelectionMetric {
   kSurface,  ///< Distance from the selection sphere's centre to the object's surface (default).
-  kOrigin,   ///< Distance to the object's origin (centre of mass), as in the paper.
+  kOrigin,  ///< Distance to the object's origin (centre of mass), as in the paper.
 };
 
 /// Tunables of the grasp system (not of the hand: those live in the HandRig).
@@ -41,14 +41,14 @@ struct GraspSettings {
   ClosingMode mode = ClosingMode::kPrecise;
   SelectionMetric selection = SelectionMetric::kSurface;
   double contact_tolerance = 0.05e-3;  ///< Precise mode: a blocked capsule's gap lies in [0, this] (m).
-  double speed_scale = 1.0;            ///< Multiplies every joint's max speed.
+  double speed_scale = 1.0;  ///< Multiplies every joint's max speed.
 };
 
 /// One controller sample for one hand.
 struct ControllerInput {
   Eigen::Isometry3d X_WorldPalm = Eigen::Isometry3d::Identity();
-  double trigger = 0;          ///< 0 open .. 1 closed.
-  std::vector<double> curls;   ///< Empty, or one value in [0, 1] per finger of the rig.
+  double trigger = 0;  ///< 0 open .. 1 closed.
+  std::vector<double> curls;  ///< Empty, or one value in [0, 1] per finger of the rig.
   bool tracking_valid = true;  ///< False: keep the last pose, still apply trigger and curls.
 };
 
@@ -65,22 +65,22 @@ struct ObjectView {
 /// The paper's ND for one capsule, and the exact signed distance of its volume.
 struct CapsuleMetric {
   PhalanxId phalanx;
-  bool hit = false;             ///< The sweep found the object within its length.
-  double nd = 0;                ///< ND in metres (> 0 gap, < 0 penetration); meaningful only if hit.
-  double signed_distance = 0;   ///< Exact capsule-to-solid signed distance, metres.
+  bool hit = false;  ///< The sweep found the object within its length.
+  double nd = 0;  ///< ND in metres (> 0 gap, < 0 penetration); meaningful only if hit.
+  double signed_distance = 0;  ///< Exact capsule-to-solid signed distance, metres.
   bool blocked = false;
 };
 
 /// ND of every capsule and the HandError, taken on the tick of the grasp.
 struct GraspMetrics {
   std::vector<CapsuleMetric> capsules;
-  double hand_error_mm = 0;     ///< Sum over fingers of mean |ND| over the finger's capsules that hit.
-  int capsules_without_hit = 0; ///< Capsules whose sweep found nothing (left out of HandError).
+  double hand_error_mm = 0;  ///< Sum over fingers of mean |ND| over the finger's capsules that hit.
+  int capsules_without_hit = 0;  ///< Capsules whose sweep found nothing (left out of HandError).
 };
 
 /// A contact between a blocked phalanx (or the palm) and the grasped object.
 struct Contact {
-  PhalanxId phalanx;            ///< Invalid for the palm.
+  PhalanxId phalanx;  ///< Invalid for the palm.
   Eigen::Vector3d p_WorldContact{0, 0, 0}, n_World{0, 0, 0};
   Eigen::Vector3d p_ObjectContact{0, 0, 0}, n_Object{0, 0, 0};
   double nd = 0;
@@ -95,10 +95,10 @@ struct HandState {
   bool has_pose = false;
   double trigger = 0;
   std::vector<double> curls;
-  std::vector<double> q;                        ///< Joint angle per phalanx, rad.
-  std::vector<Eigen::Isometry3d> X_PalmPhalanx; ///< Forward kinematics of q.
-  std::vector<std::uint8_t> blocked;            ///< Per phalanx.
-  std::vector<double> blocked_angle;            ///< Joint angle when it blocked.
+  std::vector<double> q;  ///< Joint angle per phalanx, rad.
+  std::vector<Eigen::Isometry3d> X_PalmPhalanx;  ///< Forward kinematics of q.
+  std::vector<std::uint8_t> blocked;  ///< Per phalanx.
+  std::vector<double> blocked_angle;  ///< Joint angle when it blocked.
   bool palm_contact = false;
   ObjectId selected;
   ObjectId grasped;
@@ -107,7 +107,7 @@ struct HandState {
 
 /// What happened on a tick.
 struct HandTickEvents {
-  bool grasped = false;   ///< The grasp rule turned true: attach `state().grasped`.
+  bool grasped = false;  ///< The grasp rule turned true: attach `state().grasped`.
   bool released = false;  ///< The grasp rule turned false: hand `released_object` back to physics.
   ObjectId released_object;
   Eigen::Isometry3d X_WorldReleased = Eigen::Isometry3d::Identity();  ///< Its pose as the hand let go.

@@ -25,20 +25,20 @@ struct CapsuleSpec {
   Eigen::Vector3d p_PhalanxA, p_PhalanxB;  ///< Segment end points.
   double radius = 0;
   Eigen::Vector3d p_PhalanxCTc;  ///< Centre point on the palmar skin at mid-length.
-  Eigen::Vector3d p_PhalanxSp;   ///< Sweep start inside the finger.
+  Eigen::Vector3d p_PhalanxSp;  ///< Sweep start inside the finger.
 };
 
 /// One phalanx: a revolute joint at its frame origin, and an optional capsule.
 struct PhalanxSpec {
   std::string name;
-  int finger = 0;                 ///< Index into HandRig::fingers().
-  int parent = -1;                ///< Phalanx index of the parent, -1 for the palm.
+  int finger = 0;  ///< Index into HandRig::fingers().
+  int parent = -1;  ///< Phalanx index of the parent, -1 for the palm.
   Eigen::Isometry3d X_ParentJoint = Eigen::Isometry3d::Identity();  ///< Joint frame at angle 0.
   Eigen::Vector3d axis = Eigen::Vector3d::UnitY();  ///< Unit axis in the joint frame.
-  double open = 0, closed = 0;    ///< Radians at trigger 0 and 1.
-  double min = 0, max = 0;        ///< Radian limits.
-  double max_speed = 0;           ///< rad/s.
-  double length = 0;              ///< Display length along +x.
+  double open = 0, closed = 0;  ///< Radians at trigger 0 and 1.
+  double min = 0, max = 0;  ///< Radian limits.
+  double max_speed = 0;  ///< rad/s.
+  double length = 0;  ///< Display length along +x.
   std::optional<CapsuleSpec> capsule;
 };
 

@@ -9,9 +9,10 @@ namespace telegrasp::sim {
 
 /// Mass properties of a solid bounded by a closed, outward-facing mesh.
 struct MassProperties {
-  double volume = 0;                               ///< m^3, > 0 for a valid closed mesh.
-  Eigen::Vector3d centroid{0, 0, 0};               ///< Centre of mass, mesh frame.
-  Eigen::Matrix3d inertia_per_density = Eigen::Matrix3d::Zero();  ///< About the centroid, mesh axes; times density = kg m^2.
+  double volume = 0;  ///< m^3, > 0 for a valid closed mesh.
+  Eigen::Vector3d centroid{0, 0, 0};  ///< Centre of mass, mesh frame.
+  Eigen::Matrix3d inertia_per_density =
+      Eigen::Matrix3d::Zero();  ///< About the centroid, mesh axes; times density = kg m^2.
 };
 
 /// Exact polyhedral mass properties (divergence theorem over the triangles).

@@ -15,19 +15,19 @@ namespace telegrasp::sim {
 
 /// Closest point on the mesh surface to a query point.
 struct PointQuery {
-  bool found = false;               ///< False when nothing lies within max_distance.
+  bool found = false;  ///< False when nothing lies within max_distance.
   Eigen::Vector3d point_on_mesh{0, 0, 0};
   Eigen::Vector3d normal{0, 0, 0};  ///< Outward unit angle-weighted pseudo-normal at point_on_mesh.
-  double distance = 0;              ///< Unsigned distance, >= 0.
-  double signed_distance = 0;       ///< Negative inside the (closed) mesh.
+  double distance = 0;  ///< Unsigned distance, >= 0.
+  double signed_distance = 0;  ///< Negative inside the (closed) mesh.
   std::uint32_t triangle = 0;
 };
 
 /// Closest pair between a segment and the mesh surface.
 struct SegmentQuery {
-  bool found = false;               ///< False when nothing lies within max_distance.
-  double distance = 0;              ///< Unsigned distance between segment and surface, >= 0.
-  double segment_t = 0;             ///< Closest point on the segment = a + t (b - a), t in [0, 1].
+  bool found = false;  ///< False when nothing lies within max_distance.
+  double distance = 0;  ///< Unsigned distance between segment and surface, >= 0.
+  double segment_t = 0;  ///< Closest point on the segment = a + t (b - a), t in [0, 1].
   Eigen::Vector3d point_on_segment{0, 0, 0};
   Eigen::Vector3d point_on_mesh{0, 0, 0};
   Eigen::Vector3d normal{0, 0, 0};  ///< Outward unit pseudo-normal at point_on_mesh.
@@ -36,12 +36,12 @@ struct SegmentQuery {
 
 /// First contact of a sphere swept along a ray.
 struct SweepHit {
-  bool hit = false;                 ///< False when no contact within max_length.
-  bool started_inside = false;      ///< The sweep origin lies inside the closed mesh.
+  bool hit = false;  ///< False when no contact within max_length.
+  bool started_inside = false;  ///< The sweep origin lies inside the closed mesh.
   /// Travel of the sphere centre along the direction at first contact: in [0, max_length], or,
   /// when started_inside, <= 0 (the entry lies behind the origin, at any distance).
   double t = 0;
-  Eigen::Vector3d point{0, 0, 0};   ///< Contact point on the mesh surface.
+  Eigen::Vector3d point{0, 0, 0};  ///< Contact point on the mesh surface.
   Eigen::Vector3d normal{0, 0, 0};  ///< Outward surface normal at the contact point.
 };
 
@@ -55,7 +55,7 @@ class MeshDistance {
 
   /// Closest surface point to `p`, searching only within `max_distance`.
   [[nodiscard]] PointQuery closest_point(const Eigen::Vector3d& p,
-      double max_distance = std::numeric_limits<double>::infinity()) const;
+                                         double max_distance = std::numeric_limits<double>::infinity()) const;
 
   /// Signed distance from `p` to the surface (negative inside).
   [[nodiscard]] double signed_distance(const Eigen::Vector3d& p) const;
@@ -67,7 +67,8 @@ class MeshDistance {
   /// `hint` names a triangle likely to be near (e.g. the previous answer's `triangle`): it only
   /// tightens the search's first bound, so it changes the speed, never the distance.
   [[nodiscard]] SegmentQuery closest_to_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-      double max_distance = std::numeric_limits<double>::infinity(), std::uint32_t hint = kNoHint) const;
+                                                double max_distance = std::numeric_limits<double>::infinity(),
+                                                std::uint32_t hint = kNoHint) const;
 
   /// True when the segment [a, b] comes within `radius` of the surface or lies inside the mesh
   /// (the capsule overlaps the solid). Early-outs, trying the `hint` triangle first.
@@ -76,15 +77,15 @@ class MeshDistance {
 
   /// Exact signed distance between the capsule (segment [a, b], `radius`) and the solid:
   /// min over segment points of signed_distance, minus radius. Positive = gap, negative = depth.
-  [[nodiscard]] double capsule_signed_distance(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                               double radius, std::uint32_t hint = kNoHint) const;
+  [[nodiscard]] double capsule_signed_distance(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius,
+                                               std::uint32_t hint = kNoHint) const;
 
   /// Sweeps a sphere of `radius` from `origin` along unit `direction` for at most `max_length`
   /// and returns the first contact with the surface. If `origin` starts inside the solid, the
   /// result has started_inside set and reports the surface found by sweeping backwards instead
   /// (t is then <= 0: the entry point lies behind the origin).
-  [[nodiscard]] SweepHit sphere_cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
-                                     double radius, double max_length) const;
+  [[nodiscard]] SweepHit sphere_cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double radius,
+                                     double max_length) const;
 
   /// True when `p` lies inside the closed mesh.
   [[nodiscard]] bool contains(const Eigen::Vector3d& p) const;
@@ -100,7 +101,7 @@ class MeshDistance {
   struct Node {
     float lo[3] = {0, 0, 0};
     float hi[3] = {0, 0, 0};
-    float radius = 0;         // rounded-up half diagonal: the box lies in this ball around its centre
+    float radius = 0;  // rounded-up half diagonal: the box lies in this ball around its centre
     std::uint32_t first = 0;  // leaf: first triangle (BVH order); inner: left child (right = first + 1)
     std::uint32_t count = 0;  // leaf: number of triangles (> 0); inner: 0
   };
@@ -121,13 +122,13 @@ class MeshDistance {
   template <class Reach, class Leaf>
   void traverse(Reach&& reach, Leaf&& leaf) const;
   [[nodiscard]] Candidate nearest_to_point(const Eigen::Vector3d& p, double max_distance) const;
-  [[nodiscard]] Candidate nearest_to_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                             double max_distance, std::uint32_t hint = kNoHint) const;
+  [[nodiscard]] Candidate nearest_to_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double max_distance,
+                                             std::uint32_t hint = kNoHint) const;
   [[nodiscard]] Eigen::Vector3d feature_normal(std::uint32_t slot, int feature) const;
   [[nodiscard]] bool sweep_forward(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double radius,
                                    double max_length, double& t, std::uint32_t& slot) const;
-  [[nodiscard]] bool sweep_exit(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double radius,
-                                double& s, std::uint32_t& slot) const;
+  [[nodiscard]] bool sweep_exit(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double radius, double& s,
+                                std::uint32_t& slot) const;
   [[nodiscard]] bool inside_by_ray_parity(const Eigen::Vector3d& p, bool& decided) const;
   [[nodiscard]] double min_signed_distance_on_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                                       double hint_t) const;
@@ -136,7 +137,7 @@ class MeshDistance {
   std::vector<Eigen::Vector3d> vertices_;
   std::vector<std::array<std::uint32_t, 3>> triangles_;
   std::vector<Eigen::Vector3d> face_normals_;
-  std::vector<Eigen::Vector3d> vertex_normals_;             // angle-weighted
+  std::vector<Eigen::Vector3d> vertex_normals_;  // angle-weighted
   std::vector<std::array<Eigen::Vector3d, 3>> edge_normals_;  // per triangle edge (v0v1, v1v2, v2v0)
   // Per-triangle arrays (triangles_, face_normals_, edge_normals_, corners_) are stored in BVH
   // leaf order; triangle_ids_ maps a slot back to the input triangle index.

@@ -16,17 +16,16 @@ class MeshLoadError : public std::runtime_error {
 
 /// What clean_mesh changed, for logs and tests.
 struct MeshCleanReport {
-  std::size_t vertices_welded = 0;       ///< Vertices merged into an earlier one.
-  std::size_t degenerate_dropped = 0;    ///< Triangles with repeated or collinear corners removed.
-  std::size_t duplicate_dropped = 0;     ///< Triangles identical to an earlier one removed.
+  std::size_t vertices_welded = 0;  ///< Vertices merged into an earlier one.
+  std::size_t degenerate_dropped = 0;  ///< Triangles with repeated or collinear corners removed.
+  std::size_t duplicate_dropped = 0;  ///< Triangles identical to an earlier one removed.
 };
 
 /// Merges vertices closer than `weld_tolerance` (metres), drops degenerate and duplicate
 /// triangles and unreferenced vertices. Triangle winding is preserved.
 /// A back-to-back pair (same corners, opposite winding) bounds no volume: both are dropped and
 /// counted in degenerate_dropped.
-TriangleMesh clean_mesh(const TriangleMesh& mesh, double weld_tolerance = 1e-7,
-                        MeshCleanReport* report = nullptr);
+TriangleMesh clean_mesh(const TriangleMesh& mesh, double weld_tolerance = 1e-7, MeshCleanReport* report = nullptr);
 
 /// Loads every triangle of every mesh in a file assimp reads (PLY, OBJ, STL, glTF, ...),
 /// applying node transforms, then clean_mesh. Units are taken as metres.

@@ -15,10 +15,10 @@ namespace telegrasp::sim {
 /// An object's geometry and mass in its own frame, whose origin is the centre of mass.
 /// Fingers are tested against `distance` (the exact mesh); physics uses a convex hull of it.
 struct ObjectModel {
-  std::string name;           ///< e.g. "032_knife".
-  std::string source;         ///< File path, or "built-in stand-in".
-  TriangleMesh mesh;          ///< Recentred: the centre of mass is the origin.
-  MeshDistance distance;      ///< BVH over `mesh` for exact queries.
+  std::string name;  ///< e.g. "032_knife".
+  std::string source;  ///< File path, or "built-in stand-in".
+  TriangleMesh mesh;  ///< Recentred: the centre of mass is the origin.
+  MeshDistance distance;  ///< BVH over `mesh` for exact queries.
   MassProperties mass_properties;
   double mass_kg = 0;
   Eigen::Vector3d p_ObjectMin{0, 0, 0}, p_ObjectMax{0, 0, 0};  ///< Bounds of `mesh`.
@@ -42,9 +42,9 @@ ObjectModelPtr make_object_model(const std::string& name, const TriangleMesh& me
 /// structure; `mass_kg` is kept as given (if > 0, else volume x 500 kg/m^3) and
 /// `p_OriginalCenterOfMass` is stored as is. Throws MeshLoadError naming `source` if the mesh has
 /// no triangle, an index past its vertices, a non-finite coordinate, or encloses no volume.
-ObjectModelPtr make_object_model_in_model_frame(const std::string& name, TriangleMesh mesh, double mass_kg,
-                                                const std::string& source,
-                                                const Eigen::Vector3d& p_OriginalCenterOfMass = Eigen::Vector3d::Zero());
+ObjectModelPtr make_object_model_in_model_frame(
+    const std::string& name, TriangleMesh mesh, double mass_kg, const std::string& source,
+    const Eigen::Vector3d& p_OriginalCenterOfMass = Eigen::Vector3d::Zero());
 
 /// Loads a mesh file as an object named after the file stem, of mass `mass_kg` (<= 0: volume x
 /// 500 kg/m^3, as make_object_model). Throws MeshLoadError naming the file.

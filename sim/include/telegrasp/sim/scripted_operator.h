@@ -19,11 +19,11 @@ namespace telegrasp::sim {
 /// How well and how fast an operator moves.
 struct OperatorSkill {
   std::string name;
-  double position_error = 0;     ///< Std dev of the grasp position error per axis, m.
+  double position_error = 0;  ///< Std dev of the grasp position error per axis, m.
   double orientation_error = 0;  ///< Std dev of the grasp orientation error, rad.
-  double reach_speed = 0.5;      ///< Mean hand speed while reaching, m/s.
-  double reaction_time = 0.3;    ///< Delay after the object appears, s.
-  double squeeze_time = 0.35;    ///< Trigger 0 -> 1, s.
+  double reach_speed = 0.5;  ///< Mean hand speed while reaching, m/s.
+  double reaction_time = 0.3;  ///< Delay after the object appears, s.
+  double squeeze_time = 0.35;  ///< Trigger 0 -> 1, s.
 };
 
 /// Built-in skill profiles: "perfect", "experienced", "inexperienced".
@@ -37,20 +37,20 @@ enum class OperatorPhase { kReact, kReach, kSqueeze, kLift, kHold, kRelease, kDo
 struct GraspPlan {
   Eigen::Isometry3d X_WorldPalm = Eigen::Isometry3d::Identity();  ///< Palm pose when closing.
   Eigen::Vector3d approach_World{0, 0, -1};  ///< Unit direction of the final approach.
-  int predicted_blocked = 0;                 ///< Capsules blocked in the offline closing.
-  bool predicted_grasp = false;              ///< The offline closing grasped, with no penetration.
+  int predicted_blocked = 0;  ///< Capsules blocked in the offline closing.
+  bool predicted_grasp = false;  ///< The offline closing grasped, with no penetration.
 };
 
 /// What closing the hand fully at a fixed palm pose on a static object gave (no physics): the
 /// trigger ramps 0 -> 1 over 0.35 s and stays closed for 0.15 s more.
 struct OfflineClosing {
-  HandController hand;         ///< The hand at the end of the close.
-  bool grasped = false;        ///< The grasp rule turned true during the close.
-  int blocked = 0;             ///< Capsules blocked at the end.
-  bool penetrating = false;    ///< A blocked capsule ended below -0.1 mm (the hand started in the object).
-  bool below_table = false;    ///< A capsule ended under the table top.
-  bool opposed = false;        ///< Two contact normals oppose (n_i . n_j < -0.5): a pinch or wrap, not a press.
-  GraspMetrics metrics{};      ///< ND and exact signed distances at the end.
+  HandController hand;  ///< The hand at the end of the close.
+  bool grasped = false;  ///< The grasp rule turned true during the close.
+  int blocked = 0;  ///< Capsules blocked at the end.
+  bool penetrating = false;  ///< A blocked capsule ended below -0.1 mm (the hand started in the object).
+  bool below_table = false;  ///< A capsule ended under the table top.
+  bool opposed = false;  ///< Two contact normals oppose (n_i . n_j < -0.5): a pinch or wrap, not a press.
+  GraspMetrics metrics{};  ///< ND and exact signed distances at the end.
 };
 OfflineClosing close_offline(const std::shared_ptr<const HandRig>& rig, const GraspSettings& settings,
                              const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject,
@@ -59,15 +59,15 @@ OfflineClosing close_offline(const std::shared_ptr<const HandRig>& rig, const Gr
 /// A search for the palm pose whose offline closing gives the lowest ND (see nd_pose_search).
 struct NdSearchSettings {
   int random_poses = 400;  ///< Random orientations and grasp-centre positions around the object.
-  int refinements = 300;   ///< Small moves (2 mm, 2 deg) from the best pose, kept when better.
-  int min_hits = 5;        ///< Capsules whose ND sweep must hit for a grasp to count.
+  int refinements = 300;  ///< Small moves (2 mm, 2 deg) from the best pose, kept when better.
+  int min_hits = 5;  ///< Capsules whose ND sweep must hit for a grasp to count.
   std::uint64_t seed = 1;
 };
 
 /// The pose an ND search kept.
 struct NdSearchResult {
   std::optional<OfflineClosing> best;  ///< Empty if no clean grasp was found.
-  double nd_mean_mm = 0;               ///< Mean |ND| over the capsules of `best` whose sweep hit.
+  double nd_mean_mm = 0;  ///< Mean |ND| over the capsules of `best` whose sweep hit.
   int poses_tried = 0, clean_grasps = 0;
 };
 
@@ -101,8 +101,8 @@ class ScriptedOperator {
                    GraspSettings settings = {}, double dt = 1.0 / 90.0);
 
   /// Starts a trial at time `t0` for the object at X_WorldObject, the hand at X_WorldPalm.
-  void begin(const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject,
-             const Eigen::Isometry3d& X_WorldPalm, double t0);
+  void begin(const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject, const Eigen::Isometry3d& X_WorldPalm,
+             double t0);
   /// The input for time `t`; `grasped` is whether the hand holds the trial's object now.
   ControllerInput next(double t, bool grasped);
 

@@ -15,11 +15,11 @@ namespace telegrasp::sim {
 
 /// One object of the evaluation protocol (shared/data/ycb/README.md), in protocol order.
 struct ProtocolObject {
-  std::string id;          ///< "002", "072-a", ...
-  std::string name;        ///< YCB file stem, e.g. "002_master_chef_can".
+  std::string id;  ///< "002", "072-a", ...
+  std::string name;  ///< YCB file stem, e.g. "002_master_chef_can".
   Eigen::Vector3d extent;  ///< Bounding-box size in metres (x, y, z), as the YCB table gives it.
-  double mass_kg;          ///< Typical real mass, for dynamics.
-  int paper_order = 0;     ///< Place in the paper's presentation order (0 = its label a, 29 = ad).
+  double mass_kg;  ///< Typical real mass, for dynamics.
+  int paper_order = 0;  ///< Place in the paper's presentation order (0 = its label a, 29 = ad).
 };
 
 /// All 30 protocol objects in the protocol's fixed order (by YCB id).

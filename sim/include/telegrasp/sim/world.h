@@ -17,9 +17,9 @@ namespace telegrasp::sim {
 
 /// Fixed parameters of a world.
 struct WorldSettings {
-  double dt = 1.0 / 90.0;                       ///< Fixed tick, seconds.
+  double dt = 1.0 / 90.0;  ///< Fixed tick, seconds.
   Eigen::Vector3d gravity{0, 0, -9.81};
-  double table_half_extent = 1.0;               ///< The table top is [-this, this]^2 at z = 0, m.
+  double table_half_extent = 1.0;  ///< The table top is [-this, this]^2 at z = 0, m.
   GraspSettings grasp;
 };
 
@@ -30,15 +30,15 @@ struct GraspEvent {
   HandId hand;
   ObjectId object;
   std::uint64_t tick = 0;
-  double time = 0;                               ///< Seconds since the world started.
-  std::optional<GraspMetrics> metrics;           ///< Grasp events.
-  std::vector<Contact> contacts;                 ///< Grasp events.
-  Eigen::Vector3d v_WorldObject{0, 0, 0};        ///< Release events: velocity handed to physics.
+  double time = 0;  ///< Seconds since the world started.
+  std::optional<GraspMetrics> metrics;  ///< Grasp events.
+  std::vector<Contact> contacts;  ///< Grasp events.
+  Eigen::Vector3d v_WorldObject{0, 0, 0};  ///< Release events: velocity handed to physics.
   Eigen::Vector3d w_WorldObject{0, 0, 0};
 };
 
-/// One physics scene with a table top at z = 0 (square, see WorldSettings), dynamic objects and hands. One thread owns it.
-/// Deterministic: the same calls in the same order give bit-identical results.
+/// One physics scene with a table top at z = 0 (square, see WorldSettings), dynamic objects and hands. One thread owns
+/// it. Deterministic: the same calls in the same order give bit-identical results.
 class World {
  public:
   explicit World(WorldSettings settings = {});

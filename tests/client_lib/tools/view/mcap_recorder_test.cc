@@ -114,7 +114,7 @@ TEST_F(McapRecorderTest, NoKeyframeOfAnEmptyModel) {
 TEST_F(McapRecorderTest, WritesAChunkOnceTheFlushIntervalHasPassed) {
   McapRecorder recorder(path_.string(), test_channels(), {.flush_interval_ns = kSecond});
   std::uint64_t now = 5 * kSecond;  // the caller's monotonic clock
-  recorder.flush_if_due(now);       // starts the interval
+  recorder.flush_if_due(now);  // starts the interval
   recorder.record(step(kStart), model_, kStart);
   recorder.flush_if_due(now += kSecond / 2);
   EXPECT_EQ(recorder.writer().chunks().size(), 0u);  // half a second: the chunk stays open

@@ -29,7 +29,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr std::uint64_t kStartNs = 1'700'000'000'000'000'000ull;  // 2023-11-14, past 2^53
-constexpr std::uint64_t kTickNs = 1'000'000;                      // 1 kHz hand state
+constexpr std::uint64_t kTickNs = 1'000'000;  // 1 kHz hand state
 constexpr int kMessages = 10'000;
 
 const char* kHandStateSchema = R"({"title":"telegrasp.HandState","type":"object","properties":{
@@ -58,8 +58,7 @@ std::vector<Sample> make_samples(int count) {
   for (std::uint64_t tick = 0; static_cast<int>(out.size()) < count; ++tick) {
     const std::uint64_t t = kStartNs + tick * kTickNs;
     const double s = static_cast<double>(tick) * 1e-3;
-    std::snprintf(buffer, sizeof buffer,
-                  R"({"seq":%d,"joints":[%.4f,%.4f,%.4f,%.4f],"grasped":%s})", seq[0]++,
+    std::snprintf(buffer, sizeof buffer, R"({"seq":%d,"joints":[%.4f,%.4f,%.4f,%.4f],"grasped":%s})", seq[0]++,
                   0.6 * std::sin(s), 0.4 * std::sin(1.3 * s), 0.5 * std::cos(0.7 * s), 0.1 * s,
                   (tick / 700) % 2 ? "true" : "false");
     out.push_back({0, t, buffer});
@@ -67,14 +66,13 @@ std::vector<Sample> make_samples(int count) {
       std::snprintf(buffer, sizeof buffer,
                     R"({"seq":%d,"parent_frame_id":"world","child_frame_id":"palm",)"
                     R"("translation":{"x":%.5f,"y":%.5f,"z":%.5f},"rotation":{"x":0,"y":0,"z":%.5f,"w":%.5f}})",
-                    seq[1]++, 0.3 + 0.05 * std::sin(s), 0.02 * std::cos(s), 0.12, std::sin(s / 2),
-                    std::cos(s / 2));
+                    seq[1]++, 0.3 + 0.05 * std::sin(s), 0.02 * std::cos(s), 0.12, std::sin(s / 2), std::cos(s / 2));
       out.push_back({1, t, buffer});
     }
     if (tick % 50 == 0 && static_cast<int>(out.size()) < count) {
       std::snprintf(buffer, sizeof buffer,
-                    R"({"seq":%d,"level":2,"message":"tick %llu: hand controller ok","name":"sim"})",
-                    seq[2]++, static_cast<unsigned long long>(tick));
+                    R"({"seq":%d,"level":2,"message":"tick %llu: hand controller ok","name":"sim"})", seq[2]++,
+                    static_cast<unsigned long long>(tick));
       out.push_back({2, t, buffer});
     }
   }
@@ -110,8 +108,11 @@ nlohmann::json channel_summary(const std::vector<Sample>& samples, std::size_t e
       last = samples[i].log_time_ns;
     }
     // Times as strings: nanoseconds since 1970 exceed a JSON number's exact range (2^53).
-    channels.push_back({{"topic", kTopics[c]}, {"schema", kSchemas[c]}, {"count", count},
-                        {"start_time_ns", std::to_string(first)}, {"end_time_ns", std::to_string(last)}});
+    channels.push_back({{"topic", kTopics[c]},
+                        {"schema", kSchemas[c]},
+                        {"count", count},
+                        {"start_time_ns", std::to_string(first)},
+                        {"end_time_ns", std::to_string(last)}});
   }
   return channels;
 }
@@ -175,10 +176,10 @@ int write_sample(const fs::path& dir) {
         {"channels", channel_summary(samples, killed_complete)}}},
   };
   std::ofstream(dir / "sample.json") << sidecar.dump(2) << '\n';
-  std::cout << "wrote " << full.string() << ": " << samples.size() << " messages in " << chunks.size()
-            << " chunks, " << fs::file_size(full) << " bytes; cut at byte " << cut << " (chunk "
-            << cut_chunk << ", " << complete << " messages before it); " << killed_path.filename().string()
-            << ": " << killed_complete << " messages in complete chunks\n";
+  std::cout << "wrote " << full.string() << ": " << samples.size() << " messages in " << chunks.size() << " chunks, "
+            << fs::file_size(full) << " bytes; cut at byte " << cut << " (chunk " << cut_chunk << ", " << complete
+            << " messages before it); " << killed_path.filename().string() << ": " << killed_complete
+            << " messages in complete chunks\n";
   return 0;
 }
 
@@ -194,10 +195,10 @@ int bench(int messages, const std::string& path) {
   const Config configs[] = {{"none", mcap::Compression::kNone, 3},
                             {"zstd-1", mcap::Compression::kZstd, 1},
                             {"zstd-3 (default)", mcap::Compression::kZstd, 3}};
-  std::printf("%d JSON messages on 3 channels, %.1f B average, %.2f MB payload; 1 MiB chunks; best of 3\n",
-              messages, static_cast<double>(payload) / messages, payload / 1e6);
-  std::printf("%-18s %10s %12s %12s %10s %8s\n", "compression", "file MB", "payload MB/s", "messages/s",
-              "chunk x", "chunks");
+  std::printf("%d JSON messages on 3 channels, %.1f B average, %.2f MB payload; 1 MiB chunks; best of 3\n", messages,
+              static_cast<double>(payload) / messages, payload / 1e6);
+  std::printf("%-18s %10s %12s %12s %10s %8s\n", "compression", "file MB", "payload MB/s", "messages/s", "chunk x",
+              "chunks");
   for (const Config& config : configs) {
     double best = 1e30;
     std::uint64_t file_size = 0, raw = 0, stored = 0, chunk_count = 0;
@@ -206,7 +207,8 @@ int bench(int messages, const std::string& path) {
       mcap::Writer writer(path, {.compression = config.compression, .zstd_level = config.level});
       const Channels channels = add_channels(writer);
       std::uint32_t seq = 0;
-      for (const Sample& s : samples) writer.write(channels.ids[s.channel], seq++, s.log_time_ns, s.log_time_ns, s.json);
+      for (const Sample& s : samples)
+        writer.write(channels.ids[s.channel], seq++, s.log_time_ns, s.log_time_ns, s.json);
       writer.close();
       best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count());
       file_size = writer.bytes_written();
@@ -217,9 +219,8 @@ int bench(int messages, const std::string& path) {
       }
       chunk_count = writer.chunks().size();
     }
-    std::printf("%-18s %10.2f %12.1f %12.0f %10.2f %8llu\n", config.name, file_size / 1e6,
-                payload / 1e6 / best, messages / best, static_cast<double>(raw) / stored,
-                static_cast<unsigned long long>(chunk_count));
+    std::printf("%-18s %10.2f %12.1f %12.0f %10.2f %8llu\n", config.name, file_size / 1e6, payload / 1e6 / best,
+                messages / best, static_cast<double>(raw) / stored, static_cast<unsigned long long>(chunk_count));
   }
   std::printf("chunk x: uncompressed / stored chunk records; payload MB/s: message bytes per second\n");
   return 0;

@@ -32,9 +32,8 @@ const std::string kMagic = std::string("\x89MCAP0\r\n", 8);
 class McapWriterTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("mcap_writer_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() / ("mcap_writer_test_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::create_directories(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
@@ -70,9 +69,9 @@ std::uint32_t bitwise_crc32(const std::string& s, std::size_t begin, std::size_t
 
 struct Record {
   std::uint8_t opcode;
-  std::size_t offset;   // of the opcode
+  std::size_t offset;  // of the opcode
   std::size_t content;  // offset of the content
-  std::uint64_t length; // of the content
+  std::uint64_t length;  // of the content
 };
 
 // Splits [begin, end) into records; fails the test if they do not tile the range exactly.
@@ -94,9 +93,9 @@ struct Layout {
   std::uint64_t summary_start = 0;
   std::uint64_t summary_offset_start = 0;
   std::uint32_t summary_crc = 0;
-  std::vector<Record> data;            // records after the Header, Data End included
-  std::vector<Record> summary;         // summary section records
-  std::vector<Record> summary_offsets; // summary offset section records
+  std::vector<Record> data;  // records after the Header, Data End included
+  std::vector<Record> summary;  // summary section records
+  std::vector<Record> summary_offsets;  // summary offset section records
 };
 
 Layout parse_layout(const std::string& s) {
@@ -153,8 +152,7 @@ Chunk parse_chunk(const std::string& s, const Record& r) {
   } else {
     EXPECT_EQ(c.compression, "zstd");
     c.records.resize(c.uncompressed_size);
-    const std::size_t n =
-        ZSTD_decompress(c.records.data(), c.records.size(), stored.data(), stored.size());
+    const std::size_t n = ZSTD_decompress(c.records.data(), c.records.size(), stored.data(), stored.size());
     EXPECT_FALSE(ZSTD_isError(n)) << ZSTD_getErrorName(n);
     EXPECT_EQ(n, c.uncompressed_size);
   }
@@ -167,9 +165,7 @@ Chunk parse_chunk(const std::string& s, const Record& r) {
   return c;
 }
 
-std::string schema_json(const std::string& title) {
-  return R"({"title":")" + title + R"(","type":"object"})";
-}
+std::string schema_json(const std::string& title) { return R"({"title":")" + title + R"(","type":"object"})"; }
 
 TEST(McapCrcTest, MatchesTheStandardCheckValue) {
   // CRC-32/ISO-HDLC of "123456789" is 0xCBF43926 (the catalogue's check value).
@@ -184,8 +180,7 @@ TEST(McapCrcTest, MatchesTheStandardCheckValue) {
   for (int i = 0; i < 40; ++i) bytes.push_back(static_cast<char>((i * 151 + 7) & 0xFF));
   for (std::size_t n = 0; n <= bytes.size(); ++n) {
     const std::string head = bytes.substr(0, n / 3), tail = bytes.substr(n / 3, n - n / 3);
-    EXPECT_EQ(crc32(std::as_bytes(std::span(tail)), crc32(std::as_bytes(std::span(head)))),
-              bitwise_crc32(bytes, 0, n))
+    EXPECT_EQ(crc32(std::as_bytes(std::span(tail)), crc32(std::as_bytes(std::span(head)))), bitwise_crc32(bytes, 0, n))
         << n << " bytes";
   }
 }
@@ -238,8 +233,7 @@ void write_three_channels(const std::string& path, Compression compression, int 
   *chunks = writer.chunks();
 }
 
-class McapWriterCompressionTest : public McapWriterTest,
-                                  public ::testing::WithParamInterface<Compression> {};
+class McapWriterCompressionTest : public McapWriterTest, public ::testing::WithParamInterface<Compression> {};
 
 TEST_P(McapWriterCompressionTest, ChunksIndexesSummaryAndOffsetsAgreeWithTheMessages) {
   constexpr int kMessages = 3000;
