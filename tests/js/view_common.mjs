@@ -47,9 +47,15 @@ export class Checks {
   }
 }
 
-// A DDS domain of its own and a scratch folder: from the pid, so parallel tests do not meet.
+// The DDS domain telegrasp-test-domains leased for this test (TELEGRASP_TEST_DOMAIN), so that
+// concurrent test runs never meet: run the script under it (ctest does).
 export function testDomain() {
-  return 100 + (process.pid % 100);
+  const domain = process.env.TELEGRASP_TEST_DOMAIN;
+  if (!/^[0-9]+$/.test(domain ?? "")) {
+    console.error("no DDS domain: run this under telegrasp-test-domains (build/bin), which leases one");
+    process.exit(2);
+  }
+  return Number(domain);
 }
 
 const children = new Set();

@@ -11,7 +11,8 @@
 //      when it moves: /tf carries the frames that moved) are poses the server published (echo's
 //      SceneState), within 20 cm of the holding palm;
 //   5. /grasp_events carries the events echo saw (same ids, objects, HandError).
-// Usage: node view_foxglove_check.mjs --bin BUILD/bin --out DIR   (ctest: view.foxglove_client)
+// Usage: BUILD/bin/telegrasp-test-domains node view_foxglove_check.mjs --bin BUILD/bin --out DIR
+//   (ctest: client_lib.view.foxglove_client; the wrapper leases the DDS domain)
 import path from "node:path";
 import { Checks, fatal, need, options, start, startBot, startServerAndView, stop, testDomain, until, sleep } from "./view_common.mjs";
 

@@ -6,7 +6,8 @@
 //   - around the holding hand's palm on screen there are pixels of the hand's colours (skin or
 //     blocked red), and around the held object pixels of its holder's colour;
 //   - the page reported no JavaScript error (window errors, page errors, console errors).
-// Usage: node view_page_check.mjs --bin BUILD/bin --out DIR   (ctest: view.browser_page)
+// Usage: BUILD/bin/telegrasp-test-domains node view_page_check.mjs --bin BUILD/bin --out DIR
+//   (ctest: client_lib.view.browser_page; the wrapper leases the DDS domain)
 import fs from "node:fs";
 import os from "node:os";
 import path from "node:path";

@@ -16,8 +16,8 @@
 //      snapshot with object meshes may fill one on its own): a kill loses about a second;
 //   5. at least one grasp event, each one echo saw (id, kind, object, hand); both of the bot's
 //      hands and the scene's objects on /scene.
-// Usage: node view_record_check.mjs --bin BUILD/bin --out DIR   (ctest: client_lib.view.record_killed,
-// under telegrasp-test-domains, which leases the DDS domain in TELEGRASP_TEST_DOMAIN)
+// Usage: BUILD/bin/telegrasp-test-domains node view_record_check.mjs --bin BUILD/bin --out DIR
+//   (ctest: client_lib.view.record_killed; the wrapper leases the DDS domain)
 import fs from "node:fs";
 import path from "node:path";
 import { Checks, fatal, options, start, startBot, stop, testDomain, until, sleep } from "./view_common.mjs";
@@ -26,7 +26,7 @@ import { McapIndexedReader, checkChannels, decompressHandlers, messagesOf, reada
 const kChunkSizeBytes = 1024 * 1024;  // the recorder's size cut (McapRecorder::Options)
 
 const { bin, out } = options();
-const domain = Number(process.env.TELEGRASP_TEST_DOMAIN ?? testDomain());
+const domain = testDomain();
 const checks = new Checks("client_lib.view.record_killed");
 const file = path.join(out, "view.mcap");
 console.log(`DDS domain ${domain}, recording ${file}`);
