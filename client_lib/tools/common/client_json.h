@@ -116,7 +116,9 @@ template <class Json>
 Json grasp_event(const client::GraspEvent& e) {
   using Kind = client::GraspEvent::Kind;
   Json j{{"event_id", e.event_id},
-         {"kind", e.kind == Kind::kGrasp ? "grasp" : e.kind == Kind::kRelease ? "release" : "unknown"},
+         {"kind", e.kind == Kind::kGrasp     ? "grasp"
+                  : e.kind == Kind::kRelease ? "release"
+                                             : "unknown"},
          {"hand", hand<Json>(e.hand)},
          {"object_id", e.object_id},
          {"object_name", e.object_name},

@@ -74,12 +74,12 @@ Json grasp_event_schema() {
                                                                        {"signed_distance_mm", number()},
                                                                        {"blocked", boolean()}}))},
               {"contacts", array_of(object("telegrasp.ContactPoint", {{"phalanx", integer()},
-                                                                     {"p_WorldContact_m", vec3()},
-                                                                     {"n_World", vec3()},
-                                                                     {"p_ObjectContact_m", vec3()},
-                                                                     {"n_Object", vec3()},
-                                                                     {"nd_mm", Json{{"type", {"number", "null"}}}},
-                                                                     {"nd_hit", boolean()}}))},
+                                                                      {"p_WorldContact_m", vec3()},
+                                                                      {"n_World", vec3()},
+                                                                      {"p_ObjectContact_m", vec3()},
+                                                                      {"n_Object", vec3()},
+                                                                      {"nd_mm", Json{{"type", {"number", "null"}}}},
+                                                                      {"nd_hit", boolean()}}))},
               {"v_WorldObject_m_per_s", vec3()},
               {"w_WorldObject_rad_per_s", vec3()}});
   s["description"] = "A grasp or release (GraspEvent topic); grasps carry the paper's metrics (nd_mm null: no hit)";
