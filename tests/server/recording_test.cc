@@ -3,6 +3,7 @@
 // truncated and corrupted files keep exactly the records before the damage; the header carries
 // the settings; the contacts CSV holds every grasp contact; fill_standins completes a mesh folder.
 #include "recorded_session.h"
+#include "scratch_dir.h"
 #include "recording.h"
 #include "replay.h"
 #include "replay_export.h"
@@ -25,22 +26,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A scratch folder of this test process (ctest runs every test as its own process, in parallel).
-const fs::path& scratch() {
-  static const fs::path dir = [] {
-    fs::path d = fs::temp_directory_path() / ("telegrasp-recording-test-" + std::to_string(::getpid()));
-    fs::create_directories(d);
-    return d;
-  }();
-  return dir;
-}
-struct RemoveScratch : ::testing::Environment {
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(scratch(), ec);
-  }
-};
-const auto* const kRemoveScratch = ::testing::AddGlobalTestEnvironment(new RemoveScratch);
+const fs::path& scratch() { return scratch_dir("telegrasp-recording-test"); }
 
 std::string read_bytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

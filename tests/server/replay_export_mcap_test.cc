@@ -4,6 +4,7 @@
 // unwritable file fail naming the file. The MCAP file itself is read by the reference reader in
 // server.replay_mcap.reference_reader (tests/js/mcap_export_check.mjs).
 #include "recorded_session.h"
+#include "scratch_dir.h"
 #include "recording.h"
 #include "replay_export_mcap.h"
 
@@ -20,21 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path& scratch() {
-  static const fs::path dir = [] {
-    fs::path d = fs::temp_directory_path() / ("telegrasp-replay-mcap-test-" + std::to_string(::getpid()));
-    fs::create_directories(d);
-    return d;
-  }();
-  return dir;
-}
-struct RemoveScratch : ::testing::Environment {
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(scratch(), ec);
-  }
-};
-const auto* const kRemoveScratch = ::testing::AddGlobalTestEnvironment(new RemoveScratch);
+const fs::path& scratch() { return scratch_dir("telegrasp-replay-mcap-test"); }
 
 // The recording's outputs and the server time of the first and last, counted here.
 struct Outputs {

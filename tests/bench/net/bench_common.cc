@@ -187,6 +187,18 @@ bool wait_until(const std::function<bool()>& ready, double timeout_s) {
 
 // ---------------------------------------------------------------------------------------------
 
+ServerOptions server_options(const CommonOptions& o) {
+  ServerOptions so;
+  so.path = o.server;
+  so.domain = o.domain;
+  so.profile = o.profile;
+  so.profiles_file = o.profiles_file;
+  so.late_latch = o.late_latch;
+  so.tick_hz = o.tick_hz;
+  so.extra = o.server_args;
+  return so;
+}
+
 std::vector<std::string> server_argv(const ServerOptions& o) {
   std::vector<std::string> a{o.path, "--domain", std::to_string(o.domain), "--profile", o.profile, "--empty-scene"};
   if (!o.profiles_file.empty()) a.insert(a.end(), {"--profiles", o.profiles_file});

@@ -185,6 +185,10 @@ struct ServerOptions {
   std::string log_path;
 };
 
+/// The server a benchmark starts, from its common options (log_path and extra arguments are the
+/// benchmark's own).
+ServerOptions server_options(const CommonOptions& o);
+
 /// The command line the server is started with (also printed in reports).
 std::vector<std::string> server_argv(const ServerOptions& o);
 

@@ -461,13 +461,7 @@ struct Bench {
 };
 
 void Bench::start_server(const std::string& tmp) {
-  so.path = o.server;
-  so.domain = o.domain;
-  so.profile = o.profile;
-  so.profiles_file = o.profiles_file;
-  so.late_latch = o.late_latch;
-  so.tick_hz = o.tick_hz;
-  so.extra = o.server_args;
+  so = server_options(o);
   so.log_path = o.server_log.empty() ? tmp + "-server.log" : o.server_log;
   main_participant.emplace(o.domain, o.profile, o.profiles_file);
   main_participant->reader<msg::ServerStatusPubSubType>(idl::kServerStatusTopic, &status);

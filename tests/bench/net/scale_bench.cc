@@ -385,13 +385,7 @@ int run(const Options& o) {
       << "\n";
     if (!c) throw std::runtime_error("cannot write " + config);
   }
-  ServerOptions so;
-  so.path = o.server;
-  so.domain = o.domain;
-  so.profile = o.profile;
-  so.profiles_file = o.profiles_file;
-  so.late_latch = o.late_latch;
-  so.tick_hz = o.tick_hz;
+  ServerOptions so = server_options(o);
   so.extra = {"--config", config};
   so.extra.insert(so.extra.end(), o.server_args.begin(), o.server_args.end());
   so.log_path = own_server_log ? tmp + "-server.log" : o.server_log;
