@@ -2,6 +2,7 @@
 // at a time.
 #pragma once
 
+#include "telegrasp/sim/grasp_quality.h"
 #include "telegrasp/sim/hand_rig.h"
 #include "telegrasp/sim/ids.h"
 #include "telegrasp/sim/object_model.h"
@@ -62,11 +63,13 @@ struct ObjectView {
   const ObjectModel* model = nullptr;
 };
 
-/// The paper's ND for one capsule, and the exact signed distance of its volume.
+/// ND of one capsule taken two ways (GRASPING.md section 4), and the exact signed distance of its volume.
 struct CapsuleMetric {
   PhalanxId phalanx;
-  bool hit = false;  ///< The sweep found the object within its length.
-  double nd = 0;  ///< ND in metres (> 0 gap, < 0 penetration); meaningful only if hit.
+  bool hit = false;  ///< nd_midlength: the sweep toward CTc found the object within its length.
+  double nd = 0;  ///< nd_midlength (the paper's ND) in metres (> 0 gap, < 0 penetration); meaningful only if hit.
+  bool contact_hit = false;  ///< nd_contact was taken (blocked capsules always have it).
+  double nd_contact = 0;  ///< ND toward the axis point nearest the capsule's contact, metres; only if contact_hit.
   double signed_distance = 0;  ///< Exact capsule-to-solid signed distance, metres.
   bool blocked = false;
 };
@@ -76,6 +79,8 @@ struct GraspMetrics {
   std::vector<CapsuleMetric> capsules;
   double hand_error_mm = 0;  ///< Sum over fingers of mean |ND| over the finger's capsules that hit.
   int capsules_without_hit = 0;  ///< Capsules whose sweep found nothing (left out of HandError).
+  double palm_signed_distance = 0;  ///< Exact signed distance of the palm volume to the object, metres.
+  GraspQuality quality;  ///< Ferrari-Canny epsilon, wrench-space volume, force closure (section 4b).
 };
 
 /// A contact between a blocked phalanx (or the palm) and the grasped object.
