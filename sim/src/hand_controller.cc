@@ -511,6 +511,7 @@ void track_input(HandState& state, const ControllerInput& input, double dt) {
       state.w_WorldPalm.setZero();
     }
     state.X_WorldPalm = input.X_WorldPalm;
+    state.X_WorldTracked = input.X_WorldPalm;
     state.has_pose = true;
   } else {
     state.v_WorldPalm.setZero();

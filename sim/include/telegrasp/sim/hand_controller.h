@@ -94,7 +94,8 @@ struct Contact {
 
 /// The mutable per-tick state of one hand.
 struct HandState {
-  Eigen::Isometry3d X_WorldPalm = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d X_WorldPalm = Eigen::Isometry3d::Identity();  ///< Resolved: the pose that grasps and is shown.
+  Eigen::Isometry3d X_WorldTracked = Eigen::Isometry3d::Identity();  ///< The controller's pose, as last tracked.
   Eigen::Vector3d v_WorldPalm{0, 0, 0};  ///< Linear velocity, m/s.
   Eigen::Vector3d w_WorldPalm{0, 0, 0};  ///< Angular velocity, rad/s.
   bool has_pose = false;
