@@ -655,6 +655,14 @@ std::optional<Eigen::Isometry3d> HandController::grasped_object_pose() const {
   return state_.X_WorldPalm * state_.X_PalmObject;
 }
 
+void HandController::reattach(const Eigen::Isometry3d& X_WorldObject) {
+  if (!state_.grasped.valid()) return;
+  state_.X_PalmObject = state_.X_WorldPalm.inverse() * X_WorldObject;
+  // The cached contacts and hold metrics were taken at the old hand-object pose.
+  contacts_key_.clear();
+  hold_metrics_key_.clear();
+}
+
 SegmentQuery HandController::closest_pair(PhalanxId id, ObjectId object, const MeshDistance& mesh,
                                           const Eigen::Vector3d& a, const Eigen::Vector3d& b, double reach) const {
   Scratch::ClosestCache& cache = scratch_->closest[id.value];

@@ -1,6 +1,8 @@
 // The physics scene: Bullet rigid bodies for the table and objects, and the hands.
 #include "telegrasp/sim/world.h"
 
+#include "telegrasp/sim/two_hand_hold.h"
+
 #include <btBulletDynamicsCommon.h>
 #include <LinearMath/btConvexHullComputer.h>
 
@@ -33,13 +35,29 @@ constexpr double kHullMargin = 0.0005;
 
 }  // namespace
 
+std::optional<TwoHandMode> parse_two_hand_mode(std::string_view name) {
+  if (name == "share") return TwoHandMode::kShare;
+  if (name == "takeover") return TwoHandMode::kTakeover;
+  return std::nullopt;
+}
+
+const char* two_hand_mode_name(TwoHandMode mode) { return mode == TwoHandMode::kTakeover ? "takeover" : "share"; }
+
 struct World::Impl {
   struct Object {
     ObjectModelPtr model;
     std::unique_ptr<btConvexHullShape> shape;
     std::unique_ptr<btDefaultMotionState> motion;
     std::unique_ptr<btRigidBody> body;
-    HandId holder;
+    std::vector<HandId> holders;  // in the order they grasped: holders[0] is the first hand
+    std::optional<TwoHandHold> shared;  // while two hands hold it, taken the tick the second joined
+
+    bool held_by(HandId hand) const { return std::find(holders.begin(), holders.end(), hand) != holders.end(); }
+    // `hand` no longer holds it; a two-hand hold ends (one restarts when a second hand joins again).
+    void forget(HandId hand) {
+      holders.erase(std::remove(holders.begin(), holders.end(), hand), holders.end());
+      shared.reset();
+    }
   };
   struct Hand {
     std::unique_ptr<HandController> controller;
@@ -99,6 +117,81 @@ struct World::Impl {
       body.setDeactivationTime(0);
     }
   }
+
+  GraspEvent event(GraspEvent::Kind kind, HandId hand_id, ObjectId object_id) const {
+    GraspEvent e;
+    e.kind = kind;
+    e.hand = hand_id;
+    e.object = object_id;
+    e.tick = tick + 1;
+    e.time = static_cast<double>(tick + 1) * settings.dt;
+    return e;
+  }
+
+  // `hand` let go of the object in `ev`: another holder keeps it, else it goes back to physics
+  // where the hand let go of it, with the hand's motion: v = v_palm + w x (p_object - p_palm).
+  void on_release(HandId hand_id, const HandController& hand, const HandTickEvents& ev) {
+    auto it = objects.find(ev.released_object.value);
+    if (it == objects.end() || !it->second.held_by(hand_id)) return;
+    Object& o = it->second;
+    o.forget(hand_id);
+    GraspEvent e = event(GraspEvent::Kind::kRelease, hand_id, ev.released_object);
+    if (o.holders.empty()) {
+      place(o, to_bt(ev.X_WorldReleased));
+      make_kinematic(o, false);
+      const HandState& s = hand.state();
+      const Eigen::Vector3d r = ev.X_WorldReleased.translation() - s.X_WorldPalm.translation();
+      e.v_WorldObject = s.v_WorldPalm + s.w_WorldPalm.cross(r);
+      e.w_WorldObject = s.w_WorldPalm;
+      o.body->setLinearVelocity(to_bt(e.v_WorldObject));
+      o.body->setAngularVelocity(to_bt(e.w_WorldObject));
+    }
+    events.push_back(std::move(e));
+  }
+
+  // `holder` lets go because another hand's grasp took its place (zero velocity: it stays held).
+  void displace(Object& o, HandId holder, ObjectId object_id) {
+    hand(holder).controller->release();
+    o.forget(holder);
+    events.push_back(event(GraspEvent::Kind::kRelease, holder, object_id));
+  }
+
+  // `hand` grasped an object: it takes it over, or joins its holder (the oldest of two lets go).
+  void on_grasp(HandId hand_id, const HandController& hand) {
+    const ObjectId oid = hand.state().grasped;
+    Object& o = object(oid);
+    const std::size_t keep = settings.two_hand_mode == TwoHandMode::kTakeover ? 0 : 1;
+    while (o.holders.size() > keep) displace(o, o.holders.front(), oid);
+    o.holders.push_back(hand_id);
+    o.shared.reset();
+    make_kinematic(o, true);
+    GraspEvent e = event(GraspEvent::Kind::kGrasp, hand_id, oid);
+    e.metrics = hand.grasp_metrics();
+    e.contacts = hand.contacts();
+    events.push_back(std::move(e));
+  }
+
+  // A held object follows its holder exactly, or both holders (two_hand_hold.h), who then hold it
+  // where it is.
+  void follow_holders(Object& o) {
+    HandController& first = *hand(o.holders.front()).controller;
+    const auto X_WorldAlone = first.grasped_object_pose();
+    assert(X_WorldAlone);
+    if (o.holders.size() == 1) {
+      place(o, to_bt(*X_WorldAlone));
+      return;
+    }
+    HandController& second = *hand(o.holders[1]).controller;
+    const Eigen::Isometry3d& X_WorldPalm1 = first.state().X_WorldPalm;
+    const Eigen::Isometry3d& X_WorldPalm2 = second.state().X_WorldPalm;
+    if (!o.shared)
+      o.shared = start_two_hand_hold(X_WorldPalm1, first.rig().palm_contact().p_PalmCenter, X_WorldPalm2,
+                                     second.rig().palm_contact().p_PalmCenter, *X_WorldAlone);
+    place(o, to_bt(two_hand_object_pose(*o.shared, X_WorldPalm1, X_WorldPalm2)));
+    const Eigen::Isometry3d X_WorldObject = to_eigen(o.body->getWorldTransform());
+    first.reattach(X_WorldObject);
+    second.reattach(X_WorldObject);
+  }
 };
 
 World::World(WorldSettings settings) : impl_(std::make_unique<Impl>()) {
@@ -151,9 +244,9 @@ ObjectId World::add_object(ObjectModelPtr model, const Eigen::Isometry3d& X_Worl
 void World::remove_object(ObjectId id) {
   auto it = impl_->objects.find(id.value);
   if (it == impl_->objects.end()) return;
-  if (it->second.holder.valid()) {
-    impl_->hand(it->second.holder).controller->release();
-    impl_->pend_release(it->second.holder, id);
+  for (HandId holder : it->second.holders) {
+    impl_->hand(holder).controller->release();
+    impl_->pend_release(holder, id);
   }
   impl_->dynamics.removeRigidBody(it->second.body.get());
   impl_->objects.erase(it);
@@ -161,7 +254,7 @@ void World::remove_object(ObjectId id) {
 
 bool World::place_object(ObjectId id, const Eigen::Isometry3d& X_WorldObject) {
   auto it = impl_->objects.find(id.value);
-  if (it == impl_->objects.end() || it->second.holder.valid()) return false;
+  if (it == impl_->objects.end() || !it->second.holders.empty()) return false;
   Impl::Object& o = it->second;
   Impl::place(o, to_bt(X_WorldObject));
   o.body->setLinearVelocity(btVector3(0, 0, 0));
@@ -190,12 +283,14 @@ void World::remove_hand(HandId id) {
   const ObjectId held = it->second.controller->release();
   if (held.valid()) {
     Impl::Object& o = impl_->object(held);
-    if (o.holder == id) {
-      // Dropped where it is, at rest: physics takes it from here.
-      o.holder = HandId();
-      impl_->make_kinematic(o, false);
-      o.body->setLinearVelocity(btVector3(0, 0, 0));
-      o.body->setAngularVelocity(btVector3(0, 0, 0));
+    if (o.held_by(id)) {
+      o.forget(id);
+      if (o.holders.empty()) {
+        // Dropped where it is, at rest: physics takes it from here.
+        impl_->make_kinematic(o, false);
+        o.body->setLinearVelocity(btVector3(0, 0, 0));
+        o.body->setAngularVelocity(btVector3(0, 0, 0));
+      }
       impl_->pend_release(id, held);
     }
   }
@@ -214,56 +309,18 @@ void World::step() {
   w.events = std::move(w.pending);
   w.pending.clear();
   const double dt = w.settings.dt;
-  const double now = static_cast<double>(w.tick + 1) * dt;
   std::vector<ObjectView> views;
   views.reserve(w.objects.size());
   for (auto& [id, o] : w.objects) views.push_back({ObjectId(id), to_eigen(o.body->getWorldTransform()), o.model.get()});
 
   for (auto& [h, hand_entry] : w.hands) {
     HandController& hand = *hand_entry.controller;
-    const HandId hand_id(h);
     const HandTickEvents ev = hand.tick(hand_entry.input, dt, views);
-    if (ev.released) {
-      auto it = w.objects.find(ev.released_object.value);
-      if (it != w.objects.end() && it->second.holder == hand_id) {
-        Impl::Object& o = it->second;
-        o.holder = HandId();
-        // Let go where the hand holds it now, with the hand's motion: v = v_palm + w x (p_object - p_palm).
-        Impl::place(o, to_bt(ev.X_WorldReleased));
-        w.make_kinematic(o, false);
-        const HandState& s = hand.state();
-        const Eigen::Vector3d r = ev.X_WorldReleased.translation() - s.X_WorldPalm.translation();
-        const Eigen::Vector3d v = s.v_WorldPalm + s.w_WorldPalm.cross(r);
-        o.body->setLinearVelocity(to_bt(v));
-        o.body->setAngularVelocity(to_bt(s.w_WorldPalm));
-        GraspEvent e{
-            GraspEvent::Kind::kRelease, hand_id, ev.released_object, w.tick + 1, now, {}, {}, v, s.w_WorldPalm};
-        w.events.push_back(std::move(e));
-      }
-    }
-    if (ev.grasped) {
-      const ObjectId oid = hand.state().grasped;
-      Impl::Object& o = w.object(oid);
-      // Hand-to-hand takeover: the newest grasp wins, the previous holder lets go.
-      if (o.holder.valid() && o.holder != hand_id) {
-        w.hand(o.holder).controller->release();
-        GraspEvent e{GraspEvent::Kind::kRelease, o.holder, oid, w.tick + 1, now, {}, {}, {0, 0, 0}, {0, 0, 0}};
-        w.events.push_back(std::move(e));
-      }
-      o.holder = hand_id;
-      w.make_kinematic(o, true);
-      GraspEvent e{GraspEvent::Kind::kGrasp, hand_id,         oid,       w.tick + 1, now,
-                   hand.grasp_metrics(),     hand.contacts(), {0, 0, 0}, {0, 0, 0}};
-      w.events.push_back(std::move(e));
-    }
+    if (ev.released) w.on_release(HandId(h), hand, ev);
+    if (ev.grasped) w.on_grasp(HandId(h), hand);
   }
-  // Held objects follow their hands exactly.
-  for (auto& [id, o] : w.objects) {
-    if (!o.holder.valid()) continue;
-    const auto pose = w.hand(o.holder).controller->grasped_object_pose();
-    assert(pose);
-    Impl::place(o, to_bt(*pose));
-  }
+  for (auto& [id, o] : w.objects)
+    if (!o.holders.empty()) w.follow_holders(o);
   w.dynamics.stepSimulation(btScalar(dt), 1, btScalar(dt));
   ++w.tick;
 }
@@ -291,7 +348,11 @@ Eigen::Isometry3d World::object_pose(ObjectId id) const {
 Eigen::Vector3d World::object_velocity(ObjectId id) const {
   return to_eigen(impl_->object(id).body->getLinearVelocity());
 }
-HandId World::holder(ObjectId id) const { return impl_->object(id).holder; }
+HandId World::holder(ObjectId id) const {
+  const std::vector<HandId>& holders = impl_->object(id).holders;
+  return holders.empty() ? HandId() : holders.front();
+}
+std::vector<HandId> World::holders(ObjectId id) const { return impl_->object(id).holders; }
 const HandController& World::hand(HandId id) const { return *impl_->hand(id).controller; }
 const std::vector<GraspEvent>& World::events() const { return impl_->events; }
 

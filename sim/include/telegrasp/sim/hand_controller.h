@@ -147,6 +147,9 @@ class HandController {
   std::optional<GraspMetrics> hold_metrics() const;
   /// World pose of the grasped object, if any.
   std::optional<Eigen::Isometry3d> grasped_object_pose() const;
+  /// Keeps holding the grasped object where it now is (the World moves an object two hands hold):
+  /// X_PalmObject = X_WorldPalm^-1 * X_WorldObject. Does nothing when no object is grasped.
+  void reattach(const Eigen::Isometry3d& X_WorldObject);
 
   /// ND and exact signed distances of every capsule against `object` (an analysis tool).
   GraspMetrics measure(const ObjectView& object) const;

@@ -11,9 +11,21 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace telegrasp::sim {
+
+/// What a hand's grasp on an object another hand holds does.
+enum class TwoHandMode {
+  kShare,  ///< Both hold it and it follows both hands (two_hand_hold.h); a third grasp replaces the first holder.
+  kTakeover,  ///< The newest grasp takes it and the previous holder lets go (the original's hand-to-hand takeover).
+};
+
+/// The mode named "share" or "takeover" (as configuration files and flags write it); nothing for any other name.
+std::optional<TwoHandMode> parse_two_hand_mode(std::string_view name);
+/// The name parse_two_hand_mode reads: "share" or "takeover".
+const char* two_hand_mode_name(TwoHandMode mode);
 
 /// Fixed parameters of a world.
 struct WorldSettings {
@@ -21,6 +33,7 @@ struct WorldSettings {
   Eigen::Vector3d gravity{0, 0, -9.81};
   double table_half_extent = 1.0;  ///< The table top is [-this, this]^2 at z = 0, m.
   GraspSettings grasp;
+  TwoHandMode two_hand_mode = TwoHandMode::kShare;
 };
 
 /// A grasp or release, with the grasp's metrics and contacts.
@@ -39,6 +52,15 @@ struct GraspEvent {
 
 /// One physics scene with a table top at z = 0 (square, see WorldSettings), dynamic objects and hands. One thread owns
 /// it. Deterministic: the same calls in the same order give bit-identical results.
+///
+/// An object has up to two holders. One holder carries it at its grasp's relative pose. With
+/// TwoHandMode::kShare, a second hand whose grasp rule turns true on it joins: from then on the
+/// object follows two_hand_object_pose() of the first and second holder (the attach points are
+/// the centres of the rigs' palm contact spheres), and after every tick both hands are re-attached
+/// at the object's new pose (HandController::reattach), so each hand's fingers work against the
+/// object where it is. When one of two holders lets go (release event with zero velocity), the
+/// other keeps it at its current relative pose; the object goes back to physics, with the
+/// velocity of its last holder, only when the last holder lets go.
 class World {
  public:
   explicit World(WorldSettings settings = {});
@@ -58,14 +80,15 @@ class World {
 
   /// Adds a hand driven by a rig; it starts open, at the origin, until its first input.
   HandId add_hand(std::shared_ptr<const HandRig> rig);
-  /// Removes a hand; an object it holds is dropped to physics at rest where it is (a release event
-  /// comes with the next step). Unknown ids are ignored. Ids are never reused.
+  /// Removes a hand; an object only it holds is dropped to physics at rest where it is (a release
+  /// event comes with the next step; another holder keeps it). Unknown ids are ignored. Ids are never reused.
   void remove_hand(HandId id);
   /// Sets a hand's input for the next step; returns "" or the reason the input was rejected
   /// (the hand then keeps its previous input).
   std::string set_input(HandId hand, const ControllerInput& input);
 
-  /// Advances one tick: every hand in id order, grasp attachment, then physics.
+  /// Advances one tick: every hand in id order (its release, then its grasp), held objects follow
+  /// their holders, then physics.
   void step();
 
   double dt() const;
@@ -76,8 +99,10 @@ class World {
   const ObjectModel& object_model(ObjectId id) const;
   Eigen::Isometry3d object_pose(ObjectId id) const;
   Eigen::Vector3d object_velocity(ObjectId id) const;
-  /// The hand holding `id`, or an invalid id.
+  /// The first hand holding `id` (the earliest grasp), or an invalid id.
   HandId holder(ObjectId id) const;
+  /// Every hand holding `id`, in the order they grasped it (at most two); empty when it is free.
+  std::vector<HandId> holders(ObjectId id) const;
   const HandController& hand(HandId id) const;
   /// Events of the last step, in order (a release caused by remove_object between steps comes first).
   const std::vector<GraspEvent>& events() const;
