@@ -106,6 +106,24 @@ TEST(ConversionsTest, SkeletonIsTheHandInTheWorldFrame) {
     EXPECT_TRUE(to_eigen(latched.phalanges()[i]).isApprox(moved * hand.state().X_PalmPhalanx[i], 1e-9));
 }
 
+// Two hands share an object: the first is in the old holder fields, both in holders, in grasp order.
+TEST(ConversionsTest, HoldersAreTheFirstHolderAndEveryHolder) {
+  msg::ObjectState two;
+  set_holders(two, {{"alice", 1}, {"bob", 0}});
+  EXPECT_TRUE(two.held());
+  EXPECT_EQ(two.holder_client().to_string(), "alice");
+  EXPECT_EQ(two.holder_hand(), 1);
+  ASSERT_EQ(two.holders().size(), 2u);
+  EXPECT_EQ(two.holders()[0].client_id().to_string(), "alice");
+  EXPECT_EQ(two.holders()[0].hand_side(), 1);
+  EXPECT_EQ(two.holders()[1].client_id().to_string(), "bob");
+  EXPECT_EQ(two.holders()[1].hand_side(), 0);
+  msg::ObjectState free;
+  set_holders(free, {});
+  EXPECT_FALSE(free.held());
+  EXPECT_TRUE(free.holders().empty());
+}
+
 TEST(ConversionsTest, GraspEventCarriesMetricsAndNames) {
   auto rig = std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")));
   sim::GraspEvent e;
@@ -117,7 +135,13 @@ TEST(ConversionsTest, GraspEventCarriesMetricsAndNames) {
   sim::GraspMetrics metrics;
   metrics.hand_error_mm = 2.5;
   metrics.capsules_without_hit = 1;
-  metrics.capsules.push_back({sim::PhalanxId(2), true, -0.0004, -0.0001, true});
+  sim::CapsuleMetric capsule;
+  capsule.phalanx = sim::PhalanxId(2);
+  capsule.hit = true;
+  capsule.nd = -0.0004;
+  capsule.signed_distance = -0.0001;
+  capsule.blocked = true;
+  metrics.capsules.push_back(capsule);
   e.metrics = metrics;
   EventContext ctx;
   ctx.hand = {"bob", 0};
