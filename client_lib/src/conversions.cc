@@ -271,6 +271,12 @@ msg::ObjectState to_msg(const client::ObjectState& o) {
   m.holder_client(o.holder.client_id);
   m.holder_hand(to_msg_side(o.holder.side));
   m.spawn_time(o.spawn_time);
+  for (const client::HandKey& h : o.holders) {
+    msg::ObjectHolder holder;
+    holder.client_id(h.client_id);
+    holder.hand_side(to_msg_side(h.side));
+    m.holders().push_back(std::move(holder));
+  }
   return m;
 }
 
@@ -283,6 +289,8 @@ client::ObjectState from_msg(const msg::ObjectState& m) {
   o.held = m.held();
   o.holder = hand_key(m.holder_client().to_string(), m.holder_hand());
   o.spawn_time = m.spawn_time();
+  for (const msg::ObjectHolder& h : m.holders())
+    o.holders.push_back(hand_key(h.client_id().to_string(), h.hand_side()));
   return o;
 }
 

@@ -36,6 +36,20 @@ msg::HandSkeleton make_hand_skeleton(const HandAddress& address, const sim::Hand
   return m;
 }
 
+void set_holders(msg::ObjectState& object, const std::vector<HandAddress>& holders) {
+  object.held(!holders.empty());
+  object.holders().clear();
+  for (const HandAddress& h : holders) {
+    msg::ObjectHolder m;
+    m.client_id(h.client_id);
+    m.hand_side(h.side);
+    object.holders().push_back(std::move(m));
+  }
+  if (holders.empty()) return;
+  object.holder_client(holders.front().client_id);
+  object.holder_hand(holders.front().side);
+}
+
 msg::GraspState make_grasp_state(const HandAddress& address, const sim::HandController& hand, std::uint64_t tick,
                                  double time) {
   const sim::HandState& s = hand.state();

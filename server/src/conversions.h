@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace telegrasp::server {
 
@@ -43,6 +44,10 @@ msg::HandSkeleton make_hand_skeleton(const HandAddress& address, const sim::Hand
                                      const Eigen::Isometry3d* X_WorldPalm_override = nullptr);
 msg::GraspState make_grasp_state(const HandAddress& address, const sim::HandController& hand, std::uint64_t tick,
                                  double time);
+/// Who holds an object, on the wire: `held`, the first holder in holder_client/holder_hand (the
+/// fields older subscribers read) and every holder, in grasp order, in `holders`.
+void set_holders(msg::ObjectState& object, const std::vector<HandAddress>& holders);
+
 msg::ContactPoint to_msg(const sim::Contact& contact);
 sim::Contact to_sim(const msg::ContactPoint& contact);
 /// Contacts of the grasp `hand` holds, with the object's pose at this tick.

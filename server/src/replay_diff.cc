@@ -153,6 +153,11 @@ struct FieldDiff {
                value(n + ".holder_client", x.holder_client(), y.holder_client());
                value(n + ".holder_hand", x.holder_hand(), y.holder_hand());
                value(n + ".spawn_time", x.spawn_time(), y.spawn_time());
+               sequence(n + ".holders", x.holders(), y.holders(),
+                        [this](const std::string& m, const msg::ObjectHolder& p, const msg::ObjectHolder& q) {
+                          value(m + ".client_id", p.client_id(), q.client_id());
+                          value(m + ".hand_side", p.hand_side(), q.hand_side());
+                        });
              });
   }
 };

@@ -51,6 +51,7 @@ SceneServer::SceneServer(const ServerSettings& settings, std::vector<sim::Object
   sim::WorldSettings ws;
   ws.dt = 1.0 / settings.tick_hz;
   ws.grasp.mode = settings.closing_mode;
+  ws.two_hand_mode = settings.two_hand_mode;
   ws.table_half_extent = kTableHalfExtent;
   world_ = std::make_unique<sim::World>(ws);
   spawn_initial_scene();
@@ -217,13 +218,9 @@ msg::SceneState SceneServer::scene_state() const {
     o.spawn_time(objects_.at(id.value).spawn_time);
     o.pose(to_msg(world_->object_pose(id)));
     o.linear_velocity(to_msg(world_->object_velocity(id)));
-    const sim::HandId holder = world_->holder(id);
-    o.held(holder.valid());
-    if (holder.valid()) {
-      const HandAddress& a = address_of_.at(holder.value);
-      o.holder_client(a.client_id);
-      o.holder_hand(a.side);
-    }
+    std::vector<HandAddress> holders;
+    for (sim::HandId holder : world_->holders(id)) holders.push_back(address_of_.at(holder.value));
+    set_holders(o, holders);
     m.objects().push_back(std::move(o));
   }
   return m;

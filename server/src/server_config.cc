@@ -50,6 +50,12 @@ void apply_config(const proto::ServerConfig& c, ServerSettings& s, const std::st
       throw std::runtime_error(origin + ": closing_mode must be precise or discrete, got '" + c.closing_mode() + "'");
     s.closing_mode = *mode;
   }
+  if (has("two_hand_mode")) {
+    const std::optional<sim::TwoHandMode> mode = sim::parse_two_hand_mode(c.two_hand_mode());
+    if (!mode)
+      throw std::runtime_error(origin + ": two_hand_mode must be share or takeover, got '" + c.two_hand_mode() + "'");
+    s.two_hand_mode = *mode;
+  }
   if (has("freeze_after_s")) s.freeze_after_s = c.freeze_after_s();
   if (has("remove_after_s")) s.remove_after_s = c.remove_after_s();
   if (has("late_latch")) s.late_latch = c.late_latch();
@@ -112,6 +118,7 @@ proto::ServerConfig to_proto(const ServerSettings& s) {
   c.set_right_rig(s.right_rig);
   c.set_left_rig(s.left_rig);
   c.set_closing_mode(sim::closing_mode_name(s.closing_mode));
+  c.set_two_hand_mode(sim::two_hand_mode_name(s.two_hand_mode));
   c.set_freeze_after_s(s.freeze_after_s);
   c.set_remove_after_s(s.remove_after_s);
   c.set_late_latch(s.late_latch);

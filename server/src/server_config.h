@@ -2,6 +2,7 @@
 #pragma once
 
 #include "telegrasp/sim/hand_controller.h"
+#include "telegrasp/sim/world.h"
 
 #include <string>
 #include <vector>
@@ -32,6 +33,8 @@ struct ServerSettings {
   bool empty_scene = false;
   std::string right_rig, left_rig;  ///< "": the built-in human rigs.
   sim::ClosingMode closing_mode = sim::ClosingMode::kPrecise;
+  /// A grasp on an object another hand holds: both hold it (share) or it takes it over (takeover).
+  sim::TwoHandMode two_hand_mode = sim::TwoHandMode::kShare;
   double freeze_after_s = 0.25;
   double remove_after_s = 0.5;
   bool late_latch = true;

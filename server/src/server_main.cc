@@ -43,6 +43,8 @@ Options (override the --config file):
   --empty-scene       start with no objects (spawn them with SceneCommand)
   --tick-hz HZ        simulation rate (default 90)
   --mode M            finger closing: precise (default) | discrete
+  --two-hand-mode M   a grasp on an object another hand holds: share (default: both hold it, the
+                      object follows both hands) | takeover (the newest grasp takes it)
   --no-late-latch     publish skeletons only at ticks, not also on each sample's arrival
   --lockstep          tick as soon as every hand has answered the last tick (ControllerState.
                       lockstep_tick) and its commands have arrived, not on the clock: runs are
@@ -101,6 +103,11 @@ void apply_flags(int argc, char** argv, Flags& f, std::vector<std::string>& conf
       const std::optional<sim::ClosingMode> mode = sim::parse_closing_mode(m);
       if (!mode) usage_error("--mode expects precise or discrete, got '" + m + "'");
       s.closing_mode = *mode;
+    } else if (a == "--two-hand-mode") {
+      const std::string m = value();
+      const std::optional<sim::TwoHandMode> mode = sim::parse_two_hand_mode(m);
+      if (!mode) usage_error("--two-hand-mode expects share or takeover, got '" + m + "'");
+      s.two_hand_mode = *mode;
     } else {
       return false;
     }

@@ -65,6 +65,8 @@ void expect_same(const client::ObjectState& a, const client::ObjectState& b) {
   EXPECT_EQ(a.v_WorldObject, b.v_WorldObject);
   EXPECT_EQ(a.held, b.held);
   expect_same(a.holder, b.holder);
+  ASSERT_EQ(a.holders.size(), b.holders.size());
+  for (std::size_t i = 0; i < a.holders.size(); ++i) expect_same(a.holders[i], b.holders[i]);
   EXPECT_EQ(a.spawn_time, b.spawn_time);
 }
 
@@ -353,12 +355,16 @@ TEST(ConversionsTest, SceneStateRoundTrip) {
     o.v_WorldObject = {0.01 * i, 0, -0.5};
     o.held = i == 1;
     o.holder = i == 1 ? client::HandKey{"carol", client::HandSide::kLeft} : client::HandKey{};
+    if (i == 1) o.holders = {o.holder, client::HandKey{"dave", client::HandSide::kRight}};
     o.spawn_time = 0.25 * i;
     s.objects.push_back(o);
   }
   const msg::SceneState m = to_msg(s);
   EXPECT_EQ(m.objects().at(1).holder_client().to_string(), "carol");
   EXPECT_EQ(m.objects().at(1).holder_hand(), msg::HAND_LEFT);
+  ASSERT_EQ(m.objects().at(1).holders().size(), 2u);
+  EXPECT_EQ(m.objects().at(1).holders().at(1).client_id().to_string(), "dave");
+  EXPECT_EQ(m.objects().at(1).holders().at(1).hand_side(), msg::HAND_RIGHT);
   const client::SceneState r = from_msg(m);
   EXPECT_EQ(r.tick, s.tick);
   EXPECT_EQ(r.time, s.time);

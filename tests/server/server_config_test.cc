@@ -34,6 +34,7 @@ TEST(ServerConfigTest, ReadsEveryFieldAndKeepsDefaultsElsewhere) {
     tick_hz: 120
     objects { model: "005_tomato_soup_can" x: 0.4 y: 0.1 yaw: 0.5 }
     closing_mode: "discrete"
+    two_hand_mode: "takeover"
     late_latch: false
   )"),
                      s);
@@ -44,14 +45,17 @@ TEST(ServerConfigTest, ReadsEveryFieldAndKeepsDefaultsElsewhere) {
   EXPECT_EQ(s.objects[0].model, "005_tomato_soup_can");
   EXPECT_EQ(s.objects[0].y, 0.1);
   EXPECT_EQ(s.closing_mode, sim::ClosingMode::kDiscrete);
+  EXPECT_EQ(s.two_hand_mode, sim::TwoHandMode::kTakeover);
   EXPECT_FALSE(s.late_latch);
   EXPECT_EQ(s.freeze_after_s, 0.25);  // default kept
+  EXPECT_EQ(ServerSettings{}.two_hand_mode, sim::TwoHandMode::kShare);
 }
 
 TEST(ServerConfigTest, ErrorsNameTheFileAndField) {
   EXPECT_NE(error_of("tick_hz: 0").find("tick_hz"), std::string::npos);
   EXPECT_NE(error_of("domain: 300").find("domain"), std::string::npos);
   EXPECT_NE(error_of("closing_mode: \"fast\"").find("closing_mode"), std::string::npos);
+  EXPECT_NE(error_of("two_hand_mode: \"both\"").find("two_hand_mode"), std::string::npos);
   EXPECT_NE(error_of("remove_after_s: 2").find("remove_after_s"), std::string::npos);
   const std::string typo = error_of("tick_hertz: 90");
   EXPECT_NE(typo.find("tick_hertz"), std::string::npos);

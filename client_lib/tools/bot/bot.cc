@@ -355,7 +355,7 @@ Target* Bot::pick(const std::map<int, const client::ObjectState*>& objects) {
 }
 
 bool Bot::holds_target(const Hand& h, const client::ObjectState* o) const {
-  if (o && o->held && o->holder == h.key) return true;
+  if (o && std::find(o->holders.begin(), o->holders.end(), h.key) != o->holders.end()) return true;
   const auto gs = client_.latest_grasp_state(h.key);
   return gs && gs->grasped_object == h.target->id;
 }

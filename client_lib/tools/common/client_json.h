@@ -70,6 +70,7 @@ Json object_state(const client::ObjectState& o) {
          {"v_WorldObject_m_per_s", vec<Json>(o.v_WorldObject)},
          {"held", o.held}};
   if (o.held) j["holder"] = hand<Json>(o.holder);
+  if (o.held) j["holders"] = array<Json>(o.holders, hand<Json>);
   j["spawn_time_s"] = o.spawn_time;
   return j;
 }

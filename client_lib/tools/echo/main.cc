@@ -78,7 +78,8 @@ X_WorldObject is the object's pose in the world frame.
                   grasp: "hand_error_mm", "capsules_without_hit", "capsules", "contacts";
                   release: "v_WorldObject_m_per_s", "w_WorldObject_rad_per_s"
   SceneState      "objects": {"id","name","X_WorldObject","v_WorldObject_m_per_s","held",
-                  "holder" (if held),"spawn_time_s"}
+                  "holder" (if held: the first), "holders" (if held: every hand holding
+                  it, in grasp order; two may share one object), "spawn_time_s"}
   ServerStatus    "tick_rate_hz", "clients", "hands", "objects", "tick_us_p50", "tick_us_max",
                   "missed_ticks", "inputs_accepted", "inputs_rejected", "rejected" (per reason),
                   "commands_accepted", "commands_rejected", "models"

@@ -122,7 +122,8 @@ struct ObjectState {
   Eigen::Isometry3d X_WorldObject = Eigen::Isometry3d::Identity();
   Eigen::Vector3d v_WorldObject{0, 0, 0};
   bool held = false;
-  HandKey holder;  ///< When held.
+  HandKey holder;  ///< When held: the first hand holding it (holders.front()).
+  std::vector<HandKey> holders;  ///< Every hand holding it, in grasp order (two may share it); empty when free.
   double spawn_time = 0;
 };
 
