@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 namespace telegrasp::server {
 namespace {
 
@@ -201,6 +203,72 @@ TEST_F(SceneServerTest, ASilentHandIsFrozenThenRemovedAndDropsItsObject) {
   const double z_dropped = scene->world().object_pose(sim::ObjectId(can)).translation().z();
   for (int i = 0; i < 90; ++i) tick();
   EXPECT_LT(scene->world().object_pose(sim::ObjectId(can)).translation().z(), z_dropped - 0.03);  // it fell
+}
+
+// A server (with `settings`) whose scene is a 0.6 m long box; alice's right hand squeezes one end
+// until it grasps, then her left hand the other end until it grasps too. Returns the box's id.
+int right_then_left_on_a_long_box(SceneServerTest& t) {
+  sim::TriangleMesh box;
+  for (int i = 0; i < 8; ++i) box.vertices.emplace_back(i & 1 ? 0.3 : -0.3, i & 2 ? 0.04 : -0.04, i & 4 ? 0.04 : -0.04);
+  box.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                   {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  t.models.push_back(sim::make_object_model("long_box", box, 0, "test"));
+  t.scene = std::make_unique<SceneServer>(t.settings, t.models, t.right, t.left, t.mailbox, t.sink);
+  const int id = t.spawn("long_box", 0.4, 0.0);
+  for (int i = 0; i < 30; ++i) t.tick();
+  const sim::ObjectModel& model = t.scene->world().object_model(sim::ObjectId(id));
+  const Eigen::Isometry3d X_WorldBox = t.scene->world().object_pose(sim::ObjectId(id));
+  const double dt = t.scene->world().dt();
+  sim::ControllerInput r, l;
+  r.X_WorldPalm = Eigen::Translation3d(0.2, 0, 0) * sim::plan_grasp(t.right, {}, model, X_WorldBox, dt).X_WorldPalm;
+  l.X_WorldPalm = Eigen::Translation3d(-0.2, 0, 0) * sim::plan_grasp(t.left, {}, model, X_WorldBox, dt).X_WorldPalm;
+  const auto grasps = [&](std::uint8_t side) {
+    return std::count_if(t.sink.events.begin(), t.sink.events.end(), [&](const msg::GraspEvent& e) {
+      return e.kind() == msg::GRASP_EVENT_GRASP && e.hand_side() == side;
+    });
+  };
+  for (auto [side, input] : {std::pair{std::uint8_t{1}, &r}, {std::uint8_t{0}, &l}}) {
+    for (int i = 1; i <= 90 && grasps(side) == 0; ++i) {
+      input->trigger = std::min(1.0, i / 30.0);
+      t.send("alice", 1, r);  // both hands send every tick
+      t.send("alice", 0, l);
+      t.tick();
+    }
+    EXPECT_EQ(grasps(side), 1) << "hand side " << int(side) << " never grasped";
+  }
+  return id;
+}
+
+// Both hold it, nobody lets go, and the scene state lists both holders in grasp order, the first
+// also in holder_client/holder_hand.
+TEST_F(SceneServerTest, TwoHandsOfOneClientShareAnObjectAndTheSceneListsBoth) {
+  const int id = right_then_left_on_a_long_box(*this);
+  EXPECT_EQ(scene->world().holders(sim::ObjectId(id)).size(), 2u);
+  ASSERT_EQ(sink.events.size(), 2u) << "two grasps, no release";
+  const msg::ObjectState& o = sink.scenes.back().objects().at(0);
+  EXPECT_TRUE(o.held());
+  EXPECT_EQ(o.holder_client().to_string(), "alice");
+  EXPECT_EQ(o.holder_hand(), 1);
+  ASSERT_EQ(o.holders().size(), 2u);
+  EXPECT_EQ(o.holders()[0].client_id().to_string(), "alice");
+  EXPECT_EQ(o.holders()[0].hand_side(), 1);
+  EXPECT_EQ(o.holders()[1].client_id().to_string(), "alice");
+  EXPECT_EQ(o.holders()[1].hand_side(), 0);
+}
+
+// two_hand_mode takeover: the left hand's grasp takes the box and the right hand lets go.
+TEST_F(SceneServerTest, TakeoverModeHandsTheObjectToTheNewestGrasp) {
+  settings.two_hand_mode = sim::TwoHandMode::kTakeover;
+  right_then_left_on_a_long_box(*this);
+  ASSERT_EQ(sink.events.size(), 3u);
+  EXPECT_EQ(sink.events[1].kind(), msg::GRASP_EVENT_RELEASE);
+  EXPECT_EQ(sink.events[1].hand_side(), 1);
+  EXPECT_EQ(sink.events[2].kind(), msg::GRASP_EVENT_GRASP);
+  EXPECT_EQ(sink.events[2].hand_side(), 0);
+  const msg::ObjectState& o = sink.scenes.back().objects().at(0);
+  EXPECT_EQ(o.holder_hand(), 0);
+  ASSERT_EQ(o.holders().size(), 1u);
+  EXPECT_EQ(o.holders()[0].hand_side(), 0);
 }
 
 TEST_F(SceneServerTest, AppliesAndRejectsSceneCommands) {
