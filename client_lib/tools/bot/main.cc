@@ -31,6 +31,8 @@ using telegrasp::bot::kRate;
 using telegrasp::bot::kStaleScene;
 using Options = telegrasp::bot::Options;
 
+constexpr int kExitNotHeld = 3;  // every trial done, some not held
+
 constexpr const char* kUsage = R"(Usage: telegrasp-bot [options]
 
 The scripted operator of telegrasp-eval driving one or two hands of a telegrasp server over DDS.
@@ -60,10 +62,15 @@ Options:
                       (default 20)
   -h, --help          this text
 
-Exit status: 0 every trial done, 1 a runtime failure (the --objects folder or a mesh in it
-missing or unreadable, the --json file not writable, DDS could not start, no server found or it
-went silent), 2 a usage error (a bad or missing option or value), 130 stopped by SIGINT or
-SIGTERM (the table shows the trials done).
+The last line on stdout (and stderr) says how many trials held, then each object not held in
+every trial with its count, e.g. "held 88/90 trials on 30 objects; not held every time: spoon 2/3".
+
+Exit status: 0 every trial done and every object held after the lift in every trial, 1 a runtime
+failure (the --objects folder or a mesh in it missing or unreadable, the --json file not
+writable, DDS could not start, no server found or it went silent), 2 a usage error (a bad or
+missing option or value), 3 every trial done but some object not held in every trial (or the
+scene had no object: nothing grasped), 130 stopped by SIGINT or SIGTERM (the table shows the
+trials done).
 )";
 
 [[noreturn]] void usage_error(const std::string& what) { telegrasp::cli::usage_exit("telegrasp-bot", what); }
@@ -188,7 +195,7 @@ int main(int argc, char** argv) {
   if (!bot.set_scene(*scene)) {
     std::cerr << "telegrasp-bot: the server's scene has no objects\n";
     bot.report_results();
-    return 0;
+    return kExitNotHeld;
   }
   std::cerr << "telegrasp-bot " << opt.client_id << ": " << scene->objects.size() << " objects x " << opt.trials
             << " trial(s), " << opt.hands.size() << " hand(s), skill " << opt.skill << "\n";
@@ -236,5 +243,6 @@ int main(int argc, char** argv) {
   if (status != 0 && bot.in_progress() > 0)
     std::cerr << "telegrasp-bot: " << bot.in_progress() << " trial(s) in progress not counted\n";
   if (!bot.report_results() && status == 0) status = 1;
+  if (status == 0 && !bot.all_held()) status = kExitNotHeld;
   return status;
 }
