@@ -35,7 +35,12 @@ constexpr double kFrameTolerance = 0.002;  // m: a received mesh's centre of mas
 constexpr double kSameTime = 0.05;
 constexpr double kReplanMove = 0.02;  // m: an object moved this far since its plan is planned again ...
 constexpr double kReplanTurn = 0.25;  // rad: ... or turned this far
-constexpr int kMaxReplans = 3;  // re-plans per trial
+constexpr int kMaxReplans = 3;  // re-plans per trial of an object that moved
+// A trial's attempts: two rounds of the operator's kMaxAttempts. After a round of misses on an
+// object that did not move, the bot plans again (a new operator, new pose errors) and tries once
+// more, as a person over the wire would rather than give up; the records say how many it took.
+constexpr int kRounds = 2;
+constexpr int kAttemptBudget = kRounds * sim::ScriptedOperator::kMaxAttempts;
 constexpr double kFollowSpeed = 0.2;  // m/s: how fast the correction follows the object ...
 constexpr double kFollowTurnSpeed =
     1.0;  // rad/s: ... and its turn  // s of server time: two hands arriving this close together tie
@@ -475,6 +480,7 @@ void Bot::step(Hand& h, std::int64_t tick, const client::SceneState& scene,
       return;
     }
     if (o && !o->held && h.replans < kMaxReplans && moved_beyond(o->X_WorldObject, h.X_WorldObject_plan)) {
+      ++h.replans;
       replan(h, *o, "it moved while the plan was made");  // planning took long and the object moved
       return;
     }
@@ -506,9 +512,9 @@ void Bot::step(Hand& h, std::int64_t tick, const client::SceneState& scene,
         // The attempts made so far: the one being reached for has not squeezed yet.
         const int made =
             h.attempts_before + std::max(0, h.op->attempts() - (phase_before == sim::OperatorPhase::kReach ? 1 : 0));
-        if (h.replans < kMaxReplans && made < sim::ScriptedOperator::kMaxAttempts &&
-            moved_beyond(o->X_WorldObject, h.X_WorldObject_plan)) {
+        if (h.replans < kMaxReplans && made < kAttemptBudget && moved_beyond(o->X_WorldObject, h.X_WorldObject_plan)) {
           h.attempts_before = made;
+          ++h.replans;
           replan(
               h, *o,
               "it moved " +
@@ -529,8 +535,16 @@ void Bot::step(Hand& h, std::int64_t tick, const client::SceneState& scene,
     h.input.X_WorldPalm = h.correction * h.input.X_WorldPalm;
     if (h.op->phase() == sim::OperatorPhase::kHold && o)
       h.z_max = std::max(h.z_max, o->X_WorldObject.translation().z());
-    // Every operator of the trial shares kMaxAttempts: one that begins an attempt past it is done.
-    const bool out_of_attempts = h.attempts_before + h.op->attempts() > sim::ScriptedOperator::kMaxAttempts;
+    // A round of misses (the operator gave up, nothing grasped): plan again for another round.
+    if (h.op->done() && !h.seen_grasped && o && !o->held && h.retries + 1 < kRounds &&
+        h.attempts_before + h.op->attempts() < kAttemptBudget) {
+      h.attempts_before += h.op->attempts();
+      ++h.retries;
+      replan(h, *o, "not grasped in " + std::to_string(h.attempts_before) + " attempt(s)");
+      return;
+    }
+    // Every operator of the trial shares kAttemptBudget: one that begins an attempt past it is done.
+    const bool out_of_attempts = h.attempts_before + h.op->attempts() > kAttemptBudget;
     if (h.op->done() || out_of_attempts || t_op > kTrialLimit) {
       if (!h.op->done() && !out_of_attempts) h.note = "cut short after " + report::fmt(kTrialLimit, 0) + " s";
       h.input.trigger = 0;
@@ -589,7 +603,7 @@ void Bot::start_trial(Hand& h, Target& t, std::int64_t tick, const client::Objec
   h.input.X_WorldPalm = X_WorldStart;
   h.X_WorldObject_plan = h.X_WorldObject_followed = o.X_WorldObject;
   h.correction = Eigen::Isometry3d::Identity();
-  h.replans = h.attempts_before = 0;
+  h.plans = h.replans = h.retries = h.attempts_before = 0;
   h.running = false;
   begin_operator(h, o.X_WorldObject, X_WorldStart);
 }
@@ -597,7 +611,7 @@ void Bot::start_trial(Hand& h, Target& t, std::int64_t tick, const client::Objec
 void Bot::begin_operator(Hand& h, const Eigen::Isometry3d& X_WorldObject, const Eigen::Isometry3d& X_WorldPalm) {
   // The operator's noise depends on the object, trial and re-plan only, as in telegrasp-eval.
   const std::uint64_t seed = opt_.seed * 1000003ULL + h.target->scene_index * 1009ULL +
-                             static_cast<std::uint64_t>(h.trial) + 7919ULL * static_cast<std::uint64_t>(h.replans);
+                             static_cast<std::uint64_t>(h.trial) + 7919ULL * static_cast<std::uint64_t>(h.plans);
   h.op = std::make_unique<sim::ScriptedOperator>(h.rig, skill_, seed, sim::GraspSettings{}, 1.0 / kRate);
   sim::ScriptedOperator* op = h.op.get();
   h.planning = std::async(std::launch::async, [op, model = h.target->model, X_WorldObject, X_WorldPalm] {
@@ -606,7 +620,7 @@ void Bot::begin_operator(Hand& h, const Eigen::Isometry3d& X_WorldObject, const 
 }
 
 void Bot::replan(Hand& h, const client::ObjectState& o, const std::string& why) {
-  ++h.replans;
+  ++h.plans;
   std::cerr << side_name(h.key.side) << " hand plans " << h.target->label << " trial " << h.trial << " again: " << why
             << "\n";
   h.X_WorldObject_plan = h.X_WorldObject_followed = o.X_WorldObject;
@@ -633,7 +647,7 @@ void Bot::abandon(Hand& h, const client::HandKey& other) {
 void Bot::finish_trial(Hand& h) {
   BotRecord r;
   r.record = std::move(h.rec);
-  r.record.attempts = std::min(h.attempts_before + h.op->attempts(), sim::ScriptedOperator::kMaxAttempts);
+  r.record.attempts = std::min(h.attempts_before + h.op->attempts(), kAttemptBudget);
   r.record.held_after_lift = h.op->held_after_lift() && h.z_max - h.z0 > 0.8 * sim::ScriptedOperator::kLiftHeight;
   r.object_id = h.target->id;
   r.hand = h.key.side;

@@ -101,7 +101,10 @@ struct Hand {
   Eigen::Isometry3d X_WorldObject_plan = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d X_WorldObject_followed = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d correction = Eigen::Isometry3d::Identity();
-  int replans = 0, attempts_before = 0;  // attempts of the operators replaced by a re-plan
+  int plans = 0;  // re-plans in all: each operator of the trial gets its own pose errors
+  int replans = 0;  // re-plans because the object moved
+  int retries = 0;  // re-plans after a round of misses (kRounds)
+  int attempts_before = 0;  // attempts of the operators replaced by a re-plan
   bool running = false;  // the trial's operator has run (a re-plan keeps its start time)
   std::int64_t stage_tick = 0, op_tick = 0;
   double server_t0 = 0, z0 = 0, z_max = -1e9;
@@ -177,8 +180,8 @@ class Bot {
   // Starts h's operator planning (asynchronously) on the object at X_WorldObject, the hand at X_WorldPalm.
   void begin_operator(Hand& h, const Eigen::Isometry3d& X_WorldObject, const Eigen::Isometry3d& X_WorldPalm);
 
-  // Plans h's trial again on the object's pose now (it moved far since the plan), from where the
-  // hand is, keeping the trial's attempts and start time.
+  // Plans h's trial again on the object's pose now (it moved far since the plan, or a round of
+  // attempts missed), from where the hand is, keeping the trial's attempts and start time.
   void replan(Hand& h, const client::ObjectState& o, const std::string& why);
 
   // Drops the current trial without counting it: `other` has the object, or came for it first.

@@ -38,11 +38,16 @@ constexpr const char* kUsage = R"(Usage: telegrasp-bot [options]
 The scripted operator of telegrasp-eval driving one or two hands of a telegrasp server over DDS.
 Each hand picks a free object from the server's SceneState (resting on the table, held by
 nobody, no other client's hand at it), appears 30 cm from it, reaches, grasps, lifts 10 cm,
-holds 1 s and releases, publishing its controller at 90 Hz. Every object in the scene (as the
-bot first sees it) is grasped --trials times; each grasp is recorded from the server's
-GraspEvent. A hand leaves an object to another client's hand that got there first; an object
-unavailable for 10 s is given up (recorded as not grasped, with the reason). Progress goes to
-stderr (one line per trial), then the per-object table of telegrasp-eval goes to stdout.
+holds 1 s and releases, publishing its controller at 90 Hz. It plans on the object's pose of
+the newest SceneState and moves its hand with the object until it squeezes; an object that moved
+over 2 cm (or 0.25 rad) since its plan is planned again. A missed squeeze is tried again; after 3
+misses the bot plans again and tries up to 3 more times (6 attempts a trial at most, the JSON
+"attempts" says how many). An object is started only once it rests (under 0.02 m/s, within 2 mm
+and 0.02 rad of one pose for 0.3 s). Every object in the scene (as the bot first sees it) is
+grasped --trials times; each grasp is recorded from the server's GraspEvent. A hand leaves an
+object to another client's hand that got there first; an object unavailable for 10 s is given
+up (recorded as not grasped, with the reason). Progress goes to stderr (one line per trial),
+then the per-object table of telegrasp-eval goes to stdout.
 
 Options:
   --client-id ID      names this bot's hands on the server (default bot-<pid>)
