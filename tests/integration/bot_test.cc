@@ -3,7 +3,10 @@
 // publishes, on the hardest objects: the thin ones and the sugar box (a tall box that rocks after
 // a release). The full run, every object with 3 trials and several seeds, is
 // tests/integration/bot_no_meshes.sh.
+#include "bot.h"
 #include "process.h"
+#include "telegrasp/sim/mesh_loading.h"
+#include "telegrasp/sim/standin_objects.h"
 #include "test_domain.h"
 
 #include <gtest/gtest.h>
@@ -102,6 +105,47 @@ TEST(BotTest, NoMeshFilesHoldsTheHardestObjectsOnAFreeRunningServer) {
   const std::string tail = bot.log_tail(5);
   EXPECT_NE(tail.find("held " + std::to_string(o.held) + "/" + std::to_string(o.trials) + " trials"), std::string::npos)
       << tail;
+}
+
+// The geometry a server publishes for a stand-in, as the client library delivers it.
+client::ObjectGeometry published(const sim::ObjectModel& m) {
+  client::ObjectGeometry g;
+  g.model = m.name;
+  g.content_hash = 42;
+  for (const Eigen::Vector3d& v : m.mesh.vertices) g.vertices.push_back(v.cast<float>());
+  g.triangles = m.mesh.triangles;
+  g.vertex_count = static_cast<std::uint32_t>(g.vertices.size());
+  g.triangle_count = static_cast<std::uint32_t>(g.triangles.size());
+  g.p_ObjectMin = m.p_ObjectMin;
+  g.p_ObjectMax = m.p_ObjectMax;
+  g.mass_kg = m.mass_kg;
+  return g;
+}
+
+// The bot plans on a received mesh in its model frame, unchanged; a model published without its
+// mesh (over the server's size limit) is planned on the box of its bounds instead of given up.
+TEST(BotModelTest, ReceivedMeshInTheModelFrameAndTheBoundsWhenTheMeshIsOmitted) {
+  const sim::ObjectModelPtr knife = sim::make_standin_model(*sim::find_protocol_object("032_knife"));
+  client::ObjectGeometry g = published(*knife);
+  const sim::ObjectModelPtr received = bot::model_from_geometry(g);
+  EXPECT_EQ(received->name, "032_knife");
+  EXPECT_EQ(received->mesh.triangles.size(), knife->mesh.triangles.size());
+  EXPECT_LT((received->p_ObjectMin - knife->p_ObjectMin).norm(), 1e-6);
+  EXPECT_LT(received->mass_properties.centroid.norm(), 1e-4) << "not in the model frame";
+
+  g.mesh_omitted = true;
+  g.vertices.clear();
+  g.triangles.clear();
+  const sim::ObjectModelPtr box = bot::model_from_geometry(g);
+  EXPECT_EQ(box->mesh.triangles.size(), 12u);
+  EXPECT_LT((box->p_ObjectMin - knife->p_ObjectMin).norm(), 1e-9);
+  EXPECT_LT((box->p_ObjectMax - knife->p_ObjectMax).norm(), 1e-9);
+  const Eigen::Vector3d size = knife->p_ObjectMax - knife->p_ObjectMin;
+  EXPECT_NEAR(box->mass_properties.volume, size.prod(), 1e-9) << "a closed box, faces outward";
+  EXPECT_EQ(box->mass_kg, knife->mass_kg);
+
+  g.p_ObjectMax = g.p_ObjectMin;  // no mesh and no bounds: nothing to plan on
+  EXPECT_THROW(bot::model_from_geometry(g), sim::MeshLoadError);
 }
 
 }  // namespace
