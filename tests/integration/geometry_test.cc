@@ -193,7 +193,8 @@ TEST(ObjectGeometryTest, ABotWithoutMeshFilesPlansOnReceivedGeometry) {
   ChildProcess bot({bin("telegrasp-bot"), "--client-id", "wire-bot", "--trials", std::to_string(trials), "--seed", "3",
                     "--domain", std::to_string(domain), "--profile", "loopback", "--json", json, "--timeout", "30"},
                    log);
-  ASSERT_EQ(bot.wait(300s), 0) << bot.exit_description() << "\n" << bot.log_tail();
+  const int status = bot.wait(300s);  // 0 every trial held, 3 some not (asserted below)
+  ASSERT_TRUE(status == 0 || status == 3) << bot.exit_description() << "\n" << bot.log_tail();
 
   const std::string text = read_file(log);
   EXPECT_NE(text.find("planning on the server's published geometry for 3 model(s): wire_baseball, wire_gelatin_box, "

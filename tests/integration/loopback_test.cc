@@ -164,8 +164,11 @@ TEST(LoopbackTest, TwoBotsFourHandsEveryEventOnceContactsConsistent) {
   const std::string json_a = work_path("bot_a.json"), json_b = work_path("bot_b.json");
   auto a = start_bot(domain, "bot-a", "both", 1, json_a);
   auto b = start_bot(domain, "bot-b", "both", 1, json_b);
-  ASSERT_EQ(a->wait(kBotGuard), 0) << "see " << work_path("bot-a.log");
-  ASSERT_EQ(b->wait(kBotGuard), 0) << "see " << work_path("bot-b.log");
+  // 0: every trial held; 3: done, some not held (two bots contend for the objects).
+  for (auto* bot : {a.get(), b.get()}) {
+    const int status = bot->wait(kBotGuard);
+    ASSERT_TRUE(status == 0 || status == 3) << bot->exit_description() << "; see " << bot->log_path();
+  }
 
   // Each bot: one record per object of the scene (grasped or not, or given up).
   std::map<std::tuple<std::string, std::string, int>, int> grasped_records;  // (client, hand, object)
@@ -309,7 +312,9 @@ TEST(LoopbackTest, KilledBotsObjectIsReleasedAndFalls) {
       },
       kEventGuard))
       << "object " << held_object << " is still held or in the air";
-  EXPECT_EQ(survivor->wait(kBotGuard), 0) << "see " << work_path("survivor.log");
+  const int survivor_status = survivor->wait(kBotGuard);  // 0 every trial held, 3 some not
+  EXPECT_TRUE(survivor_status == 0 || survivor_status == 3)
+      << survivor->exit_description() << "; see " << work_path("survivor.log");
 }
 
 // Every kind of bad input is dropped and counted once per sample under its reason, and the server

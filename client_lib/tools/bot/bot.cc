@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -24,17 +25,40 @@ constexpr double kTrialLimit = 30.0;  // s of operator time before a trial is cu
 constexpr double kSettleTime = 0.2;  // s at the start pose before the operator starts
 constexpr double kFinishLimit = 2.0;  // s to wait for the release (and grasp event) after a trial
 constexpr double kGiveUpAfter = 10.0;  // s an object may be unavailable before it is given up
-constexpr double kRestingSpeed = 0.01;  // m/s: slower objects may be resting ...
-constexpr double kStillTime = 0.3;  // s: ... once their pose has not changed for this long
-constexpr double kStillMove = 1e-4;  // m, rad: pose changes below this between scene states are none
+constexpr double kRestingSpeed = 0.02;  // m/s: slower objects (server's velocity) may be resting ...
+constexpr double kStillTime = 0.3;  // s: ... once their pose has stayed this long ...
+constexpr double kStillMove = 0.002;  // m: ... within this distance ...
+constexpr double kStillTurn = 0.02;  // rad: ... and this angle of where it was then
 constexpr double kOnTableZ = -0.05;  // m: an object below this fell off the table
 constexpr double kNearObject = 0.15;  // m: a palm this close to an object's centre is working on it
-constexpr double kSameTime = 0.05;  // s of server time: two hands arriving this close together tie
+constexpr double kFrameTolerance = 0.002;  // m: a received mesh's centre of mass this far from its origin is off
+constexpr double kSameTime = 0.05;
+constexpr double kReplanMove = 0.02;  // m: an object moved this far since its plan is planned again ...
+constexpr double kReplanTurn = 0.25;  // rad: ... or turned this far
+constexpr int kMaxReplans = 3;  // re-plans per trial of an object that moved
+// A trial's attempts: two rounds of the operator's kMaxAttempts. After a round of misses on an
+// object that did not move, the bot plans again (a new operator, new pose errors) and tries once
+// more, as a person over the wire would rather than give up; the records say how many it took.
+constexpr int kRounds = 2;
+constexpr int kAttemptBudget = kRounds * sim::ScriptedOperator::kMaxAttempts;
+constexpr double kFollowSpeed = 0.2;  // m/s: how fast the correction follows the object ...
+constexpr double kFollowTurnSpeed =
+    1.0;  // rad/s: ... and its turn  // s of server time: two hands arriving this close together tie
 
 std::string hex64(std::uint64_t h) {
   char text[19];
   std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(h));
   return text;
+}
+
+// A closed box between two corners, counter-clockwise seen from outside.
+sim::TriangleMesh box_mesh(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+  sim::TriangleMesh m;
+  for (int i = 0; i < 8; ++i)
+    m.vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+  m.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                 {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  return m;
 }
 
 const char* side_name(client::HandSide s) { return s == client::HandSide::kRight ? "right" : "left"; }
@@ -50,15 +74,45 @@ std::vector<client::HandKey> hands_near(const client::ObjectState& o, const std:
   return out;
 }
 
-// Follows whether `t`'s object is still: a grasp is planned on a resting object only.
+// The angle between two rotations, rad (quaternions: exact near zero, unlike acos of a trace).
+double angle_between(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return Eigen::Quaterniond(a.linear()).normalized().angularDistance(Eigen::Quaterniond(b.linear()).normalized());
+}
+
+// `from` moved toward `to` by at most `step_m` and `step_rad`.
+Eigen::Isometry3d step_toward(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to, double step_m,
+                              double step_rad) {
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  const Eigen::Vector3d d = to.translation() - from.translation();
+  out.translation() = from.translation() + (d.norm() > step_m ? d * (step_m / d.norm()) : d);
+  const Eigen::Quaterniond qa(from.linear()), qb(to.linear());
+  const double angle = qa.angularDistance(qb);
+  out.linear() = (angle > step_rad ? qa.slerp(step_rad / angle, qb) : qb).normalized().toRotationMatrix();
+  return out;
+}
+
+// Whether an object at `X` has moved beyond the re-plan thresholds from `X_plan`.
+bool moved_beyond(const Eigen::Isometry3d& X, const Eigen::Isometry3d& X_plan) {
+  return (X.translation() - X_plan.translation()).norm() > kReplanMove || angle_between(X, X_plan) > kReplanTurn;
+}
+
+// Follows whether `t`'s object is still: a grasp is planned on a resting object only. Resting:
+// the server's velocity is low and the pose has stayed near one pose (the anchor) for kStillTime.
+// A pose test over a window, not between successive scene states, so the solver's sub-millimetre
+// jitter on a resting object does not count as motion.
 void track_stillness(Target& t, const client::ObjectState* o, double server_time) {
   if (!o) return;
   const Eigen::Isometry3d& X = o->X_WorldObject;
-  const bool same = t.X_WorldObject_last &&
-                    (X.translation() - t.X_WorldObject_last->translation()).norm() < kStillMove &&
-                    Eigen::AngleAxisd(X.linear() * t.X_WorldObject_last->linear().transpose()).angle() < kStillMove;
-  if (!same || o->v_WorldObject.norm() > kRestingSpeed) t.still_since = server_time;
-  t.X_WorldObject_last = X;
+  if (t.X_WorldObject_anchor) {
+    t.moved_m = (X.translation() - t.X_WorldObject_anchor->translation()).norm();
+    t.turned_rad = angle_between(X, *t.X_WorldObject_anchor);
+  }
+  if (!t.X_WorldObject_anchor || t.moved_m > kStillMove || t.turned_rad > kStillTurn ||
+      o->v_WorldObject.norm() > kRestingSpeed || o->held) {
+    t.X_WorldObject_anchor = X;
+    t.still_since = server_time;
+    t.moved_m = t.turned_rad = 0;
+  }
 }
 
 // Why an object cannot be started now ("" if it can).
@@ -69,7 +123,10 @@ std::string why_unavailable(const Target& t, const client::ObjectState* o,
   if (const auto near = hands_near(*o, others); !near.empty()) return "being worked on by " + hand_name(near.front());
   const double z = o->X_WorldObject.translation().z();
   if (z < kOnTableZ) return "off the table (z " + report::fmt(z, 2) + " m)";
-  if (server_time - t.still_since < kStillTime) return "moving (" + report::fmt(o->v_WorldObject.norm(), 2) + " m/s)";
+  if (server_time - t.still_since < kStillTime)
+    return "moving (" + report::fmt(o->v_WorldObject.norm(), 3) + " m/s; " + report::fmt(1000 * t.moved_m, 1) +
+           " mm, " + report::fmt(t.turned_rad * 180 / M_PI, 1) + " deg in " +
+           report::fmt(std::max(0.0, server_time - t.still_since), 2) + " s)";
   return "";
 }
 
@@ -84,14 +141,28 @@ bool geometry_complete(const client::Client& c, const client::SceneState& scene,
 
 sim::ObjectModelPtr model_from_geometry(const client::ObjectGeometry& g) {
   const std::string source = "ObjectGeometry " + g.model + " (hash " + hex64(g.content_hash) + ")";
-  if (g.mesh_omitted)
-    throw sim::MeshLoadError(source + ": the server published it without its mesh (" +
-                             std::to_string(g.triangle_count) + " triangles, over its limit)");
   sim::TriangleMesh mesh;
-  mesh.vertices.reserve(g.vertices.size());
-  for (const Eigen::Vector3f& v : g.vertices) mesh.vertices.push_back(v.cast<double>());
-  mesh.triangles = g.triangles;
-  return sim::make_object_model_in_model_frame(g.model, std::move(mesh), g.mass_kg, source, -g.p_ObjectSourceOrigin);
+  if (g.mesh_omitted) {
+    // Over the server's size limit: plan on the box of its bounds (model frame), the best the wire
+    // gives. Fingers close on the box's faces, which lie on or outside the real surface.
+    if (!((g.p_ObjectMax - g.p_ObjectMin).array() > 0).all())
+      throw sim::MeshLoadError(source + ": published without its mesh (" + std::to_string(g.triangle_count) +
+                               " triangles, over the server's limit) and with empty bounds");
+    mesh = box_mesh(g.p_ObjectMin, g.p_ObjectMax);
+  } else {
+    mesh.vertices.reserve(g.vertices.size());
+    for (const Eigen::Vector3f& v : g.vertices) mesh.vertices.push_back(v.cast<double>());
+    mesh.triangles = g.triangles;
+  }
+  sim::ObjectModelPtr m = sim::make_object_model_in_model_frame(g.model, std::move(mesh), g.mass_kg,
+                                                                source + (g.mesh_omitted ? ", its bounding box" : ""),
+                                                                -g.p_ObjectSourceOrigin);
+  // The plan is made in the model frame, the frame of ObjectState's pose: its origin is the centre
+  // of mass. A mesh whose centroid is elsewhere may not have been published in that frame: say so.
+  if (!g.mesh_omitted && m->mass_properties.centroid.norm() > kFrameTolerance)
+    std::cerr << "telegrasp-bot: warning: " << source << " may not be in the model frame: its centre of mass is "
+              << report::fmt(1000 * m->mass_properties.centroid.norm(), 1) << " mm from its origin\n";
+  return m;
 }
 
 std::map<std::string, sim::ObjectModelPtr> resolve_models(const client::Client& c, const client::SceneState& scene,
@@ -251,7 +322,23 @@ bool Bot::report_results() const {
   s["skill"] = opt_.skill;
   s["client_id"] = opt_.client_id;
   s["hands"] = hands;
-  std::cout << "summary: " << s.dump() << "\n" << std::flush;
+  std::cout << "summary: " << s.dump() << "\n";
+  // The held line: the total, then each object not held in every trial.
+  int held = 0;
+  std::string failed;
+  for (const report::ObjectRows& row : rows) {
+    int n = 0;
+    for (const report::Record* r : row.records) n += r->held_after_lift;
+    held += n;
+    if (n < static_cast<int>(row.records.size()) || row.records.empty())
+      failed += (failed.empty() ? "" : ", ") + row.object + " " + std::to_string(n) + "/" +
+                std::to_string(row.records.size());
+  }
+  const std::string line = "held " + std::to_string(held) + "/" + std::to_string(all.size()) + " trials on " +
+                           std::to_string(rows.size()) + " objects; " +
+                           (failed.empty() ? "every object held in every trial" : "not held every time: " + failed);
+  std::cout << line << "\n" << std::flush;
+  std::cerr << line << "\n";
   if (opt_.json_path.empty()) return true;
   json grasps = json::array();
   for (const BotRecord& r : records_) {
@@ -269,6 +356,13 @@ bool Bot::report_results() const {
     return false;
   }
   std::cerr << "wrote " << opt_.json_path << "\n";
+  return true;
+}
+
+bool Bot::all_held() const {
+  if (records_.empty()) return false;
+  for (const BotRecord& r : records_)
+    if (!r.record.held_after_lift) return false;
   return true;
 }
 
@@ -377,7 +471,7 @@ void Bot::step(Hand& h, std::int64_t tick, const client::SceneState& scene,
       return;
     }
     const bool planned = h.planning.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
-    if (!planned || (tick - h.stage_tick) * dt < kSettleTime) return;
+    if (!planned || (!h.running && (tick - h.stage_tick) * dt < kSettleTime)) return;
     try {
       h.planning.get();
     } catch (const std::exception& e) {
@@ -385,20 +479,52 @@ void Bot::step(Hand& h, std::int64_t tick, const client::SceneState& scene,
       finish_trial(h);
       return;
     }
+    if (o && !o->held && h.replans < kMaxReplans && moved_beyond(o->X_WorldObject, h.X_WorldObject_plan)) {
+      ++h.replans;
+      replan(h, *o, "it moved while the plan was made");  // planning took long and the object moved
+      return;
+    }
     h.stage = Stage::kRun;
     h.op_tick = tick;
-    h.server_t0 = scene.time;
-    h.z0 = o ? o->X_WorldObject.translation().z() : 0;
+    if (!h.running) {
+      h.server_t0 = scene.time;
+      h.z0 = o ? o->X_WorldObject.translation().z() : 0;
+    }
+    h.running = true;
+    // The object's motion since the plan (the scene state planned on is older than this one).
+    h.X_WorldObject_followed = o ? o->X_WorldObject : h.X_WorldObject_plan;
+    h.correction = h.X_WorldObject_followed * h.X_WorldObject_plan.inverse();
   }
   if (h.stage == Stage::kRun) {
     const bool grasped = holds_target(h, o);
     h.seen_grasped |= grasped;
     const double t_op = static_cast<double>(tick - h.op_tick) * dt;
     const sim::OperatorPhase phase_before = h.op->phase();
-    if (phase_before == sim::OperatorPhase::kReact || phase_before == sim::OperatorPhase::kReach) {
+    const bool approaching = phase_before == sim::OperatorPhase::kReact || phase_before == sim::OperatorPhase::kReach;
+    if (approaching) {
       if (const auto other = yields_to(h, o)) {
         abandon(h, *other);
         return;
+      }
+      if (o && !o->held) {
+        // Before a squeeze (the first, or after a miss that pushed the object): follow the object,
+        // or plan again where it went if it moved far (fell over, rolled away).
+        // The attempts made so far: the one being reached for has not squeezed yet.
+        const int made =
+            h.attempts_before + std::max(0, h.op->attempts() - (phase_before == sim::OperatorPhase::kReach ? 1 : 0));
+        if (h.replans < kMaxReplans && made < kAttemptBudget && moved_beyond(o->X_WorldObject, h.X_WorldObject_plan)) {
+          h.attempts_before = made;
+          ++h.replans;
+          replan(
+              h, *o,
+              "it moved " +
+                  report::fmt(1000 * (o->X_WorldObject.translation() - h.X_WorldObject_plan.translation()).norm(), 0) +
+                  " mm since its plan");
+          return;
+        }
+        h.X_WorldObject_followed =
+            step_toward(h.X_WorldObject_followed, o->X_WorldObject, kFollowSpeed * dt, kFollowTurnSpeed * dt);
+        h.correction = h.X_WorldObject_followed * h.X_WorldObject_plan.inverse();
       }
     }
     if (!o)
@@ -406,10 +532,21 @@ void Bot::step(Hand& h, std::int64_t tick, const client::SceneState& scene,
     else if (h.seen_grasped && !grasped && o->held && !(o->holder == h.key))
       h.note = "taken by " + hand_name(o->holder);
     h.input = h.op->next(t_op, grasped);
+    h.input.X_WorldPalm = h.correction * h.input.X_WorldPalm;
     if (h.op->phase() == sim::OperatorPhase::kHold && o)
       h.z_max = std::max(h.z_max, o->X_WorldObject.translation().z());
-    if (h.op->done() || t_op > kTrialLimit) {
-      if (!h.op->done()) h.note = "cut short after " + report::fmt(kTrialLimit, 0) + " s";
+    // A round of misses (the operator gave up, nothing grasped): plan again for another round.
+    if (h.op->done() && !h.seen_grasped && o && !o->held && h.retries + 1 < kRounds &&
+        h.attempts_before + h.op->attempts() < kAttemptBudget) {
+      h.attempts_before += h.op->attempts();
+      ++h.retries;
+      replan(h, *o, "not grasped in " + std::to_string(h.attempts_before) + " attempt(s)");
+      return;
+    }
+    // Every operator of the trial shares kAttemptBudget: one that begins an attempt past it is done.
+    const bool out_of_attempts = h.attempts_before + h.op->attempts() > kAttemptBudget;
+    if (h.op->done() || out_of_attempts || t_op > kTrialLimit) {
+      if (!h.op->done() && !out_of_attempts) h.note = "cut short after " + report::fmt(kTrialLimit, 0) + " s";
       h.input.trigger = 0;
       h.input.curls.clear();
       h.stage = Stage::kFinish;
@@ -464,13 +601,35 @@ void Bot::start_trial(Hand& h, Target& t, std::int64_t tick, const client::Objec
   h.X_WorldStart = X_WorldStart;
   h.input = {};
   h.input.X_WorldPalm = X_WorldStart;
-  // The operator's noise depends on the object and trial only, as in telegrasp-eval.
-  const std::uint64_t seed = opt_.seed * 1000003ULL + t.scene_index * 1009ULL + static_cast<std::uint64_t>(h.trial);
+  h.X_WorldObject_plan = h.X_WorldObject_followed = o.X_WorldObject;
+  h.correction = Eigen::Isometry3d::Identity();
+  h.plans = h.replans = h.retries = h.attempts_before = 0;
+  h.running = false;
+  begin_operator(h, o.X_WorldObject, X_WorldStart);
+}
+
+void Bot::begin_operator(Hand& h, const Eigen::Isometry3d& X_WorldObject, const Eigen::Isometry3d& X_WorldPalm) {
+  // The operator's noise depends on the object, trial and re-plan only, as in telegrasp-eval.
+  const std::uint64_t seed = opt_.seed * 1000003ULL + h.target->scene_index * 1009ULL +
+                             static_cast<std::uint64_t>(h.trial) + 7919ULL * static_cast<std::uint64_t>(h.plans);
   h.op = std::make_unique<sim::ScriptedOperator>(h.rig, skill_, seed, sim::GraspSettings{}, 1.0 / kRate);
   sim::ScriptedOperator* op = h.op.get();
-  h.planning = std::async(std::launch::async, [op, model = t.model, X_WorldObject = o.X_WorldObject, X_WorldStart] {
-    op->begin(*model, X_WorldObject, X_WorldStart, 0.0);
+  h.planning = std::async(std::launch::async, [op, model = h.target->model, X_WorldObject, X_WorldPalm] {
+    op->begin(*model, X_WorldObject, X_WorldPalm, 0.0);
   });
+}
+
+void Bot::replan(Hand& h, const client::ObjectState& o, const std::string& why) {
+  ++h.plans;
+  std::cerr << side_name(h.key.side) << " hand plans " << h.target->label << " trial " << h.trial << " again: " << why
+            << "\n";
+  h.X_WorldObject_plan = h.X_WorldObject_followed = o.X_WorldObject;
+  h.correction = Eigen::Isometry3d::Identity();
+  h.input.trigger = 0;
+  h.input.curls.clear();
+  h.stage = Stage::kSettle;
+  h.stage_tick = 0;
+  begin_operator(h, o.X_WorldObject, h.input.X_WorldPalm);  // from where the hand is, open
 }
 
 // Drops the current trial without counting it: `other` has the object, or came for it first.
@@ -488,7 +647,7 @@ void Bot::abandon(Hand& h, const client::HandKey& other) {
 void Bot::finish_trial(Hand& h) {
   BotRecord r;
   r.record = std::move(h.rec);
-  r.record.attempts = h.op->attempts();
+  r.record.attempts = std::min(h.attempts_before + h.op->attempts(), kAttemptBudget);
   r.record.held_after_lift = h.op->held_after_lift() && h.z_max - h.z0 > 0.8 * sim::ScriptedOperator::kLiftHeight;
   r.object_id = h.target->id;
   r.hand = h.key.side;

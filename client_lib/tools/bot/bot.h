@@ -65,9 +65,11 @@ struct Target {
   int started = 0, finished = 0;
   bool given_up = false;
   std::optional<Clock::time_point> unavailable_since;
-  // Stillness: the last pose seen and since when (server time) it has not changed.
-  std::optional<Eigen::Isometry3d> X_WorldObject_last;
+  // Stillness: the pose the object has stayed near (within kStillMove) and since when (server
+  // time), and how far the newest pose is from it.
+  std::optional<Eigen::Isometry3d> X_WorldObject_anchor;
   double still_since = 0;
+  double moved_m = 0, turned_rad = 0;
 };
 
 // A finished trial: the shared record and who did it.
@@ -91,6 +93,19 @@ struct Hand {
   Eigen::Isometry3d X_WorldStart = Eigen::Isometry3d::Identity();  // where it began, and returns to
   std::unique_ptr<sim::ScriptedOperator> op;
   std::future<void> planning;  // op->begin() runs here so the loop keeps publishing
+  // The operator plans on the object's pose when planning began (X_WorldObject_plan); the scene
+  // state it then sees is newer. Its palm poses are moved by `correction`, the motion from the
+  // planned pose to X_WorldObject_followed: the object's pose followed at a bounded speed before
+  // each squeeze, fixed from the squeeze on. A move beyond kReplanMove or kReplanTurn re-plans on
+  // the new pose (at most kMaxReplans times).
+  Eigen::Isometry3d X_WorldObject_plan = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d X_WorldObject_followed = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d correction = Eigen::Isometry3d::Identity();
+  int plans = 0;  // re-plans in all: each operator of the trial gets its own pose errors
+  int replans = 0;  // re-plans because the object moved
+  int retries = 0;  // re-plans after a round of misses (kRounds)
+  int attempts_before = 0;  // attempts of the operators replaced by a re-plan
+  bool running = false;  // the trial's operator has run (a re-plan keeps its start time)
   std::int64_t stage_tick = 0, op_tick = 0;
   double server_t0 = 0, z0 = 0, z_max = -1e9;
   bool seen_grasped = false, got_grasp_event = false;
@@ -125,8 +140,12 @@ class Bot {
   // The trials in progress (not counted when stopped early).
   int in_progress() const;
 
-  // Prints the table and the summary line; writes --json. False if the file cannot be written.
+  // Prints the table, the JSON summary line and the held line (on stdout, and the held line on
+  // stderr too); writes --json. False if the file cannot be written.
   bool report_results() const;
+
+  // Every object held after the lift in every one of its trials (and at least one trial done).
+  bool all_held() const;
 
  private:
   Hand* hand_of(const client::HandKey& key);
@@ -157,6 +176,13 @@ class Bot {
   std::optional<client::HandKey> yields_to(Hand& h, const client::ObjectState* o);
 
   void start_trial(Hand& h, Target& t, std::int64_t tick, const client::ObjectState& o);
+
+  // Starts h's operator planning (asynchronously) on the object at X_WorldObject, the hand at X_WorldPalm.
+  void begin_operator(Hand& h, const Eigen::Isometry3d& X_WorldObject, const Eigen::Isometry3d& X_WorldPalm);
+
+  // Plans h's trial again on the object's pose now (it moved far since the plan, or a round of
+  // attempts missed), from where the hand is, keeping the trial's attempts and start time.
+  void replan(Hand& h, const client::ObjectState& o, const std::string& why);
 
   // Drops the current trial without counting it: `other` has the object, or came for it first.
   void abandon(Hand& h, const client::HandKey& other);

@@ -31,16 +31,23 @@ using telegrasp::bot::kRate;
 using telegrasp::bot::kStaleScene;
 using Options = telegrasp::bot::Options;
 
+constexpr int kExitNotHeld = 3;  // every trial done, some not held
+
 constexpr const char* kUsage = R"(Usage: telegrasp-bot [options]
 
 The scripted operator of telegrasp-eval driving one or two hands of a telegrasp server over DDS.
 Each hand picks a free object from the server's SceneState (resting on the table, held by
 nobody, no other client's hand at it), appears 30 cm from it, reaches, grasps, lifts 10 cm,
-holds 1 s and releases, publishing its controller at 90 Hz. Every object in the scene (as the
-bot first sees it) is grasped --trials times; each grasp is recorded from the server's
-GraspEvent. A hand leaves an object to another client's hand that got there first; an object
-unavailable for 10 s is given up (recorded as not grasped, with the reason). Progress goes to
-stderr (one line per trial), then the per-object table of telegrasp-eval goes to stdout.
+holds 1 s and releases, publishing its controller at 90 Hz. It plans on the object's pose of
+the newest SceneState and moves its hand with the object until it squeezes; an object that moved
+over 2 cm (or 0.25 rad) since its plan is planned again. A missed squeeze is tried again; after 3
+misses the bot plans again and tries up to 3 more times (6 attempts a trial at most, the JSON
+"attempts" says how many). An object is started only once it rests (under 0.02 m/s, within 2 mm
+and 0.02 rad of one pose for 0.3 s). Every object in the scene (as the bot first sees it) is
+grasped --trials times; each grasp is recorded from the server's GraspEvent. A hand leaves an
+object to another client's hand that got there first; an object unavailable for 10 s is given
+up (recorded as not grasped, with the reason). Progress goes to stderr (one line per trial),
+then the per-object table of telegrasp-eval goes to stdout.
 
 Options:
   --client-id ID      names this bot's hands on the server (default bot-<pid>)
@@ -60,10 +67,15 @@ Options:
                       (default 20)
   -h, --help          this text
 
-Exit status: 0 every trial done, 1 a runtime failure (the --objects folder or a mesh in it
-missing or unreadable, the --json file not writable, DDS could not start, no server found or it
-went silent), 2 a usage error (a bad or missing option or value), 130 stopped by SIGINT or
-SIGTERM (the table shows the trials done).
+The last line on stdout (and stderr) says how many trials held, then each object not held in
+every trial with its count, e.g. "held 88/90 trials on 30 objects; not held every time: spoon 2/3".
+
+Exit status: 0 every trial done and every object held after the lift in every trial, 1 a runtime
+failure (the --objects folder or a mesh in it missing or unreadable, the --json file not
+writable, DDS could not start, no server found or it went silent), 2 a usage error (a bad or
+missing option or value), 3 every trial done but some object not held in every trial (or the
+scene had no object: nothing grasped), 130 stopped by SIGINT or SIGTERM (the table shows the
+trials done).
 )";
 
 [[noreturn]] void usage_error(const std::string& what) { telegrasp::cli::usage_exit("telegrasp-bot", what); }
@@ -188,7 +200,7 @@ int main(int argc, char** argv) {
   if (!bot.set_scene(*scene)) {
     std::cerr << "telegrasp-bot: the server's scene has no objects\n";
     bot.report_results();
-    return 0;
+    return kExitNotHeld;
   }
   std::cerr << "telegrasp-bot " << opt.client_id << ": " << scene->objects.size() << " objects x " << opt.trials
             << " trial(s), " << opt.hands.size() << " hand(s), skill " << opt.skill << "\n";
@@ -236,5 +248,6 @@ int main(int argc, char** argv) {
   if (status != 0 && bot.in_progress() > 0)
     std::cerr << "telegrasp-bot: " << bot.in_progress() << " trial(s) in progress not counted\n";
   if (!bot.report_results() && status == 0) status = 1;
+  if (status == 0 && !bot.all_held()) status = kExitNotHeld;
   return status;
 }
