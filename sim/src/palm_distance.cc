@@ -13,7 +13,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // A box edge or mesh vertex this close to the other counts as touching: the box overlaps.
 constexpr double kTouching = 1e-9;
 // Projected descent: starts kept after the first evaluation, iterations, smallest step (m).
-constexpr int kDescentStarts = 3;
+constexpr int kDescentStarts = 4;
+constexpr int kGrid = 5;  // start points along the box's two long axes (3 across its thickness)
 constexpr int kDescentIterations = 64;
 constexpr double kMinStep = 1e-7;
 
@@ -84,17 +85,16 @@ double descend(const MeshDistance& mesh, const Box& box, Eigen::Vector3d x) {
   return q.signed_distance;
 }
 
-// The lowest signed distance over the box: descent from the best few of corners, face centres,
-// centre and seeds.
+// The lowest signed distance over the box: descent from the best few of a 5 x 5 x 3 grid of box
+// points (corners, face and edge points, centre included) and the seeds.
 double deepest(const MeshDistance& mesh, const Box& box, std::vector<Eigen::Vector3d> starts) {
-  for (int i = 0; i < 8; ++i) starts.push_back(box.corner(i));
-  for (int axis = 0; axis < 3; ++axis)
-    for (double s : {-1.0, 1.0}) {
-      Eigen::Vector3d l = Eigen::Vector3d::Zero();
-      l[axis] = s * box.h[axis];
-      starts.push_back(box.X_ObjectBox * l);
-    }
-  starts.push_back(box.X_ObjectBox.translation());
+  const Eigen::Array3i n(kGrid, kGrid, 3);
+  for (int i = 0; i < n.x(); ++i)
+    for (int j = 0; j < n.y(); ++j)
+      for (int k = 0; k < n.z(); ++k) {
+        const Eigen::Array3d f = Eigen::Array3d(i, j, k) / (n - 1).cast<double>();
+        starts.push_back(box.X_ObjectBox * Eigen::Vector3d((2 * f - 1) * box.h.array()));
+      }
   std::vector<std::pair<double, std::size_t>> ranked;
   for (std::size_t i = 0; i < starts.size(); ++i) ranked.emplace_back(mesh.signed_distance(starts[i]), i);
   const std::size_t keep = std::min<std::size_t>(kDescentStarts, ranked.size());

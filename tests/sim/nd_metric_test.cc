@@ -13,13 +13,16 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <limits>
 #include <numbers>
 
 namespace telegrasp::sim {
 namespace {
 
 constexpr double kDt = 1.0 / 90.0;
-constexpr double kTol = 0.05e-3;  // GraspSettings default contact tolerance
+constexpr double kTol = 0.05e-3;
+constexpr double kInf = std::numeric_limits<double>::infinity();  // GraspSettings default contact tolerance
 
 // One phalanx hinged at (0.04, 0, 0) in the palm frame, flexing about +y (the tip goes to -z):
 // capsule from x = 3 mm to 27 mm, radius 5 mm; Sp on its axis and CTc on the palmar skin at
@@ -220,6 +223,46 @@ TEST_F(PalmDistanceTest, InsideABlock) {
   EXPECT_NEAR(
       palm_distance(testing::box_mesh({0.06, 0.06, 0.06}), Eigen::Isometry3d(Eigen::Translation3d(0, 0, -0.03))), -0.04,
       1e-9);
+}
+
+// Against brute force: at random palm poses around stand-ins (a box, a ball, a drill), the palm
+// box's signed distance is no more than the lowest signed distance over a 41 x 41 x 11 grid of
+// the box's points (it is the minimum over the box) and no less than that less the grid's reach
+// (half a cell's diagonal).
+TEST(PalmDistanceBruteForceTest, MatchesAGridOverTheBox) {
+  auto rig = std::make_shared<const HandRig>(HandRig::load(HandRig::builtin_path("human_right")));
+  const Eigen::Vector3d h = rig->palm_half_extent();
+  const Eigen::Array3i n(41, 41, 11);
+  const Eigen::Vector3d cell = 2 * h.array() / (n - 1).cast<double>();
+  const double reach = 0.5 * cell.norm();
+  std::srand(7);
+  auto uniform = [] { return 2.0 * std::rand() / RAND_MAX - 1.0; };
+  for (const char* name : {"003_cracker_box", "055_baseball", "035_power_drill"}) {
+    SCOPED_TRACE(name);
+    const ObjectModelPtr model = make_standin_model(*find_protocol_object(name));
+    const double size = 0.5 * (model->p_ObjectMax - model->p_ObjectMin).norm();
+    const ObjectView view{ObjectId(1), Eigen::Isometry3d::Identity(), model.get()};
+    for (int k = 0; k < 12; ++k) {
+      Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+      X.linear() = Eigen::Quaterniond(uniform(), uniform(), uniform(), uniform()).normalized().toRotationMatrix();
+      X.translation() = Eigen::Vector3d(uniform(), uniform(), uniform()).normalized() * size * (0.6 + 0.3 * (k % 3));
+      HandController hand(rig, GraspSettings{});
+      ControllerInput in;
+      in.X_WorldPalm = X;
+      hand.tick(in, kDt, {});
+      const double d = hand.measure(view).palm_signed_distance;
+      double grid = kInf;
+      for (int i = 0; i < n.x(); ++i)
+        for (int j = 0; j < n.y(); ++j)
+          for (int l = 0; l < n.z(); ++l) {
+            const Eigen::Vector3d p = -h + Eigen::Vector3d(i * cell.x(), j * cell.y(), l * cell.z());
+            grid = std::min(grid, model->distance.signed_distance(X * p));
+          }
+      SCOPED_TRACE(k);
+      EXPECT_LE(d, grid + 1e-9);
+      EXPECT_GE(d, grid - reach);
+    }
+  }
 }
 
 }  // namespace
