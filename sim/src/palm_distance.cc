@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <limits>
+#include <optional>
 #include <vector>
 
 namespace telegrasp::sim {
@@ -13,10 +14,10 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // A box edge or mesh vertex this close to the other counts as touching: the box overlaps.
 constexpr double kTouching = 1e-9;
 // Projected descent: starts kept after the first evaluation, iterations, smallest step (m).
-constexpr int kDescentStarts = 4;
-constexpr int kGrid = 5;  // start points along the box's two long axes (3 across its thickness)
-constexpr int kDescentIterations = 64;
-constexpr double kMinStep = 1e-7;
+constexpr std::size_t kDescentStarts = 2;
+constexpr std::size_t kSeeds = 8;
+constexpr int kDescentIterations = 24;
+constexpr double kMinStep = 1e-5;
 
 struct Box {
   Eigen::Isometry3d X_ObjectBox;
@@ -63,6 +64,15 @@ double vertex_distance(const TriangleMesh& mesh, const Box& box, double best, st
   return best;
 }
 
+// The closest point to p if p's signed distance is below `f`, else nothing. With f < 0 a search
+// bounded by |f| first rejects, cheaply, every point whose surface lies nearer than that.
+std::optional<PointQuery> lower(const MeshDistance& mesh, const Eigen::Vector3d& p, double f) {
+  if (f < 0 && mesh.closest_point(p, -f).found) return std::nullopt;
+  const PointQuery q = mesh.closest_point(p);
+  if (!(q.signed_distance < f)) return std::nullopt;
+  return q;
+}
+
 // Projected descent of the signed distance over the box from x: steps away from the nearest
 // surface point inside the solid (toward it outside), clamped to the box, kept when lower.
 double descend(const MeshDistance& mesh, const Box& box, Eigen::Vector3d x) {
@@ -74,10 +84,9 @@ double descend(const MeshDistance& mesh, const Box& box, Eigen::Vector3d x) {
     g = n > 0 ? Eigen::Vector3d(g / n) : Eigen::Vector3d(-q.normal);
     if (q.signed_distance > 0) g = -g;
     const Eigen::Vector3d y = box.clamp(x + step * g);
-    const PointQuery qy = mesh.closest_point(y);
-    if (qy.signed_distance < q.signed_distance) {
+    if (const auto qy = lower(mesh, y, q.signed_distance)) {
       x = y;
-      q = qy;
+      q = *qy;
     } else {
       step *= 0.5;
     }
@@ -85,22 +94,29 @@ double descend(const MeshDistance& mesh, const Box& box, Eigen::Vector3d x) {
   return q.signed_distance;
 }
 
-// The lowest signed distance over the box: descent from the best few of a 5 x 5 x 3 grid of box
-// points (corners, face and edge points, centre included) and the seeds.
+// The lowest signed distance over the box: descent from the lowest few of the corners, face
+// centres, centre and (up to kSeeds of) the seeds.
 double deepest(const MeshDistance& mesh, const Box& box, std::vector<Eigen::Vector3d> starts) {
-  const Eigen::Array3i n(kGrid, kGrid, 3);
-  for (int i = 0; i < n.x(); ++i)
-    for (int j = 0; j < n.y(); ++j)
-      for (int k = 0; k < n.z(); ++k) {
-        const Eigen::Array3d f = Eigen::Array3d(i, j, k) / (n - 1).cast<double>();
-        starts.push_back(box.X_ObjectBox * Eigen::Vector3d((2 * f - 1) * box.h.array()));
-      }
-  std::vector<std::pair<double, std::size_t>> ranked;
-  for (std::size_t i = 0; i < starts.size(); ++i) ranked.emplace_back(mesh.signed_distance(starts[i]), i);
-  const std::size_t keep = std::min<std::size_t>(kDescentStarts, ranked.size());
-  std::partial_sort(ranked.begin(), ranked.begin() + static_cast<std::ptrdiff_t>(keep), ranked.end());
+  if (starts.size() > kSeeds) starts.resize(kSeeds);
+  for (int i = 0; i < 8; ++i) starts.push_back(box.corner(i));
+  for (int axis = 0; axis < 3; ++axis)
+    for (double s : {-1.0, 1.0}) {
+      Eigen::Vector3d l = Eigen::Vector3d::Zero();
+      l[axis] = s * box.h[axis];
+      starts.push_back(box.X_ObjectBox * l);
+    }
+  starts.push_back(box.X_ObjectBox.translation());
+  std::vector<std::pair<double, std::size_t>> best;  // the lowest kDescentStarts, ascending
+  for (std::size_t i = 0; i < starts.size(); ++i) {
+    const double bar = best.size() < kDescentStarts ? kInf : best.back().first;
+    const auto q = lower(mesh, starts[i], bar);
+    if (!q) continue;
+    best.insert(std::upper_bound(best.begin(), best.end(), std::make_pair(q->signed_distance, i)),
+                {q->signed_distance, i});
+    if (best.size() > kDescentStarts) best.pop_back();
+  }
   double lowest = kInf;
-  for (std::size_t k = 0; k < keep; ++k) lowest = std::min(lowest, descend(mesh, box, starts[ranked[k].second]));
+  for (const auto& [f, i] : best) lowest = std::min(lowest, descend(mesh, box, starts[i]));
   return lowest;
 }
 

@@ -13,8 +13,9 @@ namespace telegrasp::sim {
 /// or at a mesh vertex facing a box face, and both are searched exactly). Overlapping (a box edge
 /// meets the surface, a mesh vertex lies in the box, or the centre lies in the solid): minus the
 /// depth of the deepest box point, found by projected descent of the signed distance from the
-/// best of a grid of box points (corners and face centres included) and the contact points (exact
-/// for a face, edge or corner pressed into the object; never deeper than the truth).
+/// lowest of the corners, face centres, centre and contact points: exact for a face, edge or corner
+/// pressed into the object, never deeper than the truth, and within about a millimetre of it when
+/// an edge of the object cuts deep into the box (the descent stalls on the object's medial ridge).
 double box_signed_distance(const ObjectModel& model, const Eigen::Isometry3d& X_ObjectBox,
                            const Eigen::Vector3d& half_extent);
 
