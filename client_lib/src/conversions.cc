@@ -83,6 +83,9 @@ msg::HandSkeleton to_msg(const client::HandSkeleton& s) {
   m.palm(to_msg(s.X_WorldPalm));
   m.phalanges(to_msgs<msg::Pose3>(s.X_WorldPhalanx));
   m.joint_angles(s.joint_angles);
+  m.tracked_palm(to_msg(s.X_WorldTracked));
+  m.resolve_offset(to_msg(s.resolve_offset));
+  m.resolve_angle(s.resolve_angle);
   return m;
 }
 
@@ -99,6 +102,9 @@ client::HandSkeleton from_msg(const msg::HandSkeleton& m) {
   s.X_WorldPalm = from_msg(m.palm());
   s.X_WorldPhalanx = from_msgs<Eigen::Isometry3d>(m.phalanges());
   s.joint_angles = m.joint_angles();
+  s.X_WorldTracked = from_msg(m.tracked_palm());
+  s.resolve_offset = from_msg(m.resolve_offset());
+  s.resolve_angle = m.resolve_angle();
   return s;
 }
 
@@ -113,6 +119,9 @@ msg::GraspState to_msg(const client::GraspState& s) {
   m.trigger(s.trigger);
   m.blocked(s.blocked);
   m.palm_contact(s.palm_contact);
+  m.epsilon(s.epsilon);
+  m.volume(s.volume);
+  m.force_closure(s.force_closure);
   return m;
 }
 
@@ -126,6 +135,9 @@ client::GraspState from_msg(const msg::GraspState& m) {
   s.trigger = m.trigger();
   s.blocked = m.blocked();
   s.palm_contact = m.palm_contact();
+  s.epsilon = m.epsilon();
+  s.volume = m.volume();
+  s.force_closure = m.force_closure();
   return s;
 }
 
@@ -184,6 +196,8 @@ msg::CapsuleReport to_msg(const client::CapsuleMetric& r) {
   m.nd(r.nd);
   m.signed_distance(r.signed_distance);
   m.blocked(r.blocked);
+  m.contact_hit(r.contact_hit);
+  m.nd_contact(r.nd_contact);
   return m;
 }
 
@@ -195,6 +209,8 @@ client::CapsuleMetric from_msg(const msg::CapsuleReport& m) {
   r.nd = m.nd();
   r.signed_distance = m.signed_distance();
   r.blocked = m.blocked();
+  r.contact_hit = m.contact_hit();
+  r.nd_contact = m.nd_contact();
   return r;
 }
 
@@ -235,6 +251,10 @@ msg::GraspEvent to_msg(const client::GraspEvent& e) {
   m.capsules_without_hit(e.capsules_without_hit);
   m.capsules(to_msgs<msg::CapsuleReport>(e.capsules));
   m.contacts(to_msgs<msg::ContactPoint>(e.contacts));
+  m.palm_signed_distance(e.palm_signed_distance);
+  m.epsilon(e.epsilon);
+  m.volume(e.volume);
+  m.force_closure(e.force_closure);
   m.release_velocity(to_msg(e.v_WorldObject));
   m.release_angular_velocity(to_msg(e.w_WorldObject));
   return m;
@@ -256,6 +276,10 @@ client::GraspEvent from_msg(const msg::GraspEvent& m) {
   e.capsules_without_hit = m.capsules_without_hit();
   e.capsules = from_msgs<client::CapsuleMetric>(m.capsules());
   e.contacts = from_msgs<client::ContactPoint>(m.contacts());
+  e.palm_signed_distance = m.palm_signed_distance();
+  e.epsilon = m.epsilon();
+  e.volume = m.volume();
+  e.force_closure = m.force_closure();
   e.v_WorldObject = from_msg(m.release_velocity());
   e.w_WorldObject = from_msg(m.release_angular_velocity());
   return e;

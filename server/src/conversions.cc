@@ -2,6 +2,9 @@
 
 #include "telegrasp/idl/geometry_hash.h"
 
+#include <algorithm>
+#include <cmath>
+
 namespace telegrasp::server {
 
 sim::ControllerInput to_sim_input(const msg::ControllerState& state) {
@@ -33,6 +36,11 @@ msg::HandSkeleton make_hand_skeleton(const HandAddress& address, const sim::Hand
   for (const Eigen::Isometry3d& X_PalmPhalanx : s.X_PalmPhalanx)
     m.phalanges().push_back(to_msg(X_WorldPalm * X_PalmPhalanx));
   m.joint_angles(s.q);
+  // Late latched, the new sample's pose is both: the resolved pose is searched on the tick.
+  const Eigen::Isometry3d& X_WorldTracked = X_WorldPalm_override ? *X_WorldPalm_override : s.X_WorldTracked;
+  m.tracked_palm(to_msg(X_WorldTracked));
+  m.resolve_offset(to_msg(Eigen::Vector3d(X_WorldPalm.translation() - X_WorldTracked.translation())));
+  m.resolve_angle(Eigen::AngleAxisd(X_WorldPalm.linear() * X_WorldTracked.linear().transpose()).angle());
   return m;
 }
 
@@ -63,7 +71,20 @@ msg::GraspState make_grasp_state(const HandAddress& address, const sim::HandCont
   m.trigger(s.trigger);
   m.blocked().assign(s.blocked.begin(), s.blocked.end());
   m.palm_contact(s.palm_contact);
+  if (const auto metrics = hand.hold_metrics()) {
+    m.epsilon(metrics->quality.epsilon);
+    m.volume(metrics->quality.volume);
+    m.force_closure(metrics->quality.force_closure);
+  }
   return m;
+}
+
+bool quality_changed(const msg::GraspState& before, const msg::GraspState& now) {
+  auto moved = [](double a, double b) {
+    return std::abs(a - b) > std::max(kQualityAbsoluteChange, kQualityRelativeChange * std::abs(a));
+  };
+  return before.force_closure() != now.force_closure() || moved(before.epsilon(), now.epsilon()) ||
+         moved(before.volume(), now.volume());
 }
 
 msg::ContactPoint to_msg(const sim::Contact& c) {
@@ -127,8 +148,14 @@ msg::GraspEvent make_grasp_event(const sim::GraspEvent& e, const sim::HandRig& r
       r.nd(c.nd);
       r.signed_distance(c.signed_distance);
       r.blocked(c.blocked);
+      r.contact_hit(c.contact_hit);
+      r.nd_contact(c.nd_contact);
       m.capsules().push_back(std::move(r));
     }
+    m.palm_signed_distance(e.metrics->palm_signed_distance);
+    m.epsilon(e.metrics->quality.epsilon);
+    m.volume(e.metrics->quality.volume);
+    m.force_closure(e.metrics->quality.force_closure);
   }
   for (const sim::Contact& c : e.contacts) m.contacts().push_back(to_msg(c));
   m.release_velocity(to_msg(e.v_WorldObject));

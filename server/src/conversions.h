@@ -42,12 +42,19 @@ struct InputStamp {
 msg::HandSkeleton make_hand_skeleton(const HandAddress& address, const sim::HandController& hand, std::uint64_t tick,
                                      double time, const InputStamp& input, bool frozen,
                                      const Eigen::Isometry3d* X_WorldPalm_override = nullptr);
+/// The hand's grasp state; while holding, with the grasp quality of the hand's current shape.
 msg::GraspState make_grasp_state(const HandAddress& address, const sim::HandController& hand, std::uint64_t tick,
                                  double time);
 /// Who holds an object, on the wire: `held`, the first holder in holder_client/holder_hand (the
 /// fields older subscribers read) and every holder, in grasp order, in `holders`.
 void set_holders(msg::ObjectState& object, const std::vector<HandAddress>& holders);
 
+/// A held grasp's quality is republished when force closure flips or epsilon or volume move by
+/// more than 5 % of the last published value or 1e-3, whichever is larger: smaller moves are
+/// rounding from the hand's small motions, not a different grasp.
+constexpr double kQualityRelativeChange = 0.05;
+constexpr double kQualityAbsoluteChange = 1e-3;
+bool quality_changed(const msg::GraspState& before, const msg::GraspState& now);
 msg::ContactPoint to_msg(const sim::Contact& contact);
 sim::Contact to_sim(const msg::ContactPoint& contact);
 /// Contacts of the grasp `hand` holds, with the object's pose at this tick.

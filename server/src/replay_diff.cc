@@ -90,6 +90,9 @@ struct FieldDiff {
     sequence("phalanges", a.phalanges(), b.phalanges(),
              [this](const std::string& n, const auto& x, const auto& y) { pose(n, x, y); });
     values("joint_angles", a.joint_angles(), b.joint_angles());
+    pose("tracked_palm", a.tracked_palm(), b.tracked_palm());
+    vec3("resolve_offset", a.resolve_offset(), b.resolve_offset());
+    value("resolve_angle", a.resolve_angle(), b.resolve_angle());
   }
   void fields(const msg::GraspState& a, const msg::GraspState& b) {
     value("client_id", a.client_id(), b.client_id());
@@ -101,6 +104,9 @@ struct FieldDiff {
     value("trigger", a.trigger(), b.trigger());
     values("blocked", a.blocked(), b.blocked());
     value("palm_contact", a.palm_contact(), b.palm_contact());
+    value("epsilon", a.epsilon(), b.epsilon());
+    value("volume", a.volume(), b.volume());
+    value("force_closure", a.force_closure(), b.force_closure());
   }
   void fields(const msg::ContactSet& a, const msg::ContactSet& b) {
     value("client_id", a.client_id(), b.client_id());
@@ -134,7 +140,13 @@ struct FieldDiff {
                value(n + ".nd", x.nd(), y.nd());
                value(n + ".signed_distance", x.signed_distance(), y.signed_distance());
                value(n + ".blocked", x.blocked(), y.blocked());
+               value(n + ".contact_hit", x.contact_hit(), y.contact_hit());
+               value(n + ".nd_contact", x.nd_contact(), y.nd_contact());
              });
+    value("palm_signed_distance", a.palm_signed_distance(), b.palm_signed_distance());
+    value("epsilon", a.epsilon(), b.epsilon());
+    value("volume", a.volume(), b.volume());
+    value("force_closure", a.force_closure(), b.force_closure());
     sequence("contacts", a.contacts(), b.contacts(),
              [this](const std::string& n, const auto& x, const auto& y) { contact(n, x, y); });
     vec3("release_velocity", a.release_velocity(), b.release_velocity());

@@ -171,11 +171,17 @@ void SceneServer::tick(std::int64_t now_ns) {
     sink_.publish(make_hand_skeleton(addr, hand, tick, time, h.stamp, h.frozen));
     msg::GraspState gs = make_grasp_state(addr, hand, tick, time);
     bool changed = !h.published_state;
-    if (h.published_state) {  // a change of selection, grasp, blocking or palm contact; not of the trigger alone
+    // A change of selection, grasp, blocking, palm contact or (beyond a threshold) grasp quality;
+    // not of the trigger alone.
+    if (h.published_state) {
       msg::GraspState old = *h.published_state;
       old.tick(tick);
       old.time(time);
       old.trigger(gs.trigger());
+      if (!quality_changed(old, gs)) {  // quality moves below the threshold do not count
+        old.epsilon(gs.epsilon());
+        old.volume(gs.volume());
+      }
       changed = !(old == gs);
     }
     if (changed) {

@@ -4,6 +4,8 @@
 #include "telegrasp/sim/grasp_rule.h"
 #include "telegrasp/sim/hand_kinematics.h"
 
+#include "palm_distance.h"
+
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -674,6 +676,53 @@ SegmentQuery HandController::closest_pair(PhalanxId id, ObjectId object, const M
   return q;
 }
 
+namespace {
+
+// nd_contact (GRASPING.md section 4, "Where ND is taken"): the paper's sweep moved to the contact.
+// From the capsule's exact closest pair (axis point A, surface point M): u is the unit direction
+// from A to M (or minus the surface normal at M when A is not outside the solid), the sweep
+// starts at Sp' = A - (|CTc - Sp| - r) u, so that the skin point CTc' = A + r u lies as CTc does
+// (|CTc' - Sp'| = |CTc - Sp|), and ND_contact = (Ip - Sp') . u - |CTc' - Sp'|. The ray from A
+// passes through M, so the sweep always hits within (|CTc - Sp| - r) + |AM| + nd_sweep_beyond;
+// should rounding still miss, the sweep's limit for a point sphere (M itself) is taken.
+struct NdContact {
+  bool hit = false;
+  double nd = 0;
+};
+
+// An axis crossing the surface has its nearest point on the surface: take instead the end of the
+// axis deepest in the solid, with its closest surface point.
+SegmentQuery contact_pair(const MeshDistance& mesh, const SegmentQuery& q, const Eigen::Vector3d& a,
+                          const Eigen::Vector3d& b) {
+  if (!q.found || q.distance > 0) return q;
+  const PointQuery qa = mesh.closest_point(a), qb = mesh.closest_point(b);
+  const bool a_deeper = qa.signed_distance <= qb.signed_distance;
+  const PointQuery& deep = a_deeper ? qa : qb;
+  if (!(deep.signed_distance < 0)) return q;
+  SegmentQuery out = q;
+  out.point_on_segment = a_deeper ? a : b;
+  out.point_on_mesh = deep.point_on_mesh;
+  out.normal = deep.normal;
+  out.distance = deep.distance;
+  return out;
+}
+
+NdContact nd_contact(const MeshDistance& mesh, const SegmentQuery& q, double radius, double sp_to_ctc,
+                     double sweep_radius, double sweep_beyond) {
+  if (!q.found) return {};
+  const Eigen::Vector3d& a = q.point_on_segment;
+  const Eigen::Vector3d am = q.point_on_mesh - a;
+  const bool outside = q.distance > 0 && (a - q.point_on_mesh).dot(q.normal) > 0;
+  const Eigen::Vector3d u = outside ? Eigen::Vector3d(am / am.norm()) : Eigen::Vector3d(-q.normal);
+  const double back = sp_to_ctc - radius;
+  const Eigen::Vector3d sp = a - back * u;
+  const SweepHit hit = mesh.sphere_cast(sp, u, sweep_radius, back + (outside ? q.distance : 0.0) + sweep_beyond);
+  const Eigen::Vector3d ip = hit.hit ? hit.point : q.point_on_mesh;
+  return {true, (ip - sp).dot(u) - sp_to_ctc};
+}
+
+}  // namespace
+
 GraspMetrics HandController::measure(const ObjectView& object) const {
   GraspMetrics out;
   const ObjectModel& model = *object.model;
@@ -706,6 +755,12 @@ GraspMetrics HandController::measure(const ObjectView& object) const {
     m.signed_distance = q.distance > 0 && (q.point_on_segment - q.point_on_mesh).dot(q.normal) > 0
                             ? q.distance - cap.radius
                             : model.distance.capsule_signed_distance(a, b, cap.radius, hint_[id.value]);
+    if (m.blocked) {
+      const NdContact c = nd_contact(model.distance, contact_pair(model.distance, q, a, b), cap.radius, length,
+                                     rig_->nd_sweep_radius(), rig_->nd_sweep_beyond());
+      m.contact_hit = c.hit;
+      m.nd_contact = c.nd;
+    }
     if (m.hit) {
       finger_count[spec.finger] += 1;
       finger_sum[spec.finger] += std::abs(m.nd);
@@ -716,6 +771,8 @@ GraspMetrics HandController::measure(const ObjectView& object) const {
   }
   for (std::size_t f = 0; f < finger_sum.size(); ++f)
     if (finger_count[f] > 0) out.hand_error_mm += 1000.0 * finger_sum[f] / finger_count[f];
+  // The palm volume is the palm box, as the planners' "palm outside the object" checks use.
+  out.palm_signed_distance = box_signed_distance(model, X_ObjectPalm, rig_->palm_half_extent());
   return out;
 }
 

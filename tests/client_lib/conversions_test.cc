@@ -56,6 +56,8 @@ void expect_same(const client::CapsuleMetric& a, const client::CapsuleMetric& b)
   EXPECT_EQ(a.nd, b.nd);
   EXPECT_EQ(a.signed_distance, b.signed_distance);
   EXPECT_EQ(a.blocked, b.blocked);
+  EXPECT_EQ(a.contact_hit, b.contact_hit);
+  EXPECT_EQ(a.nd_contact, b.nd_contact);
 }
 
 void expect_same(const client::ObjectState& a, const client::ObjectState& b) {
@@ -226,6 +228,9 @@ TEST(ConversionsTest, HandSkeletonRoundTrip) {
   for (int i = 0; i < 15; ++i)
     s.X_WorldPhalanx.push_back(make_pose(0.1 * i, {1, 0.1 * i, 0.3}, {0.01 * i, 0.02, -0.03 * i}));
   s.joint_angles = {0.1, -0.2, 0.3, 1.5, 0.0};
+  s.X_WorldTracked = make_pose(0.3, {1, 0, 1}, {0.2, 0.1, 0.85});
+  s.resolve_offset = {0, 0, 0.05};
+  s.resolve_angle = 0.1;
   const msg::HandSkeleton m = to_msg(s);
   EXPECT_EQ(m.client_id().to_string(), "viewer-3");
   EXPECT_EQ(m.phalanges().size(), 15u);
@@ -242,6 +247,9 @@ TEST(ConversionsTest, HandSkeletonRoundTrip) {
   ASSERT_EQ(r.X_WorldPhalanx.size(), s.X_WorldPhalanx.size());
   for (std::size_t i = 0; i < s.X_WorldPhalanx.size(); ++i) expect_same_pose(s.X_WorldPhalanx[i], r.X_WorldPhalanx[i]);
   EXPECT_EQ(r.joint_angles, s.joint_angles);
+  expect_same_pose(s.X_WorldTracked, r.X_WorldTracked);
+  EXPECT_EQ(r.resolve_offset, s.resolve_offset);
+  EXPECT_EQ(r.resolve_angle, s.resolve_angle);
 }
 
 TEST(ConversionsTest, GraspStateRoundTrip) {
@@ -254,6 +262,9 @@ TEST(ConversionsTest, GraspStateRoundTrip) {
   s.trigger = 0.875;
   s.blocked = {true, false, false, true, true, false};
   s.palm_contact = true;
+  s.epsilon = 0.0625;
+  s.volume = 0.125;
+  s.force_closure = true;
   const client::GraspState r = from_msg(to_msg(s));
   expect_same(r.hand, s.hand);
   EXPECT_EQ(r.tick, s.tick);
@@ -263,6 +274,9 @@ TEST(ConversionsTest, GraspStateRoundTrip) {
   EXPECT_EQ(r.trigger, s.trigger);
   EXPECT_EQ(r.blocked, s.blocked);
   EXPECT_EQ(r.palm_contact, s.palm_contact);
+  EXPECT_EQ(r.epsilon, s.epsilon);
+  EXPECT_EQ(r.volume, s.volume);
+  EXPECT_EQ(r.force_closure, s.force_closure);
 }
 
 TEST(ConversionsTest, ContactSetRoundTrip) {
@@ -310,7 +324,12 @@ TEST(ConversionsTest, GraspEventRoundTrip) {
     e.hand_error_mm = 2.75;
     e.capsules_without_hit = 2;
     for (int i = 0; i < 4; ++i)
-      e.capsules.push_back({i, "index_" + std::to_string(i), i != 2, 0.001 * i, -0.0005 * i, i % 2 == 1});
+      e.capsules.push_back(
+          {i, "index_" + std::to_string(i), i != 2, 0.001 * i, -0.0005 * i, i % 2 == 1, i % 2 == 1, 0.00001 * i});
+    e.palm_signed_distance = -0.00025;
+    e.epsilon = 0.03125;
+    e.volume = 0.5;
+    e.force_closure = true;
     e.contacts = {make_contact(0, 1), make_contact(5, -1)};
     e.v_WorldObject = {0.1, -0.2, 0.3};
     e.w_WorldObject = {-1, 2, 0.5};
@@ -329,6 +348,10 @@ TEST(ConversionsTest, GraspEventRoundTrip) {
     EXPECT_EQ(r.capsules_without_hit, e.capsules_without_hit);
     expect_same_each(e.capsules, r.capsules);
     expect_same_each(e.contacts, r.contacts);
+    EXPECT_EQ(r.palm_signed_distance, e.palm_signed_distance);
+    EXPECT_EQ(r.epsilon, e.epsilon);
+    EXPECT_EQ(r.volume, e.volume);
+    EXPECT_EQ(r.force_closure, e.force_closure);
     EXPECT_EQ(r.v_WorldObject, e.v_WorldObject);
     EXPECT_EQ(r.w_WorldObject, e.w_WorldObject);
   }

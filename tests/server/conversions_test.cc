@@ -96,6 +96,10 @@ TEST(ConversionsTest, SkeletonIsTheHandInTheWorldFrame) {
   ASSERT_EQ(m.joint_angles(), hand.state().q);
   for (std::size_t i = 0; i < m.phalanges().size(); ++i)
     EXPECT_TRUE(to_eigen(m.phalanges()[i]).isApprox(some_pose() * hand.state().X_PalmPhalanx[i], 1e-9));
+  // Nothing in the way: the tracked pose is the resolved one.
+  EXPECT_TRUE(to_eigen(m.tracked_palm()).isApprox(some_pose(), 1e-12));
+  EXPECT_EQ(to_eigen(m.resolve_offset()), Eigen::Vector3d::Zero());
+  EXPECT_NEAR(m.resolve_angle(), 0.0, 1e-12);
 
   Eigen::Isometry3d moved = some_pose();
   moved.translation() += Eigen::Vector3d(0.1, 0, 0);
@@ -139,9 +143,13 @@ TEST(ConversionsTest, GraspEventCarriesMetricsAndNames) {
   capsule.phalanx = sim::PhalanxId(2);
   capsule.hit = true;
   capsule.nd = -0.0004;
+  capsule.contact_hit = true;
+  capsule.nd_contact = 0.00003;
   capsule.signed_distance = -0.0001;
   capsule.blocked = true;
   metrics.capsules.push_back(capsule);
+  metrics.palm_signed_distance = 0.002;
+  metrics.quality = {0.125, 0.5, true};
   e.metrics = metrics;
   EventContext ctx;
   ctx.hand = {"bob", 0};
@@ -168,6 +176,34 @@ TEST(ConversionsTest, GraspEventCarriesMetricsAndNames) {
   EXPECT_EQ(m.capsules()[0].signed_distance(), -0.0001);
   EXPECT_TRUE(m.capsules()[0].hit());
   EXPECT_TRUE(m.capsules()[0].blocked());
+  EXPECT_TRUE(m.capsules()[0].contact_hit());
+  EXPECT_EQ(m.capsules()[0].nd_contact(), 0.00003);
+  EXPECT_EQ(m.palm_signed_distance(), 0.002);
+  EXPECT_EQ(m.epsilon(), 0.125);
+  EXPECT_EQ(m.volume(), 0.5);
+  EXPECT_TRUE(m.force_closure());
+}
+
+// Quality moves republish a held hand's GraspState only beyond 5 % or 1e-3 (whichever is larger),
+// or when force closure flips.
+TEST(ConversionsTest, GraspQualityChangeHasAThreshold) {
+  msg::GraspState before, now;
+  before.epsilon(0.1);
+  before.volume(0.01);
+  before.force_closure(true);
+  now = before;
+  now.epsilon(0.104);  // 4 % of 0.1
+  EXPECT_FALSE(quality_changed(before, now));
+  now.epsilon(0.106);  // 6 %
+  EXPECT_TRUE(quality_changed(before, now));
+  now = before;
+  now.volume(0.0109);  // 9 % but below 1e-3
+  EXPECT_FALSE(quality_changed(before, now));
+  now.volume(0.0111);  // 1.1e-3
+  EXPECT_TRUE(quality_changed(before, now));
+  now = before;
+  now.force_closure(false);
+  EXPECT_TRUE(quality_changed(before, now));
 }
 
 // A 0.125 x 0.25 x 0.5 m box with a corner at the origin (8 vertices, 12 triangles, outward),

@@ -1,19 +1,28 @@
 // Tests what the paper's ND reads when a phalanx touches exactly: a rigid phalanx closing onto a
 // flat face touches it with the tip of its capsule, and ND, measured at mid-length (CTc), reads
-// the gap the tilt leaves there, not the contact.
+// the gap the tilt leaves there, not the contact; nd_contact, taken toward the contact, reads the
+// gap. Also: every blocked capsule has an nd_contact, and the palm box's exact signed distance.
 #include "telegrasp/sim/hand_controller.h"
+#include "telegrasp/sim/scripted_operator.h"
+#include "telegrasp/sim/standin_objects.h"
 
 #include "test_meshes.h"
+
+#include <Eigen/Geometry>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <numbers>
 
 namespace telegrasp::sim {
 namespace {
 
 constexpr double kDt = 1.0 / 90.0;
-constexpr double kTol = 0.05e-3;  // GraspSettings default contact tolerance
+constexpr double kTol = 0.05e-3;
+constexpr double kInf = std::numeric_limits<double>::infinity();  // GraspSettings default contact tolerance
 
 // One phalanx hinged at (0.04, 0, 0) in the palm frame, flexing about +y (the tip goes to -z):
 // capsule from x = 3 mm to 27 mm, radius 5 mm; Sp on its axis and CTc on the palmar skin at
@@ -70,6 +79,190 @@ TEST(NdMetricTest, TipContactOnAFlatFaceReadsTheTiltGapAtMidLength) {
     EXPECT_NEAR(c.nd, expected_nd, 1e-9);
     EXPECT_GT(c.nd, 3.2e-3);
     EXPECT_LT(c.nd, 3.5e-3);
+    // nd_contact sweeps straight down from the tip's centre b: ND = b_z - z_face - r, the gap.
+    ASSERT_TRUE(c.contact_hit);
+    EXPECT_NEAR(c.nd_contact, -0.027 * std::sin(q) - z_face - r, 1e-9);
+    EXPECT_GE(c.nd_contact, 0.0);
+    EXPECT_LE(c.nd_contact, kTol);
+  }
+}
+
+// Discrete closing sinks the tip into the face by up to one step. At speed 8 (24 deg a tick) the
+// tip's centre stays above the face (ND_contact = b_z - z_face - r < 0, the exact depth); at speed
+// 30 (60 deg) it ends below the face, the axis crosses it, and nd_contact sweeps from the deep end:
+// the same formula, now with b_z < z_face.
+TEST(NdMetricTest, DiscreteSinkingReadsTheDepthAtTheTip) {
+  const double z_face = -0.012, r = 0.005;
+  auto rig = std::make_shared<const HandRig>(HandRig::parse(kOnePhalanxRig, "one_phalanx"));
+  // 100 mm thick: the face is the surface nearest every point the tip can reach.
+  auto model = make_object_model("block", testing::box_mesh({0.2, 0.2, 0.05}), 1.0, "test");
+  const ObjectView view{ObjectId(1), Eigen::Isometry3d(Eigen::Translation3d(0.1, 0, z_face - 0.05)), model.get()};
+  for (double speed : {8.0, 30.0}) {
+    SCOPED_TRACE(speed);
+    GraspSettings settings;
+    settings.mode = ClosingMode::kDiscrete;
+    settings.speed_scale = speed;
+    HandController hand(rig, settings);
+    ControllerInput in;
+    in.trigger = 1.0;
+    for (int t = 0; t < 90 && !hand.state().blocked[0]; ++t) hand.tick(in, kDt, {&view, 1});
+    ASSERT_TRUE(hand.state().blocked[0]);
+    const double b_z = -0.027 * std::sin(hand.state().q[0]);
+    const CapsuleMetric c = hand.measure(view).capsules.at(0);
+    ASSERT_TRUE(c.contact_hit);
+    EXPECT_NEAR(c.nd_contact, b_z - z_face - r, 1e-9);
+    EXPECT_NEAR(c.signed_distance, b_z - z_face - r, 1e-9);
+    EXPECT_LT(c.nd_contact, 0.0);
+    if (speed > 10) {
+      EXPECT_LT(b_z, z_face);
+    }
+  }
+}
+
+// A capsule closing onto a sphere touches it where the sphere is nearest the axis; nd_contact,
+// swept along the line through the axis point and the contact, reads that gap: within the
+// contact tolerance and equal to the exact signed distance.
+TEST(NdMetricTest, CapsuleTouchingASphereReadsItsGap) {
+  auto rig = std::make_shared<const HandRig>(HandRig::parse(kOnePhalanxRig, "one_phalanx"));
+  auto model = make_object_model("ball", testing::uv_sphere_mesh(0.015, 48, 96), 1.0, "test");
+  const ObjectView view{ObjectId(1), Eigen::Isometry3d(Eigen::Translation3d(0.06, 0.004, -0.03)), model.get()};
+  HandController hand(rig, GraspSettings{});
+  ControllerInput in;
+  in.trigger = 1.0;
+  for (int t = 0; t < 90 && !hand.state().blocked[0]; ++t) hand.tick(in, kDt, {&view, 1});
+  ASSERT_TRUE(hand.state().blocked[0]);
+  const CapsuleMetric c = hand.measure(view).capsules.at(0);
+  ASSERT_TRUE(c.contact_hit);
+  EXPECT_GE(c.nd_contact, 0.0);
+  EXPECT_LE(c.nd_contact, 2 * kTol);
+  EXPECT_NEAR(c.nd_contact, c.signed_distance, 1e-9);
+}
+
+// Unblocked capsules have no nd_contact; blocked ones always do, and in precise mode it reads
+// their gap (within the release hysteresis), whatever the object: the human hand closed by the
+// planner on stand-ins of every shape class.
+TEST(NdMetricTest, EveryBlockedCapsuleHasAnNdContact) {
+  auto rig = std::make_shared<const HandRig>(HandRig::load(HandRig::builtin_path("human_right")));
+  const Eigen::Isometry3d X_WorldObject(Eigen::Translation3d(0, 0, 0.1));
+  int blocked = 0;
+  for (const char* name :
+       {"013_apple", "004_sugar_box", "032_knife", "035_power_drill", "011_banana", "030_fork", "006_mustard_bottle"}) {
+    SCOPED_TRACE(name);
+    const auto spec = find_protocol_object(name);
+    ASSERT_TRUE(spec.has_value());
+    const ObjectModelPtr model = make_standin_model(*spec);
+    const GraspPlan plan = plan_grasp(rig, GraspSettings{}, *model, X_WorldObject, kDt);
+    const OfflineClosing closing = close_offline(rig, GraspSettings{}, *model, X_WorldObject, plan.X_WorldPalm, kDt);
+    for (const CapsuleMetric& c : closing.metrics.capsules) {
+      EXPECT_EQ(c.contact_hit, c.blocked);
+      if (!c.blocked) continue;
+      ++blocked;
+      EXPECT_GE(c.nd_contact, -1e-9);
+      EXPECT_LE(c.nd_contact, 2 * kTol + 1e-9);
+      EXPECT_NEAR(c.nd_contact, c.signed_distance, 1e-6);
+    }
+  }
+  EXPECT_GT(blocked, 12);
+}
+
+// The palm box of the one-phalanx rig: half extents 40 x 40 x 10 mm about the palm origin.
+class PalmDistanceTest : public ::testing::Test {
+ protected:
+  double palm_distance(const TriangleMesh& mesh, const Eigen::Isometry3d& X_WorldObject,
+                       const Eigen::Isometry3d& X_WorldPalm = Eigen::Isometry3d::Identity()) {
+    auto model = make_object_model("object", mesh, 1.0, "test");
+    HandController hand(rig_, GraspSettings{});
+    ControllerInput in;
+    in.X_WorldPalm = X_WorldPalm;
+    const ObjectView view{ObjectId(1), X_WorldObject, model.get()};
+    hand.tick(in, kDt, {});
+    return hand.measure(view).palm_signed_distance;
+  }
+  std::shared_ptr<const HandRig> rig_ = std::make_shared<const HandRig>(HandRig::parse(kOnePhalanxRig, "one_phalanx"));
+  TriangleMesh slab_ = testing::box_mesh({0.2, 0.2, 0.01});  // top face at +10 mm
+};
+
+// Face to face: the palm's bottom (z = -10 mm) 3 mm above a slab's top face.
+TEST_F(PalmDistanceTest, FlatAboveASlab) {
+  EXPECT_NEAR(palm_distance(slab_, Eigen::Isometry3d(Eigen::Translation3d(0, 0, -0.023))), 0.003, 1e-12);
+}
+
+// Tilted 30 deg about x: the lowest edge lies 40 sin 30 + 10 cos 30 = 28.66 mm below the centre.
+TEST_F(PalmDistanceTest, TiltedEdgeAboveASlab) {
+  const Eigen::Isometry3d X_WorldPalm(Eigen::AngleAxisd(std::numbers::pi / 6, Eigen::Vector3d::UnitX()));
+  const double lowest = 0.04 * 0.5 + 0.01 * std::sqrt(3.0) / 2;
+  EXPECT_NEAR(palm_distance(slab_, Eigen::Isometry3d(Eigen::Translation3d(0, 0, -0.045)), X_WorldPalm), 0.035 - lowest,
+              1e-12);
+}
+
+// A cube standing on a corner under the palm's centre: its top corner (a mesh vertex, 10 sqrt 3 mm
+// above its centre) 2 mm below the palm's face, far from every edge of the palm box.
+TEST_F(PalmDistanceTest, CubeCornerUnderThePalmFace) {
+  const Eigen::Quaterniond R = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d(1, 1, 1), Eigen::Vector3d::UnitZ());
+  const Eigen::Isometry3d X_WorldObject = Eigen::Translation3d(0.005, -0.003, -0.012 - 0.01 * std::sqrt(3.0)) * R;
+  EXPECT_NEAR(palm_distance(testing::box_mesh({0.01, 0.01, 0.01}), X_WorldObject), 0.002, 1e-12);
+}
+
+// The palm pressed 2 mm into a slab: every point of its bottom face is 2 mm deep.
+TEST_F(PalmDistanceTest, PressedIntoASlab) {
+  EXPECT_NEAR(palm_distance(slab_, Eigen::Isometry3d(Eigen::Translation3d(0, 0, -0.018))), -0.002, 1e-12);
+}
+
+// A ball (radius 20 mm, pole up) poking 1 mm through the palm's bottom face at its centre: the
+// deepest palm point is the face's centre, 1 mm below the pole (less the facets' sag, < 2 um).
+TEST_F(PalmDistanceTest, BallPokingIntoThePalmFace) {
+  const double d = palm_distance(testing::uv_sphere_mesh(0.02, 48, 96),
+                                 Eigen::Isometry3d(Eigen::Translation3d(0, 0, -0.01 + 0.001 - 0.02)));
+  EXPECT_LE(d, -0.001 + 2e-6);
+  EXPECT_GE(d, -0.001 - 1e-12);
+}
+
+// Entirely inside a large block (half side 60 mm, centred 30 mm below the palm): the deepest
+// palm point is the centre of its bottom face, 30 + 10 = 40 mm below the block's top face.
+TEST_F(PalmDistanceTest, InsideABlock) {
+  EXPECT_NEAR(
+      palm_distance(testing::box_mesh({0.06, 0.06, 0.06}), Eigen::Isometry3d(Eigen::Translation3d(0, 0, -0.03))), -0.04,
+      1e-9);
+}
+
+// Against brute force: at random palm poses around stand-ins (a box, a ball, a drill), the palm
+// box's signed distance is no more than the lowest signed distance over a 41 x 41 x 11 grid of
+// the box's points (it is the minimum over the box; overlapping, within 1.5 mm of it) and no less
+// than that less the grid's reach (half a cell's diagonal).
+TEST(PalmDistanceBruteForceTest, MatchesAGridOverTheBox) {
+  auto rig = std::make_shared<const HandRig>(HandRig::load(HandRig::builtin_path("human_right")));
+  const Eigen::Vector3d h = rig->palm_half_extent();
+  const Eigen::Array3i n(41, 41, 11);
+  const Eigen::Vector3d cell = 2 * h.array() / (n - 1).cast<double>();
+  const double reach = 0.5 * cell.norm();
+  std::srand(7);
+  auto uniform = [] { return 2.0 * std::rand() / RAND_MAX - 1.0; };
+  for (const char* name : {"003_cracker_box", "055_baseball", "035_power_drill"}) {
+    SCOPED_TRACE(name);
+    const ObjectModelPtr model = make_standin_model(*find_protocol_object(name));
+    const double size = 0.5 * (model->p_ObjectMax - model->p_ObjectMin).norm();
+    const ObjectView view{ObjectId(1), Eigen::Isometry3d::Identity(), model.get()};
+    for (int k = 0; k < 12; ++k) {
+      Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+      X.linear() = Eigen::Quaterniond(uniform(), uniform(), uniform(), uniform()).normalized().toRotationMatrix();
+      X.translation() = Eigen::Vector3d(uniform(), uniform(), uniform()).normalized() * size * (0.6 + 0.3 * (k % 3));
+      HandController hand(rig, GraspSettings{});
+      ControllerInput in;
+      in.X_WorldPalm = X;
+      hand.tick(in, kDt, {});
+      const double d = hand.measure(view).palm_signed_distance;
+      double grid = kInf;
+      for (int i = 0; i < n.x(); ++i)
+        for (int j = 0; j < n.y(); ++j)
+          for (int l = 0; l < n.z(); ++l) {
+            const Eigen::Vector3d p = -h + Eigen::Vector3d(i * cell.x(), j * cell.y(), l * cell.z());
+            grid = std::min(grid, model->distance.signed_distance(X * p));
+          }
+      SCOPED_TRACE(k);
+      // Overlapping, the descent may stall up to about a millimetre short of the deepest point.
+      EXPECT_LE(d, grid < 0 ? grid + 1.5e-3 : grid + 1e-9);
+      EXPECT_GE(d, grid - reach);
+    }
   }
 }
 

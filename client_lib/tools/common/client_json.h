@@ -44,13 +44,18 @@ Json contact(const client::ContactPoint& c) {
               {"nd_hit", c.nd_hit}};
 }
 
-/// nd_mm is null without a hit: "no hit" is not 0.
+/// nd_midlength_mm (the paper's ND) is null without a hit: "no hit" is not 0; nd_mm is its alias,
+/// kept for one release. nd_contact_mm (ND toward the contact) is null without contact_hit.
 template <class Json>
 Json capsule(const client::CapsuleMetric& r) {
+  const Json nd_midlength = r.hit ? Json(kMmPerM * r.nd) : Json();
   return Json{{"phalanx", r.phalanx},
               {"phalanx_name", r.phalanx_name},
               {"hit", r.hit},
-              {"nd_mm", r.hit ? Json(kMmPerM * r.nd) : Json()},
+              {"nd_midlength_mm", nd_midlength},
+              {"nd_mm", nd_midlength},
+              {"contact_hit", r.contact_hit},
+              {"nd_contact_mm", r.contact_hit ? Json(kMmPerM * r.nd_contact) : Json()},
               {"signed_distance_mm", kMmPerM * r.signed_distance},
               {"blocked", r.blocked}};
 }
@@ -87,7 +92,10 @@ Json hand_skeleton(const client::HandSkeleton& s) {
               {"frozen", s.frozen},
               {"X_WorldPalm", pose<Json>(s.X_WorldPalm)},
               {"X_WorldPhalanx", array<Json>(s.X_WorldPhalanx, pose<Json>)},
-              {"joint_angles_rad", s.joint_angles}};
+              {"joint_angles_rad", s.joint_angles},
+              {"X_WorldTracked", pose<Json>(s.X_WorldTracked)},
+              {"resolve_offset_m", vec<Json>(s.resolve_offset)},
+              {"resolve_angle_rad", s.resolve_angle}};
 }
 
 template <class Json>
@@ -99,7 +107,10 @@ Json grasp_state(const client::GraspState& s) {
               {"grasped_object", s.grasped_object},
               {"trigger", s.trigger},
               {"blocked", s.blocked},
-              {"palm_contact", s.palm_contact}};
+              {"palm_contact", s.palm_contact},
+              {"epsilon", s.epsilon},
+              {"volume", s.volume},
+              {"force_closure", s.force_closure}};
 }
 
 template <class Json>
@@ -134,6 +145,10 @@ Json grasp_event(const client::GraspEvent& e) {
   } else {
     j["hand_error_mm"] = e.hand_error_mm;
     j["capsules_without_hit"] = e.capsules_without_hit;
+    j["palm_signed_distance_mm"] = kMmPerM * e.palm_signed_distance;
+    j["epsilon"] = e.epsilon;
+    j["volume"] = e.volume;
+    j["force_closure"] = e.force_closure;
     j["capsules"] = array<Json>(e.capsules, capsule<Json>);
     j["contacts"] = array<Json>(e.contacts, contact<Json>);
   }

@@ -11,8 +11,11 @@ void record_grasp_event(const client::GraspEvent& e, double trial_start_time, co
   rec.hand_error_mm = rec.grasp_tick_hand_error_mm = e.hand_error_mm;
   rec.capsules.clear();
   for (const client::CapsuleMetric& c : e.capsules)
-    rec.capsules.push_back({c.phalanx_name, c.hit, c.blocked, 1000 * c.nd, 1000 * c.signed_distance});
+    rec.capsules.push_back(
+        {c.phalanx_name, c.hit, c.blocked, 1000 * c.nd, 1000 * c.signed_distance, c.contact_hit, 1000 * c.nd_contact});
   rec.grasp_tick_capsules = rec.capsules;
+  // The event is the grasp tick's: the record's settled figures are the same.
+  rec.figures = rec.grasp_tick_figures = {1000 * e.palm_signed_distance, e.epsilon, e.volume, e.force_closure};
   rec.contacts.clear();
   for (const client::ContactPoint& c : e.contacts) {
     const bool palm = c.phalanx < 0 || c.phalanx >= static_cast<int>(rig.phalanges().size());

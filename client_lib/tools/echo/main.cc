@@ -68,14 +68,19 @@ X_WorldObject is the object's pose in the world frame.
   hand            {"client_id":"...","side":"left"|"right"}
   every topic     "tick", "time_s" (server time), but ObjectGeometry
   HandSkeleton    "hand", "rig", "input_sequence", "input_client_time_ns", "late_latched",
-                  "frozen", "X_WorldPalm" (pose), "X_WorldPhalanx" (poses, rig order),
-                  "joint_angles_rad"
+                  "frozen", "X_WorldPalm" (pose: the resolved pose, that grasps and is
+                  shown), "X_WorldPhalanx" (poses, rig order), "joint_angles_rad",
+                  "X_WorldTracked" (pose: the controller's), "resolve_offset_m" (resolved
+                  minus tracked position, world frame), "resolve_angle_rad"
   GraspState      "hand", "selected_object", "grasped_object" (-1: none), "trigger" (0..1),
-                  "blocked" (per phalanx), "palm_contact"
+                  "blocked" (per phalanx), "palm_contact", "epsilon", "volume",
+                  "force_closure" (the held grasp's quality; 0 and false when not holding)
   ContactSet      "hand", "object_id", "X_WorldObject", "contacts"
   GraspEvent      "event_id", "kind" ("grasp"|"release"), "hand", "object_id", "object_name",
                   "object_spawn_time_s", "X_WorldObject", "input_sequence";
-                  grasp: "hand_error_mm", "capsules_without_hit", "capsules", "contacts";
+                  grasp: "hand_error_mm" (from nd_midlength), "capsules_without_hit",
+                  "palm_signed_distance_mm" (the palm box's exact signed distance),
+                  "epsilon", "volume", "force_closure", "capsules", "contacts";
                   release: "v_WorldObject_m_per_s", "w_WorldObject_rad_per_s"
   SceneState      "objects": {"id","name","X_WorldObject","v_WorldObject_m_per_s","held",
                   "holder" (if held: the first), "holders" (if held: every hand holding
@@ -87,8 +92,11 @@ X_WorldObject is the object's pose in the world frame.
                   "vertex_count", "triangle_count", "mesh_omitted", "p_ObjectMin_m",
                   "p_ObjectMax_m" (bounds, model frame), "mass_kg", "volume_m3",
                   "inertia_diagonal_kg_m2"
-  capsule         {"phalanx","phalanx_name","hit","nd_mm","signed_distance_mm","blocked"}:
-                  the paper's ND (null when "hit" is false) and the exact signed distance
+  capsule         {"phalanx","phalanx_name","hit","nd_midlength_mm","nd_mm","contact_hit",
+                  "nd_contact_mm","signed_distance_mm","blocked"}: the paper's ND at
+                  mid-length (null when "hit" is false; "nd_mm" is the same, an alias kept for
+                  one release), ND toward the contact (blocked capsules; null when
+                  "contact_hit" is false) and the exact signed distance
   contact         {"phalanx" (-1: palm),"p_WorldContact_m","n_World","p_ObjectContact_m",
                   "n_Object","nd_mm","nd_hit"}: point and unit normal in both frames, the
                   capsule's ND (null when "nd_hit" is false)

@@ -47,9 +47,27 @@ Json grasp_state_schema() {
               {"grasped_object", integer()},
               {"trigger", number()},
               {"palm_contact", boolean()},
+              {"epsilon", number()},
+              {"volume", number()},
+              {"force_closure", boolean()},
               {"phalanges", array_of(object("telegrasp.PhalanxState", {{"name", string()}, {"blocked", boolean()}}))}});
   s["description"] = "A hand's grasp state, sent when it changes (GraspState topic); -1: no object";
   return s;
+}
+
+// nd_midlength_mm: the paper's ND (nd_mm: its alias for one release); nd_contact_mm: ND toward the
+// contact (blocked capsules).
+Json capsule_schema() {
+  const Json nullable = Json{{"type", {"number", "null"}}};
+  return object("telegrasp.CapsuleMetric", {{"phalanx", integer()},
+                                            {"phalanx_name", string()},
+                                            {"hit", boolean()},
+                                            {"nd_midlength_mm", nullable},
+                                            {"nd_mm", nullable},
+                                            {"contact_hit", boolean()},
+                                            {"nd_contact_mm", nullable},
+                                            {"signed_distance_mm", number()},
+                                            {"blocked", boolean()}});
 }
 
 Json grasp_event_schema() {
@@ -67,12 +85,11 @@ Json grasp_event_schema() {
               {"input_sequence", integer()},
               {"hand_error_mm", number()},
               {"capsules_without_hit", integer()},
-              {"capsules", array_of(object("telegrasp.CapsuleMetric", {{"phalanx", integer()},
-                                                                       {"phalanx_name", string()},
-                                                                       {"hit", boolean()},
-                                                                       {"nd_mm", Json{{"type", {"number", "null"}}}},
-                                                                       {"signed_distance_mm", number()},
-                                                                       {"blocked", boolean()}}))},
+              {"palm_signed_distance_mm", number()},
+              {"epsilon", number()},
+              {"volume", number()},
+              {"force_closure", boolean()},
+              {"capsules", array_of(capsule_schema())},
               {"contacts", array_of(object("telegrasp.ContactPoint", {{"phalanx", integer()},
                                                                       {"p_WorldContact_m", vec3()},
                                                                       {"n_World", vec3()},
@@ -82,7 +99,9 @@ Json grasp_event_schema() {
                                                                       {"nd_hit", boolean()}}))},
               {"v_WorldObject_m_per_s", vec3()},
               {"w_WorldObject_rad_per_s", vec3()}});
-  s["description"] = "A grasp or release (GraspEvent topic); grasps carry the paper's metrics (nd_mm null: no hit)";
+  s["description"] =
+      "A grasp or release (GraspEvent topic); grasps carry the paper's metrics (nd_midlength_mm null: "
+      "no hit), nd_contact_mm, the palm's signed distance and the grasp quality";
   return s;
 }
 

@@ -160,6 +160,9 @@ Json grasp_state_message(const client::GraspState& s, const std::vector<std::str
               {"grasped_object", s.grasped_object},
               {"trigger", s.trigger},
               {"palm_contact", s.palm_contact},
+              {"epsilon", s.epsilon},
+              {"volume", s.volume},
+              {"force_closure", s.force_closure},
               {"phalanges", std::move(phalanges)}};
 }
 

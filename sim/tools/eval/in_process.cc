@@ -35,6 +35,7 @@ using nlohmann::json;
 using telegrasp::eval::EvalInputs;
 using telegrasp::report::capsule_records;
 using telegrasp::report::fmt;
+using telegrasp::report::grasp_figures;
 using telegrasp::report::Record;
 using telegrasp::report::summarize;
 
@@ -202,13 +203,16 @@ Trial run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRig
       rec.time_to_grasp_s = e.time - t0;
       rec.grasp_tick_hand_error_mm = e.metrics->hand_error_mm;
       rec.grasp_tick_capsules = capsule_records(*e.metrics, *rig);
+      rec.grasp_tick_figures = grasp_figures(*e.metrics);
       rec.hand_error_mm = rec.grasp_tick_hand_error_mm;
       rec.capsules = rec.grasp_tick_capsules;
+      rec.figures = rec.grasp_tick_figures;
     }
   }
   if (held) {
     rec.hand_error_mm = held->hand_error_mm;
     rec.capsules = capsule_records(*held, *rig);
+    rec.figures = grasp_figures(*held);
     if (draw) {
       char title[160];
       std::snprintf(title, sizeof title, "%s, %s mode x%g, trial %d: HandError %.1f mm", model->name.c_str(),
@@ -349,14 +353,16 @@ json print_summaries(const std::vector<Config>& configs, const std::vector<Job>&
 // The configs' summaries side by side, one row each.
 void print_side_by_side(const json& summaries) {
   std::cout << "\n== side by side ==\n";
-  std::printf("%-9s %6s %7s %10s %10s %12s %10s\n", "mode", "speed", "held%", "|ND|med", "|ND|p95", "minSD_mm",
-              "SD<-0.1");
+  std::printf("%-9s %6s %7s %10s %10s %10s %10s %8s %12s %10s %12s\n", "mode", "speed", "held%", "|ND|med", "|ND|p95",
+              "|NDc|med", "|NDc|p95", "noNDc", "minSD_mm", "SD<-0.1", "palmSDmin");
   for (const json& s : summaries) {
     auto get = [&](const char* k) { return s[k].is_null() ? NAN : s[k].get<double>(); };
-    std::printf("%-9s %6s %7s %10s %10s %12s %10d\n", s["mode"].get<std::string>().c_str(),
+    std::printf("%-9s %6s %7s %10s %10s %10s %10s %8d %12s %10d %12s\n", s["mode"].get<std::string>().c_str(),
                 fmt(get("speed_scale"), 1).c_str(), fmt(100 * get("held_rate"), 1).c_str(),
                 fmt(get("nd_abs_median_mm"), 3).c_str(), fmt(get("nd_abs_p95_mm"), 3).c_str(),
-                fmt(get("min_blocked_signed_distance_mm"), 3).c_str(), s["blocked_below_minus_0_1mm"].get<int>());
+                fmt(get("nd_contact_abs_median_mm"), 3).c_str(), fmt(get("nd_contact_abs_p95_mm"), 3).c_str(),
+                s["blocked_without_nd_contact"].get<int>(), fmt(get("min_blocked_signed_distance_mm"), 3).c_str(),
+                s["blocked_below_minus_0_1mm"].get<int>(), fmt(get("palm_signed_distance_min_mm"), 3).c_str());
   }
 }
 

@@ -31,10 +31,40 @@ json aggregate_fields(const Aggregate& a) {
           {"nd_abs_pooled_mean_mm", num(a.nd_pooled)},
           {"capsules_hit", a.capsules_hit},
           {"hand_error_mean_mm", num(a.hand_error.mean)},
-          {"hand_error_sd_mm", num(a.hand_error.sd)}};
+          {"hand_error_sd_mm", num(a.hand_error.sd)},
+          {"nd_contact_abs_median_mm", num(percentile(a.fidelity.nd_contact_abs, 0.5))},
+          {"nd_contact_abs_p95_mm", num(percentile(a.fidelity.nd_contact_abs, 0.95))},
+          {"blocked_capsules", a.fidelity.blocked},
+          {"blocked_without_nd_contact", a.fidelity.blocked_without_contact},
+          {"min_blocked_signed_distance_mm", num(a.fidelity.min_signed_distance)},
+          {"blocked_below_minus_0_1mm", a.fidelity.blocked_below},
+          {"palm_signed_distance_min_mm", num(a.fidelity.palm_min)},
+          {"palm_below_minus_0_1mm", a.fidelity.palm_below},
+          {"held_force_closure", a.held_force_closure},
+          {"held_force_closure_share", num(a.held ? static_cast<double>(a.held_force_closure) / a.held : NAN)}};
 }
 
 }  // namespace
+
+// Adds one grasp's blocked capsules and palm at the grasp tick to `f`.
+void add_fidelity(Fidelity& f, const Record& r) {
+  for (const CapsuleMetricRecord& c : r.grasp_tick_capsules) {
+    if (!c.blocked) continue;
+    ++f.blocked;
+    if (c.contact_hit) {
+      f.nd_contact_abs.push_back(std::abs(c.nd_contact_mm));
+    } else {
+      ++f.blocked_without_contact;
+    }
+    f.blocked_below += c.signed_distance_mm < -0.1;
+    f.min_signed_distance = std::isfinite(f.min_signed_distance) ? std::min(f.min_signed_distance, c.signed_distance_mm)
+                                                                 : c.signed_distance_mm;
+  }
+  const double palm = r.grasp_tick_figures.palm_signed_distance_mm;
+  ++f.palms;
+  f.palm_below += palm < -0.1;
+  f.palm_min = std::isfinite(f.palm_min) ? std::min(f.palm_min, palm) : palm;
+}
 
 // ---------------------------------------------------------------------------------------------
 // Statistics
@@ -58,7 +88,7 @@ double grasp_nd_abs_mean(const Record& r, int* hits) {
   int n = 0;
   for (const CapsuleMetricRecord& c : r.grasp_tick_capsules)
     if (c.hit) {
-      sum += std::abs(c.nd_mm);
+      sum += std::abs(c.nd_midlength_mm);
       ++n;
     }
   if (hits) *hits = n;
@@ -81,6 +111,8 @@ Aggregate aggregate(const std::vector<const Record*>& records) {
     a.held += r->held_after_lift;
     if (!r->grasped) continue;
     ++a.grasped;
+    add_fidelity(a.fidelity, *r);
+    a.held_force_closure += r->held_after_lift && r->figures.force_closure;
     times.push_back(r->time_to_grasp_s);
     int hits = 0;
     const double nd = grasp_nd_abs_mean(*r, &hits);
@@ -241,8 +273,14 @@ json aggregate_json(const ExperimentRun& run) {
   out["metrics"] = {
       {"time_to_grasp_s", "spawn to grasp, mean and sample sd over grasped trials"},
       {"nd_abs_mean_mm",
-       "per grasp: mean |ND| over the capsules that hit at the grasp tick; then mean and sample "
-       "sd over grasps (this is what the charts plot)"},
+       "nd_midlength (the paper's ND, at the capsule's mid-length): per grasp, mean |ND| over the capsules that hit "
+       "at the grasp tick; then mean and sample sd over grasps (this is what the charts plot)"},
+      {"nd_contact_abs_median_mm",
+       "nd_contact (ND toward the contact, GRASPING.md section 4): median and p95 of |nd_contact| over the blocked "
+       "capsules at the grasp tick; blocked_without_nd_contact counts those without one (must be 0)"},
+      {"palm_signed_distance_min_mm", "the palm box's exact signed distance to the object at the grasp tick, minimum"},
+      {"held_force_closure_share",
+       "held grasps whose contacts are in force closure (Ferrari-Canny epsilon > 0, mu of the rig)"},
       {"nd_abs_pooled_mean_mm", "mean |ND| over every hit capsule of the grasped trials, at the grasp tick"},
       {"hand_error_mean_mm",
        "the paper's HandError (sum over fingers of the per-finger mean |ND|) at the grasp tick, "

@@ -24,11 +24,26 @@ double grasp_nd_abs_mean(const Record& r, int* hits = nullptr);
 // The smallest exact signed distance of a blocked capsule at the grasp tick; NaN when none is.
 double grasp_min_signed_distance(const Record& r);
 
+// The fidelity figures of some grasps at the grasp tick (GRASPING.md section 4): nd_contact and
+// the exact signed distances of the blocked capsules, the palm's exact signed distance.
+struct Fidelity {
+  std::vector<double> nd_contact_abs;  // |nd_contact| of every blocked capsule that has one, mm
+  int blocked = 0, blocked_without_contact = 0, blocked_below = 0;  // below: signed distance < -0.1 mm
+  double min_signed_distance = NAN;  // of a blocked capsule, mm
+  int palms = 0, palm_below = 0;
+  double palm_min = NAN;  // mm
+};
+
+// Adds one grasp's blocked capsules and palm at the grasp tick to `f`.
+void add_fidelity(Fidelity& f, const Record& r);
+
 // The aggregate of some trials (one mode, group and object, or wider).
 struct Aggregate {
   int n = 0, grasped = 0, held = 0, capsules_hit = 0;
   Stat time, nd, hand_error;  // over grasped trials (nd, hand_error: those with a hit capsule)
   double nd_pooled = NAN;  // mean |ND| over every hit capsule of those trials
+  Fidelity fidelity;  // over grasped trials
+  int held_force_closure = 0;  // held trials whose grasp is in force closure
 };
 
 Aggregate aggregate(const std::vector<const Record*>& records);

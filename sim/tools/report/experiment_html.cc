@@ -555,7 +555,7 @@ std::string pictures_section(const ExperimentRun& run, const PageData& d, const 
 std::string overall_section(const ExperimentRun& run, const PageData& d) {
   std::ostringstream body;
   body << "<h2>Overall per mode and group</h2>\n<table class=\"numbers\"><tr><th>mode</th><th>group</th><th>trials</th>"
-          "<th>grasped</th><th>held after lift</th><th>time to grasp (s)</th><th>mean |ND| (mm)</th>"
+          "<th>grasped</th><th>held after lift</th><th>time to grasp (s)</th><th>mean |ND| at mid-length (mm)</th>"
           "<th>HandError (mm)</th></tr>\n";
   for (const std::string& mode : d.modes)
     for (const std::string& group : d.groups) {
@@ -570,6 +570,60 @@ std::string overall_section(const ExperimentRun& run, const PageData& d) {
   return body.str() + mode_times_section(run, d) + worst_objects_paragraph(run) + unit_caveat(run);
 }
 
+// The fidelity figures per mode and group (GRASPING.md section 4): nd_contact, the exact signed
+// distances of blocked capsules and of the palm, at the grasp tick. Targets are set on these.
+std::string fidelity_section(const ExperimentRun& run, const PageData& d) {
+  std::ostringstream body;
+  body << "<h2 id=\"fidelity\">Fidelity: ND at the contact and exact signed distances</h2>\n<p>At the grasp tick, "
+          "over the blocked capsules: <code>nd_contact</code> (the paper's sweep taken toward the point of the "
+          "capsule's axis nearest its contact) and the exact capsule-to-object signed distance; and the palm box's "
+          "exact signed distance. The paper comparison below uses <code>nd_midlength</code>; the fidelity targets "
+          "(|nd_contact| median &le; 0.05 mm, p95 &le; 0.1 mm, nothing below -0.1 mm) are set on these.</p>\n"
+          "<table class=\"numbers\"><tr><th>mode</th><th>group</th><th>blocked capsules</th><th>without "
+          "nd_contact</th><th>|nd_contact| median (mm)</th><th>|nd_contact| p95 (mm)</th><th>min signed distance "
+          "(mm)</th><th>capsules &lt; -0.1 mm</th><th>palm min signed distance (mm)</th><th>palms &lt; -0.1 "
+          "mm</th></tr>\n";
+  for (const std::string& mode : d.modes)
+    for (const std::string& group : d.groups) {
+      const auto records = select(run, mode, group, "");
+      if (records.empty()) continue;
+      const Fidelity f = aggregate(records).fidelity;
+      body << "<tr><td>" << esc(mode_name(mode)) << "</td><td>" << esc(group) << "</td><td>" << f.blocked << "</td><td>"
+           << f.blocked_without_contact << "</td><td>" << fmt(percentile(f.nd_contact_abs, 0.5), 3) << "</td><td>"
+           << fmt(percentile(f.nd_contact_abs, 0.95), 3) << "</td><td>" << fmt(f.min_signed_distance, 3) << "</td><td>"
+           << f.blocked_below << "</td><td>" << fmt(f.palm_min, 3) << "</td><td>" << f.palm_below << "</td></tr>\n";
+    }
+  body << "</table>\n";
+  return body.str();
+}
+
+// The share of held grasps in force closure per object, one column per mode and group.
+std::string force_closure_section(const ExperimentRun& run, const PageData& d) {
+  std::ostringstream body;
+  body << "<h2 id=\"force-closure\">Held grasps in force closure</h2>\n<p>Per object: held grasps whose contacts "
+          "are in force closure (Ferrari-Canny epsilon &gt; 0 with the rig's friction, GRASPING.md section 4b) / "
+          "held grasps, and the share.</p>\n<table class=\"numbers\"><tr><th>object</th>";
+  for (const std::string& mode : d.modes)
+    for (const std::string& group : d.groups) body << "<th>" << esc(mode_name(mode)) << ", " << esc(group) << "</th>";
+  body << "</tr>\n";
+  auto cell = [](const Aggregate& a) {
+    if (a.held == 0) return std::string(kNoData);
+    return std::to_string(a.held_force_closure) + "/" + std::to_string(a.held) + " (" +
+           fmt(100.0 * a.held_force_closure / a.held, 0) + " %)";
+  };
+  std::vector<std::string> rows = d.objects;
+  rows.push_back("");  // all objects
+  for (const std::string& object : rows) {
+    body << "<tr><td>" << (object.empty() ? std::string("<b>all</b>") : esc(object)) << "</td>";
+    for (const std::string& mode : d.modes)
+      for (const std::string& group : d.groups)
+        body << "<td>" << cell(aggregate(select(run, mode, group, object))) << "</td>";
+    body << "</tr>\n";
+  }
+  body << "</table>\n";
+  return body.str();
+}
+
 // Charts (1) to (3): one column per mode, so discrete and precise sit side by side.
 std::string mode_charts_section(const PageData& d) {
   struct Kind {
@@ -580,9 +634,11 @@ std::string mode_charts_section(const PageData& d) {
   };
   const Kind kinds[] = {
       {"time_by_group", "Mean time to grasp per object and group", "Time [s]", true, false},
-      {"nd_by_group", "Mean |ND| per object and group (capsules that hit, grasp tick)", "|ND| [mm]", false, false},
+      {"nd_by_group",
+       "Mean |ND| at mid-length (nd_midlength, the paper's ND) per object and group (capsules that hit, grasp tick)",
+       "|ND| [mm]", false, false},
       {"time_overall", "Mean time to grasp per object, all participants", "Time [s]", true, true},
-      {"nd_overall", "Mean |ND| per object, all participants", "|ND| [mm]", false, true},
+      {"nd_overall", "Mean |ND| at mid-length (nd_midlength) per object, all participants", "|ND| [mm]", false, true},
   };
   std::ostringstream body;
   for (const Kind& kind : kinds) {
@@ -613,7 +669,9 @@ std::string mode_charts_section(const PageData& d) {
 Chart paper_chart(const std::vector<PaperRow>& paper, const PageData& d, const std::string& group, bool time) {
   const bool experienced = group == "experienced";
   Chart c{std::string(time ? "paper_time." : "paper_error.") + group,
-          (time ? "Time to grasp, paper vs ours, " : "Error, paper's HandError vs our mean |ND|, ") + group,
+          (time ? "Time to grasp, paper vs ours, "
+                : "Error, paper's HandError vs our mean |ND| at mid-length (nd_midlength), ") +
+              group,
           time ? "Time [s]" : "Error [mm]",
           d.objects,
           d.labels,
@@ -679,6 +737,8 @@ std::string html_report(const ExperimentRun& run, const std::vector<PaperRow>& p
   std::string body = "<h1>telegrasp: the paper's grasping experiment (" + esc(run.protocol) + ")</h1>\n";
   body += run_section(run, d);
   body += overall_section(run, d);
+  body += fidelity_section(run, d);
+  body += force_closure_section(run, d);
   if (pictures) body += pictures_section(run, d, *pictures);
   body += mode_charts_section(d);
   body += paper_section(paper, d);

@@ -10,14 +10,48 @@ using nlohmann::json;
 
 json capsule_json(const std::vector<CapsuleMetricRecord>& capsules) {
   json out = json::array();
-  for (const auto& c : capsules)
+  for (const auto& c : capsules) {
+    const json nd_midlength = c.hit ? json(c.nd_midlength_mm) : json(nullptr);
     out.push_back({{"phalanx", c.phalanx},
                    {"hit", c.hit},
                    {"blocked", c.blocked},
-                   {"nd_mm", c.hit ? json(c.nd_mm) : json(nullptr)},
+                   {"nd_midlength_mm", nd_midlength},
+                   {"nd_mm", nd_midlength},
+                   {"contact_hit", c.contact_hit},
+                   {"nd_contact_mm", c.contact_hit ? json(c.nd_contact_mm) : json(nullptr)},
                    {"signed_distance_mm", c.signed_distance_mm}});
+  }
   return out;
 }
+
+GraspFigures grasp_figures(const sim::GraspMetrics& m) {
+  return {1000 * m.palm_signed_distance, m.quality.epsilon, m.quality.volume, m.quality.force_closure};
+}
+
+namespace {
+
+// The figures' keys into `out` (null when not grasped).
+void put_figures(json& out, const GraspFigures& f, bool grasped) {
+  auto val = [&](const json& v) { return grasped ? v : json(nullptr); };
+  out["palm_signed_distance_mm"] = val(f.palm_signed_distance_mm);
+  out["epsilon"] = val(f.epsilon);
+  out["volume"] = val(f.volume);
+  out["force_closure"] = val(f.force_closure);
+}
+
+// The figures from `j` (absent in records written before them: zero).
+GraspFigures get_figures(const json& j) {
+  GraspFigures f;
+  auto num = [&](const char* k) { return j.contains(k) && !j.at(k).is_null() ? j.at(k).get<double>() : 0.0; };
+  f.palm_signed_distance_mm = num("palm_signed_distance_mm");
+  f.epsilon = num("epsilon");
+  f.volume = num("volume");
+  f.force_closure =
+      j.contains("force_closure") && j.at("force_closure").is_boolean() && j.at("force_closure").get<bool>();
+  return f;
+}
+
+}  // namespace
 
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return std::nan("");
@@ -31,14 +65,59 @@ double percentile(std::vector<double> v, double p) {
 std::vector<CapsuleMetricRecord> capsule_records(const sim::GraspMetrics& metrics, const sim::HandRig& rig) {
   std::vector<CapsuleMetricRecord> out;
   for (const sim::CapsuleMetric& m : metrics.capsules)
-    out.push_back({rig.phalanges()[m.phalanx.value].name, m.hit, m.blocked, 1000 * m.nd, 1000 * m.signed_distance});
+    out.push_back({rig.phalanges()[m.phalanx.value].name, m.hit, m.blocked, 1000 * m.nd, 1000 * m.signed_distance,
+                   m.contact_hit, 1000 * m.nd_contact});
   return out;
 }
+
+namespace {
+
+// nd_contact over the blocked capsules of some grasps: |ND| values and the blocked ones without it.
+struct NdContactStats {
+  std::vector<double> abs_mm;
+  int blocked_without = 0;
+  void add(const std::vector<CapsuleMetricRecord>& capsules) {
+    for (const auto& c : capsules) {
+      if (!c.blocked) continue;
+      if (c.contact_hit) {
+        abs_mm.push_back(std::abs(c.nd_contact_mm));
+      } else {
+        ++blocked_without;
+      }
+    }
+  }
+};
+
+// The grasps' hand-level figures: palm distances, force closure and epsilon.
+json figures_summary(const std::vector<const Record*>& recs) {
+  int grasped = 0, closure = 0, palm_below = 0;
+  double palm_min = INFINITY;
+  std::vector<double> eps, palm;
+  for (const Record* r : recs) {
+    if (!r->grasped) continue;
+    ++grasped;
+    closure += r->figures.force_closure;
+    eps.push_back(r->figures.epsilon);
+    palm.push_back(r->figures.palm_signed_distance_mm);
+    palm_min = std::min(palm_min, r->figures.palm_signed_distance_mm);
+    palm_below += r->figures.palm_signed_distance_mm < -0.1;
+  }
+  auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+  return {{"palm_signed_distance_min_mm", num(palm_min)},
+          {"palm_signed_distance_median_mm", num(percentile(palm, 0.5))},
+          {"palm_below_minus_0_1mm", palm_below},
+          {"force_closure_grasps", closure},
+          {"force_closure_share", num(grasped ? static_cast<double>(closure) / grasped : NAN)},
+          {"epsilon_median", num(percentile(eps, 0.5))}};
+}
+
+}  // namespace
 
 json summarize(const std::vector<const Record*>& recs) {
   int grasped = 0, held = 0, capsules = 0, below = 0, blocked_count = 0;
   double time_sum = 0, he_sum = 0, he_tick_sum = 0, min_sd = 1e9;
   std::vector<double> nd_abs, nd_abs_tick;
+  NdContactStats contact, contact_tick;
   for (const Record* r : recs) {
     grasped += r->grasped;
     held += r->held_after_lift;
@@ -47,10 +126,12 @@ json summarize(const std::vector<const Record*>& recs) {
     he_sum += r->hand_error_mm;
     he_tick_sum += r->grasp_tick_hand_error_mm;
     for (const auto& c : r->grasp_tick_capsules)
-      if (c.hit) nd_abs_tick.push_back(std::abs(c.nd_mm));
+      if (c.hit) nd_abs_tick.push_back(std::abs(c.nd_midlength_mm));
+    contact.add(r->capsules);
+    contact_tick.add(r->grasp_tick_capsules);
     for (const auto& c : r->capsules) {
       ++capsules;
-      if (c.hit) nd_abs.push_back(std::abs(c.nd_mm));
+      if (c.hit) nd_abs.push_back(std::abs(c.nd_midlength_mm));
       if (c.blocked) {
         ++blocked_count;
         min_sd = std::min(min_sd, c.signed_distance_mm);
@@ -59,22 +140,30 @@ json summarize(const std::vector<const Record*>& recs) {
     }
   }
   auto num = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
-  return {{"trials", recs.size()},
-          {"grasped", grasped},
-          {"held_after_lift", held},
-          {"held_rate", recs.empty() ? 0.0 : static_cast<double>(held) / static_cast<double>(recs.size())},
-          {"time_to_grasp_mean_s", num(grasped ? time_sum / grasped : NAN)},
-          {"hand_error_mean_mm", num(grasped ? he_sum / grasped : NAN)},
-          {"capsules", capsules},
-          {"capsules_hit", nd_abs.size()},
-          {"nd_abs_median_mm", num(percentile(nd_abs, 0.5))},
-          {"nd_abs_p95_mm", num(percentile(nd_abs, 0.95))},
-          {"blocked_capsules", blocked_count},
-          {"min_blocked_signed_distance_mm", num(blocked_count ? min_sd : NAN)},
-          {"blocked_below_minus_0_1mm", below},
-          {"grasp_tick_hand_error_mean_mm", num(grasped ? he_tick_sum / grasped : NAN)},
-          {"grasp_tick_nd_abs_median_mm", num(percentile(nd_abs_tick, 0.5))},
-          {"grasp_tick_nd_abs_p95_mm", num(percentile(nd_abs_tick, 0.95))}};
+  json out = {{"trials", recs.size()},
+              {"grasped", grasped},
+              {"held_after_lift", held},
+              {"held_rate", recs.empty() ? 0.0 : static_cast<double>(held) / static_cast<double>(recs.size())},
+              {"time_to_grasp_mean_s", num(grasped ? time_sum / grasped : NAN)},
+              {"hand_error_mean_mm", num(grasped ? he_sum / grasped : NAN)},
+              {"capsules", capsules},
+              {"capsules_hit", nd_abs.size()},
+              {"nd_abs_median_mm", num(percentile(nd_abs, 0.5))},
+              {"nd_abs_p95_mm", num(percentile(nd_abs, 0.95))},
+              {"blocked_capsules", blocked_count},
+              {"min_blocked_signed_distance_mm", num(blocked_count ? min_sd : NAN)},
+              {"blocked_below_minus_0_1mm", below},
+              {"grasp_tick_hand_error_mean_mm", num(grasped ? he_tick_sum / grasped : NAN)},
+              {"grasp_tick_nd_abs_median_mm", num(percentile(nd_abs_tick, 0.5))},
+              {"grasp_tick_nd_abs_p95_mm", num(percentile(nd_abs_tick, 0.95))},
+              {"nd_contact_abs_median_mm", num(percentile(contact.abs_mm, 0.5))},
+              {"nd_contact_abs_p95_mm", num(percentile(contact.abs_mm, 0.95))},
+              {"blocked_without_nd_contact", contact.blocked_without},
+              {"grasp_tick_nd_contact_abs_median_mm", num(percentile(contact_tick.abs_mm, 0.5))},
+              {"grasp_tick_nd_contact_abs_p95_mm", num(percentile(contact_tick.abs_mm, 0.95))},
+              {"grasp_tick_blocked_without_nd_contact", contact_tick.blocked_without}};
+  out.update(figures_summary(recs));
+  return out;
 }
 
 std::string fmt(double v, int prec) {
@@ -85,16 +174,17 @@ std::string fmt(double v, int prec) {
 }
 
 void print_object_table(const std::vector<ObjectRows>& objects) {
-  std::printf("%-26s %6s %6s %8s %9s %9s %10s %9s\n", "object", "held", "grasp", "time_s", "|ND|med", "|ND|p95",
-              "minSD_mm", "HErr_mm");
+  std::printf("%-26s %6s %6s %8s %9s %9s %9s %10s %9s\n", "object", "held", "grasp", "time_s", "|ND|med", "|ND|p95",
+              "|NDc|p95", "minSD_mm", "HErr_mm");
   for (const ObjectRows& o : objects) {
     const json s = summarize(o.records);
     auto get = [&](const char* k) { return s[k].is_null() ? NAN : s[k].get<double>(); };
     const int n = static_cast<int>(o.records.size());
-    std::printf("%-26s %3d/%-2d %3d/%-2d %8s %9s %9s %10s %9s\n", o.object.c_str(), s["held_after_lift"].get<int>(), n,
-                s["grasped"].get<int>(), n, fmt(get("time_to_grasp_mean_s")).c_str(),
+    std::printf("%-26s %3d/%-2d %3d/%-2d %8s %9s %9s %9s %10s %9s\n", o.object.c_str(), s["held_after_lift"].get<int>(),
+                n, s["grasped"].get<int>(), n, fmt(get("time_to_grasp_mean_s")).c_str(),
                 fmt(get("nd_abs_median_mm"), 3).c_str(), fmt(get("nd_abs_p95_mm"), 3).c_str(),
-                fmt(get("min_blocked_signed_distance_mm"), 3).c_str(), fmt(get("hand_error_mean_mm")).c_str());
+                fmt(get("nd_contact_abs_p95_mm"), 3).c_str(), fmt(get("min_blocked_signed_distance_mm"), 3).c_str(),
+                fmt(get("hand_error_mean_mm")).c_str());
   }
 }
 
@@ -113,6 +203,8 @@ json record_json(const Record& r) {
               {"grasp_tick",
                {{"hand_error_mm", r.grasped ? json(r.grasp_tick_hand_error_mm) : json(nullptr)},
                 {"capsules", capsule_json(r.grasp_tick_capsules)}}}};
+  put_figures(out, r.figures, r.grasped);
+  put_figures(out["grasp_tick"], r.grasp_tick_figures, r.grasped);
   if (!r.group.empty()) {
     auto vec = [](const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); };
     json contacts = json::array();
@@ -162,14 +254,20 @@ Record record_from_json(const json& j) {
   }
   auto capsules = [](const json& arr) {
     std::vector<CapsuleMetricRecord> out;
-    for (const json& c : arr)
+    for (const json& c : arr) {
+      // Records written before nd_contact name the midlength ND "nd_mm" and have no nd_contact.
+      const json& nd = c.contains("nd_midlength_mm") ? c.at("nd_midlength_mm") : c.at("nd_mm");
+      const bool contact_hit = c.contains("contact_hit") && c.at("contact_hit").get<bool>();
       out.push_back({c.at("phalanx").get<std::string>(), c.at("hit").get<bool>(), c.at("blocked").get<bool>(),
-                     c.at("nd_mm").is_null() ? 0.0 : c.at("nd_mm").get<double>(),
-                     c.at("signed_distance_mm").get<double>()});
+                     nd.is_null() ? 0.0 : nd.get<double>(), c.at("signed_distance_mm").get<double>(), contact_hit,
+                     contact_hit ? c.at("nd_contact_mm").get<double>() : 0.0});
+    }
     return out;
   };
   r.capsules = capsules(j.at("capsules"));
   r.grasp_tick_capsules = capsules(j.at("grasp_tick").at("capsules"));
+  r.figures = get_figures(j);
+  r.grasp_tick_figures = get_figures(j.at("grasp_tick"));
   if (!j.contains("group")) return r;  // not a protocol record
   r.group = j.at("group").get<std::string>();
   r.participant = j.at("participant").get<int>();

@@ -14,11 +14,22 @@
 namespace telegrasp::report {
 
 /// One capsule's metrics as a report writes them: sim::CapsuleMetric (client::CapsuleMetric over
-/// DDS) with the phalanx's rig name, in millimetres.
+/// DDS) with the phalanx's rig name, in millimetres. `hit`/`nd_midlength_mm`: the paper's ND at
+/// mid-length; `contact_hit`/`nd_contact_mm`: ND toward the contact (blocked capsules).
 struct CapsuleMetricRecord {
   std::string phalanx;
   bool hit = false, blocked = false;
-  double nd_mm = 0, signed_distance_mm = 0;
+  double nd_midlength_mm = 0, signed_distance_mm = 0;
+  bool contact_hit = false;
+  double nd_contact_mm = 0;
+};
+
+/// A grasp's hand-level figures (GRASPING.md sections 4 and 4b): the palm box's exact signed
+/// distance to the object (mm), Ferrari-Canny epsilon, the wrench hull's volume, force closure.
+struct GraspFigures {
+  double palm_signed_distance_mm = 0;
+  double epsilon = 0, volume = 0;
+  bool force_closure = false;
 };
 
 /// A contact of a grasp as a report writes it: sim::Contact (client::ContactPoint over DDS) with
@@ -44,8 +55,10 @@ struct Record {
   double time_to_grasp_s = 0;
   double hand_error_mm = 0;  ///< The settled hand while held (end of the hold), else the grasp tick's.
   std::vector<CapsuleMetricRecord> capsules;
+  GraspFigures figures;  ///< Of the same hand as hand_error_mm.
   double grasp_tick_hand_error_mm = 0;  ///< The tick the grasp rule turned true.
   std::vector<CapsuleMetricRecord> grasp_tick_capsules;
+  GraspFigures grasp_tick_figures;
   // Protocol runs (telegrasp-eval --protocol) only; written when `group` is not empty.
   std::string group;  ///< Operator group, e.g. "experienced".
   int participant = 0;  ///< 1-based, unique in a run.
@@ -59,7 +72,12 @@ struct Record {
 /// The capsule metrics of a grasp, named by the rig's phalanges, in mm.
 std::vector<CapsuleMetricRecord> capsule_records(const sim::GraspMetrics& metrics, const sim::HandRig& rig);
 
-/// The capsules as a JSON array of {"phalanx","hit","blocked","nd_mm" (null without hit),"signed_distance_mm"}.
+/// The hand-level figures of a grasp, palm distance in mm.
+GraspFigures grasp_figures(const sim::GraspMetrics& metrics);
+
+/// The capsules as a JSON array of {"phalanx","hit","blocked","nd_midlength_mm" (null without hit),
+/// "nd_mm" (the same: an alias kept for one release),"contact_hit","nd_contact_mm" (null without
+/// contact_hit),"signed_distance_mm"}.
 nlohmann::json capsule_json(const std::vector<CapsuleMetricRecord>& capsules);
 
 /// Success counts and metric statistics over `records` (keys as in telegrasp-eval's JSON summary).
@@ -83,7 +101,9 @@ struct ObjectRows {
 void print_object_table(const std::vector<ObjectRows>& objects);
 
 /// One grasp record as JSON: {"object","trial","mode","speed_scale","grasped","held_after_lift",
-/// "attempts","time_to_grasp_s","hand_error_mm","capsules":[...],"grasp_tick":{...}}, plus
+/// "attempts","time_to_grasp_s","hand_error_mm","palm_signed_distance_mm","epsilon","volume",
+/// "force_closure","capsules":[...],"grasp_tick":{the same metrics at the grasp tick}} (metrics
+/// null when not grasped), plus
 /// "group","participant","contacts":[{"phalanx","p_WorldContact_m","n_World","p_ObjectContact_m","n_Object"}] for
 /// protocol runs, and "grasp_tick_hand":{"X_WorldObject":{"p","q_wxyz"},"frames":[{"frame","p","q_wxyz"}]}
 /// (X_ObjectFrame; m, unit quaternion w,x,y,z; rounded to 1e-6) when a protocol record has it.

@@ -40,9 +40,14 @@ Record grasp(const std::string& mode, const std::string& group, int participant,
   r.time_to_grasp_s = time_s;
   r.grasp_tick_hand_error_mm = hand_error_mm;
   r.hand_error_mm = 99;  // the settled hand: not what the experiment report uses
-  for (double nd : nd_hit) r.grasp_tick_capsules.push_back({"index_dist", true, true, nd, nd - 0.01});
+  // Blocked capsules: nd_contact = |ND| / 100 (mm). Trial 0 is in force closure, 1 is not; the palm
+  // is time_s / 10 mm inside the object.
+  for (double nd : nd_hit)
+    r.grasp_tick_capsules.push_back({"index_dist", true, true, nd, nd - 0.01, true, std::abs(nd) / 100});
   r.grasp_tick_capsules.push_back({"pinky_dist", false, false, 0, 7});
   r.capsules = {{"index_dist", true, true, 50, 50}};  // settled: must not be used either
+  r.grasp_tick_figures = {-time_s / 10, trial == 0 ? 0.125 : 0.0, 0.5, trial == 0};
+  r.figures = r.grasp_tick_figures;
   r.contacts.resize(2);
   return r;
 }
@@ -187,6 +192,28 @@ TEST(ExperimentReportTest, AggregatesHaveTheHandComputedMeans) {
   EXPECT_EQ(j["run"]["seed"], 7);
 }
 
+// Precise, experienced, lemon: nd_contact 0.01, 0.03 (trial 0) and 0.04 (trial 1): median 0.03,
+// p95 at rank 0.95 x 2 = 1.9: 0.03 + 0.9 x 0.01 = 0.039; palms -0.1 and -0.2 mm (one below
+// -0.1); one of the two held grasps in force closure.
+TEST(ExperimentReportTest, AggregatesHaveTheFidelityAndForceClosureFigures) {
+  const ExperimentRun run = handmade_run();
+  const nlohmann::json j = aggregate_json(run);
+  const nlohmann::json& lemon = find_row(j["by_mode_group_object"], "precise", "experienced", "014_lemon");
+  EXPECT_NEAR(lemon["nd_contact_abs_median_mm"].get<double>(), 0.03, 1e-12);
+  EXPECT_NEAR(lemon["nd_contact_abs_p95_mm"].get<double>(), 0.039, 1e-12);
+  EXPECT_EQ(lemon["blocked_capsules"], 3);
+  EXPECT_EQ(lemon["blocked_without_nd_contact"], 0);
+  EXPECT_NEAR(lemon["palm_signed_distance_min_mm"].get<double>(), -0.2, 1e-12);
+  EXPECT_EQ(lemon["palm_below_minus_0_1mm"], 1);
+  EXPECT_EQ(lemon["held_force_closure"], 1);
+  EXPECT_NEAR(lemon["held_force_closure_share"].get<double>(), 0.5, 1e-12);
+  const std::string html = html_report(run, {}, nullptr, nullptr);
+  EXPECT_NE(html.find("Held grasps in force closure"), std::string::npos);
+  EXPECT_NE(html.find("<td>1/2 (50 %)</td>"), std::string::npos);
+  EXPECT_NE(html.find("Fidelity: ND at the contact"), std::string::npos);
+  EXPECT_NE(html.find("mid-length (nd_midlength"), std::string::npos);
+}
+
 TEST(ExperimentReportTest, CsvHasOneRowPerGraspAndPerModeGroupObject) {
   const ExperimentRun run = handmade_run();
   const auto dir = std::filesystem::temp_directory_path() / ("telegrasp_report_test_" + std::to_string(::getpid()));
@@ -199,11 +226,15 @@ TEST(ExperimentReportTest, CsvHasOneRowPerGraspAndPerModeGroupObject) {
   ASSERT_EQ(grasps.size(), 1 + run.records.size());
   EXPECT_EQ(grasps[0],
             "mode,group,participant,object,trial,grasped,held_after_lift,attempts,time_to_grasp_s,hand_error_mm,"
-            "nd_abs_mean_mm,capsules_hit,min_signed_distance_mm,contacts");
-  // The first lemon grasp: |ND| (1 + 3)/2 = 2 over 2 hit capsules, smallest signed distance -3.01.
-  EXPECT_EQ(grasps[1], "precise,experienced,1,014_lemon,0,1,1,1,1.0000,5.0000,2.0000,2,-3.0100,2");
+            "nd_abs_mean_mm,capsules_hit,min_signed_distance_mm,contacts,nd_contact_abs_max_mm,"
+            "blocked_without_nd_contact,palm_signed_distance_mm,epsilon,volume,force_closure");
+  // The first lemon grasp: |ND| (1 + 3)/2 = 2 over 2 hit capsules, smallest signed distance -3.01;
+  // |nd_contact| at most 0.03, the palm 0.1 mm in, in force closure.
+  EXPECT_EQ(grasps[1],
+            "precise,experienced,1,014_lemon,0,1,1,1,1.0000,5.0000,2.0000,2,-3.0100,2,0.0300,0,-0.1000,0.125000,"
+            "0.500000,1");
   // A miss has empty metrics, not zeros.
-  EXPECT_EQ(grasps[4], "precise,inexperienced,2,014_lemon,1,0,0,3,,,,0,,0");
+  EXPECT_EQ(grasps[4], "precise,inexperienced,2,014_lemon,1,0,0,3,,,,0,,0,,,,,,");
 
   // 2 modes x (2 groups + "all") x objects with records: precise 3 + 2 (no inexperienced custom)
   // + 3 all; discrete the same: 16 rows.
@@ -518,7 +549,10 @@ TEST(GraspRecordJsonTest, RoundTrips) {
   r.grasped = r.held_after_lift = true;
   r.time_to_grasp_s = 1.25;
   r.hand_error_mm = r.grasp_tick_hand_error_mm = 7.5;
-  r.capsules = r.grasp_tick_capsules = {{"index_dist", true, true, -0.25, 0.01}, {"thumb_mid", false, false, 0, 3.5}};
+  r.capsules = r.grasp_tick_capsules = {{"index_dist", true, true, -0.25, 0.01, true, 0.02},
+                                        {"thumb_mid", false, false, 0, 3.5}};
+  r.figures = {-0.05, 0.125, 0.25, true};
+  r.grasp_tick_figures = {0.5, 0.0, 0.0, false};
   r.group = "experienced";
   r.participant = 4;
   r.contacts = {{"palm", {0.1, 0.2, 0.3}, {0, 0, 1}, {-0.01, 0.02, 0.03}, {1, 0, 0}}};
@@ -530,6 +564,9 @@ TEST(GraspRecordJsonTest, RoundTrips) {
       {"index_dist", Eigen::Isometry3d(Eigen::Translation3d(0.03, 0.0, 0.01))}};
   const Record back = record_from_json(record_json(r));
   EXPECT_EQ(record_json(back), record_json(r));
+  EXPECT_EQ(back.capsules.at(0).nd_contact_mm, 0.02);
+  EXPECT_EQ(back.figures.epsilon, 0.125);
+  EXPECT_EQ(back.grasp_tick_figures.palm_signed_distance_mm, 0.5);
   EXPECT_EQ(back.participant, 4);
   EXPECT_EQ(back.contacts.at(0).p_ObjectContact, Eigen::Vector3d(-0.01, 0.02, 0.03));
   ASSERT_EQ(back.grasp_tick_hand.size(), 2u);
@@ -545,6 +582,44 @@ TEST(GraspRecordJsonTest, RoundTrips) {
   Record in_process = back;
   in_process.group.clear();
   EXPECT_FALSE(record_json(in_process).contains("grasp_tick_hand"));
+}
+
+// The names a record's capsules and grasp carry: nd_midlength_mm with nd_mm as its alias (null
+// without a hit), nd_contact_mm (null without contact_hit), and the grasp's figures at the top
+// level and in grasp_tick; a record written before them (nd_mm only) still reads.
+TEST(GraspRecordJsonTest, NamesTheTwoNdsAndTheGraspFigures) {
+  Record r;
+  r.object = "014_lemon";
+  r.grasped = true;
+  r.capsules = r.grasp_tick_capsules = {{"index_dist", true, true, -0.25, 0.01, true, 0.02},
+                                        {"thumb_mid", false, false, 0, 3.5}};
+  r.figures = {-0.05, 0.125, 0.25, true};
+  const nlohmann::json j = record_json(r);
+  const nlohmann::json& c = j["capsules"];
+  EXPECT_EQ(c[0]["nd_midlength_mm"], -0.25);
+  EXPECT_EQ(c[0]["nd_mm"], -0.25);
+  EXPECT_EQ(c[0]["contact_hit"], true);
+  EXPECT_EQ(c[0]["nd_contact_mm"], 0.02);
+  EXPECT_TRUE(c[1]["nd_midlength_mm"].is_null());
+  EXPECT_TRUE(c[1]["nd_mm"].is_null());
+  EXPECT_TRUE(c[1]["nd_contact_mm"].is_null());
+  EXPECT_EQ(j["palm_signed_distance_mm"], -0.05);
+  EXPECT_EQ(j["epsilon"], 0.125);
+  EXPECT_EQ(j["volume"], 0.25);
+  EXPECT_EQ(j["force_closure"], true);
+  EXPECT_EQ(j["grasp_tick"]["force_closure"], false);
+  r.grasped = false;
+  EXPECT_TRUE(record_json(r)["palm_signed_distance_mm"].is_null());
+
+  nlohmann::json old = j;
+  for (nlohmann::json& cap : old["capsules"]) {
+    cap.erase("nd_midlength_mm");
+    cap.erase("contact_hit");
+    cap.erase("nd_contact_mm");
+  }
+  const Record back = record_from_json(old);
+  EXPECT_EQ(back.capsules.at(0).nd_midlength_mm, -0.25);
+  EXPECT_FALSE(back.capsules.at(0).contact_hit);
 }
 
 }  // namespace

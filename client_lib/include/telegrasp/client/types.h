@@ -49,9 +49,12 @@ struct HandSkeleton {
   std::int64_t input_client_time_ns = 0;
   bool late_latched = false;  ///< Re-posed on that sample's arrival, fingers of the last tick.
   bool frozen = false;  ///< The client went silent; the hand keeps its last input.
-  Eigen::Isometry3d X_WorldPalm = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d X_WorldPalm = Eigen::Isometry3d::Identity();  ///< Resolved: the pose that grasps and is shown.
   std::vector<Eigen::Isometry3d> X_WorldPhalanx;  ///< Rig order.
   std::vector<double> joint_angles;  ///< rad, rig order.
+  Eigen::Isometry3d X_WorldTracked = Eigen::Isometry3d::Identity();  ///< The controller's pose.
+  Eigen::Vector3d resolve_offset{0, 0, 0};  ///< X_WorldPalm minus X_WorldTracked position, world frame, m.
+  double resolve_angle = 0;  ///< Rotation from the tracked to the resolved pose, rad.
 };
 
 struct GraspState {
@@ -63,6 +66,9 @@ struct GraspState {
   double trigger = 0;
   std::vector<bool> blocked;  ///< Per phalanx, rig order.
   bool palm_contact = false;
+  double epsilon = 0;  ///< Held grasp's Ferrari-Canny epsilon (GRASPING.md section 4b); 0 when not holding.
+  double volume = 0;  ///< Held grasp's wrench-space volume.
+  bool force_closure = false;  ///< epsilon > 0.
 };
 
 struct ContactPoint {
@@ -87,10 +93,12 @@ struct ContactSet {
 struct CapsuleMetric {
   int phalanx = -1;
   std::string phalanx_name;
-  bool hit = false;  ///< False: "no hit", kept apart from nd = 0.
-  double nd = 0;  ///< m
+  bool hit = false;  ///< nd_midlength: false: "no hit", kept apart from nd = 0.
+  double nd = 0;  ///< nd_midlength, the paper's ND (sweep toward mid-length CTc), m
   double signed_distance = 0;  ///< m
   bool blocked = false;
+  bool contact_hit = false;  ///< nd_contact was taken (every blocked capsule has it).
+  double nd_contact = 0;  ///< ND toward the axis point nearest the contact, m; only if contact_hit.
 };
 
 /// The name of the previous release; goes in the next.
@@ -112,6 +120,9 @@ struct GraspEvent {
   int capsules_without_hit = 0;  ///< Grasp events.
   std::vector<CapsuleMetric> capsules;  ///< Grasp events.
   std::vector<ContactPoint> contacts;  ///< Grasp events.
+  double palm_signed_distance = 0;  ///< Grasp events: exact palm-box signed distance to the object, m.
+  double epsilon = 0, volume = 0;  ///< Grasp events: Ferrari-Canny epsilon, wrench-space volume.
+  bool force_closure = false;  ///< Grasp events: epsilon > 0.
   Eigen::Vector3d v_WorldObject{0, 0, 0};  ///< Release events: velocity handed to physics.
   Eigen::Vector3d w_WorldObject{0, 0, 0};
 };

@@ -143,13 +143,16 @@ function drawDetail() {
     <tr><th>last grasp</th><td>${g ? `${escape(g.object_name)} at ${g.time_s.toFixed(2)} s` : "none yet"}</td></tr>
     <tr><th>HandError</th><td>${g ? `${mm(g.hand_error_mm)} mm` : "n/a"}</td></tr>
     <tr><th>epsilon</th><td>${g && g.epsilon !== undefined && g.epsilon !== null ? g.epsilon.toFixed(4) : "n/a"}</td></tr>
+    <tr><th>palm distance</th><td>${g && typeof g.palm_signed_distance_mm === "number" ? `${mm(g.palm_signed_distance_mm)} mm` : "n/a"}</td></tr>
   </table>`;
   if (s) {
-    html += `<h2>Phalanges (ND of the last grasp)</h2><table><tr><th>phalanx</th><th>state</th><th class="num">ND mm</th><th class="num">dist mm</th></tr>`;
+    html += `<h2>Phalanges (ND of the last grasp)</h2><table><tr><th>phalanx</th><th>state</th><th class="num">ND mid-length mm</th><th class="num">ND contact mm</th><th class="num">dist mm</th></tr>`;
     for (const p of s.phalanges) {
       const c = capsule.get(p.name);
       html += `<tr><td>${escape(p.name)}</td><td class="${p.blocked ? "blocked" : ""}">${p.blocked ? "blocked" : "free"}</td>` +
-        `<td class="num">${c ? (c.hit ? mm(c.nd_mm) : "no hit") : ""}</td><td class="num">${c ? mm(c.signed_distance_mm) : ""}</td></tr>`;
+        `<td class="num">${c ? (c.hit ? mm(c.nd_midlength_mm ?? c.nd_mm) : "no hit") : ""}</td>` +
+        `<td class="num">${c ? (c.contact_hit ? mm(c.nd_contact_mm) : "-") : ""}</td>` +
+        `<td class="num">${c ? mm(c.signed_distance_mm) : ""}</td></tr>`;
     }
     html += `</table>`;
   }
