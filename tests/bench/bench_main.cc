@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <map>
 #include <string>
+#include <unistd.h>
 #include <vector>
 
 namespace telegrasp::sim {
@@ -23,6 +24,9 @@ double budget_us(const std::string& kind) { return kind == "closing" ? 20.0 : 50
 class SummaryReporter : public benchmark::ConsoleReporter {
  public:
   using Table = std::map<std::string, std::map<std::string, std::map<std::string, double>>>;
+
+  /// Colours only on a terminal.
+  SummaryReporter() : ConsoleReporter(isatty(fileno(stdout)) ? OO_ColorTabular : OO_Tabular) {}
 
   void ReportRuns(const std::vector<Run>& runs) override {
     ConsoleReporter::ReportRuns(runs);
