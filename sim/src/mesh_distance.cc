@@ -1,8 +1,10 @@
 // MeshDistance: exact point / segment / capsule / swept-sphere queries on a triangle mesh.
 //
 // Structure: a binned-SAH BVH of axis-aligned boxes in a flat vector (children adjacent, at most
-// four triangles per leaf where SAH agrees), triangle data stored in leaf order, and the
-// angle-weighted pseudo-normals of Baerentzen & Aanaes (2005) for the sign of the distance.
+// four triangles per leaf where SAH agrees), an oriented box (principal axes) beside the nodes
+// where it is markedly tighter (thin or flat patches of a tilted mesh), triangle data stored in
+// leaf order, and the angle-weighted pseudo-normals of Baerentzen & Aanaes (2005) for the sign of
+// the distance.
 // Traversals are iterative with a fixed stack, nearest child first, pruned by the current best.
 // Segment searches prune a box or triangle by the plane through the segment point nearest its
 // centre (separated_beyond): a finger capsule lies along the surface, many millimetres above many
@@ -15,6 +17,7 @@
 //    vertices welded by exact position, so duplicated vertices do not create false boundaries.
 #include "telegrasp/sim/mesh_distance.h"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -23,6 +26,7 @@
 #include <cstring>
 #include <optional>
 #include <stdexcept>
+#include <tuple>
 #include <unordered_map>
 #include <utility>
 
@@ -455,6 +459,70 @@ inline double triangle_support(const Vector3d& w, const Corners& v, const Vector
   return std::max({w.dot(v[0] - c), w.dot(v[1] - c), w.dot(v[2] - c)});
 }
 
+/// The float axes are orthonormal only to float precision: a relative slack this size covers it.
+constexpr double kAxisSlack = 1e-5;
+
+/// An oriented box {x : u_i . (x - c) in [lo_i, hi_i]} (rows u_i of `axes`, c the node's box
+/// centre) and the lower bounds on distances to it.
+struct OrientedBox {
+  const float (*axes)[3];
+  const float* lo;
+  const float* hi;
+  double radius;  // of the node's box: |x - c| <= radius for every x inside
+
+  [[nodiscard]] double along(int i, const Vector3d& v) const {
+    return double{axes[i][0]} * v[0] + double{axes[i][1]} * v[1] + double{axes[i][2]} * v[2];
+  }
+
+  /// Largest w . (q - c) over the points q of the box, rounded up (w = any direction).
+  [[nodiscard]] double support(const Vector3d& w) const {
+    double s = 0;
+    for (int i = 0; i < 3; ++i) {
+      const double a = along(i, w);
+      s += a >= 0 ? a * hi[i] : a * lo[i];
+    }
+    // x - c = sum_i y_i u_i + residual, |residual| <= 3 kAxisSlack radius for nearly orthonormal u_i.
+    return s + 3 * kAxisSlack * radius * (std::abs(w[0]) + std::abs(w[1]) + std::abs(w[2]));
+  }
+
+  /// True when p (given as p - c) is provably farther than e from the box.
+  [[nodiscard]] bool point_beyond(const Vector3d& pc, double e) const {
+    double g2 = 0;
+    for (int i = 0; i < 3; ++i) {
+      const double y = along(i, pc);
+      const double g = std::max({lo[i] - y, y - hi[i], 0.0});
+      g2 += g * g;
+    }
+    const double reach = e * (1 + kAxisSlack) + 1e-12;
+    return g2 > reach * reach;
+  }
+
+  /// False when a ball of radius e centred on o + t d, t in [0, t_max], provably never touches
+  /// the box (oc = o - c).
+  [[nodiscard]] bool ray_meets(const Vector3d& oc, const Vector3d& d, double e, double t_max) const {
+    const double m = e * (1 + kAxisSlack) + 1e-12;
+    double t0 = 0;
+    double t1 = t_max;
+    for (int i = 0; i < 3; ++i) {
+      const double y = along(i, oc);
+      const double v = along(i, d);
+      const double l = lo[i] - m;
+      const double h = hi[i] + m;
+      if (v == 0) {
+        if (y < l || y > h) return false;
+        continue;
+      }
+      double ta = (l - y) / v;
+      double tb = (h - y) / v;
+      if (ta > tb) std::swap(ta, tb);
+      t0 = std::max(t0, ta);
+      t1 = std::min(t1, tb);
+      if (t0 > t1) return false;
+    }
+    return true;
+  }
+};
+
 /// A segment a + s d (s in [0, 1]) with the quantities its box tests reuse.
 struct SegmentProbe {
   SegmentProbe(const Vector3d& a_in, const Vector3d& b_in)
@@ -466,13 +534,15 @@ struct SegmentProbe {
   /// The closest point of the segment to c, minus c.
   [[nodiscard]] Vector3d offset_from(const Vector3d& c) const { return a + segment_param(c, a, d, dd) * d - c; }
 
-  /// False when the box [lo, hi] is provably farther than e from the segment; `key` gets the
+  /// False when the box [lo, hi] or the oriented box is provably farther than e from the segment; `key` gets the
   /// squared centre distance for ordering.
-  bool may_reach(const float* blo, const float* bhi, double e, double& key) const {
+  bool may_reach(const float* blo, const float* bhi, const OrientedBox* obb, double e, double& key) const {
     if (!std::isinf(e) && box_box_sq(lo, hi, blo, bhi) > e * e) return false;
     const Vector3d w = offset_from(box_centre(blo, bhi));
     key = w.squaredNorm();
-    return std::isinf(e) || !separated_beyond(key, box_support(w, blo, bhi), e);
+    if (std::isinf(e)) return true;
+    const double support = box_support(w, blo, bhi);
+    return !separated_beyond(key, obb ? std::min(support, obb->support(w)) : support, e);
   }
 };
 
@@ -573,6 +643,56 @@ float store_rounded_box(const Vector3d& lo, const Vector3d& hi, float* flo, floa
     dhi[i] = fhi[i];
   }
   return round_up(0.5 * (dhi - dlo).norm() * (1 + 1e-9) + 1e-12);
+}
+
+/// The principal axes of a range's triangle corners (their covariance's eigenvectors, as rows),
+/// or the coordinate axes when that fails.
+Eigen::Matrix3d principal_axes(const TriangleMesh& mesh, const std::vector<std::uint32_t>& order, std::uint32_t begin,
+                               std::uint32_t end) {
+  Vector3d mean = Vector3d::Zero();
+  for (std::uint32_t i = begin; i < end; ++i)
+    for (std::uint32_t v : mesh.triangles[order[i]]) mean += mesh.vertices[v];
+  mean /= 3.0 * (end - begin);
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (std::uint32_t i = begin; i < end; ++i)
+    for (std::uint32_t v : mesh.triangles[order[i]]) {
+      const Vector3d d = mesh.vertices[v] - mean;
+      cov += d * d.transpose();
+    }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  if (eig.info() != Eigen::Success || !eig.eigenvectors().allFinite()) return Eigen::Matrix3d::Identity();
+  return eig.eigenvectors().transpose();
+}
+
+/// Stores a range's oriented box: float axes (principal axes) and the extents of its corners'
+/// projections relative to `centre`, rounded outwards.
+void store_oriented_box(const TriangleMesh& mesh, const std::vector<std::uint32_t>& order, std::uint32_t begin,
+                        std::uint32_t end, const Vector3d& centre, float (*axes)[3], float* lo, float* hi) {
+  const Eigen::Matrix3d u = principal_axes(mesh, order, begin, end);
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < 3; ++k) axes[i][k] = static_cast<float>(u(i, k));
+    double l = kInf;
+    double h = -kInf;
+    for (std::uint32_t t = begin; t < end; ++t)
+      for (std::uint32_t v : mesh.triangles[order[t]]) {
+        const Vector3d x = mesh.vertices[v] - centre;
+        const double y = double{axes[i][0]} * x[0] + double{axes[i][1]} * x[1] + double{axes[i][2]} * x[2];
+        l = std::min(l, y);
+        h = std::max(h, y);
+      }
+    lo[i] = round_down(l);
+    hi[i] = round_up(h);
+  }
+}
+
+/// An oriented box is worth testing beside the axis-aligned one when this much smaller.
+constexpr double kOrientedGain = 0.5;
+
+/// Volume of box [lo, hi], each side taken at least 1e-6 of the largest (flat boxes compare by area).
+double volume_with_floor(const float* lo, const float* hi) {
+  const Vector3d e(double{hi[0]} - lo[0], double{hi[1]} - lo[1], double{hi[2]} - lo[2]);
+  const Vector3d f = e.cwiseMax(1e-6 * e.maxCoeff());
+  return f.x() * f.y() * f.z();
 }
 
 /// kBins equal slices of a range's centroid extent along one axis.
@@ -677,6 +797,21 @@ std::vector<std::uint32_t> weld_vertices(const std::vector<Vector3d>& vertices) 
   return weld;
 }
 
+/// A node's oriented box, for the bounds of OrientedBox.
+template <class Node, class Data>
+OrientedBox oriented_box(const Node& n, const std::vector<Data>& boxes) {
+  const Data& o = boxes[n.oriented];
+  return {o.axes, o.lo, o.hi, n.radius};
+}
+
+/// SegmentProbe::may_reach with the node's boxes.
+template <class Node, class Data>
+bool segment_may_reach(const SegmentProbe& seg, const Node& n, const std::vector<Data>& boxes, double e, double& key) {
+  if (n.oriented == MeshDistance::kNoHint) return seg.may_reach(n.lo, n.hi, nullptr, e, key);
+  const OrientedBox obb = oriented_box(n, boxes);
+  return seg.may_reach(n.lo, n.hi, &obb, e, key);
+}
+
 }  // namespace
 
 /// Depth-first walk of the BVH, nearer child first. `reach(node, key)` says whether a node may
@@ -749,6 +884,12 @@ std::vector<std::uint32_t> MeshDistance::build_bvh(const TriangleMesh& mesh) {
     {
       Node& n = nodes_[task.node];
       n.radius = store_rounded_box(range.lo, range.hi, n.lo, n.hi);
+      OrientedBoxData o;
+      store_oriented_box(mesh, order, task.begin, task.end, box_centre(n.lo, n.hi), o.axes, o.lo, o.hi);
+      if (volume_with_floor(o.lo, o.hi) < kOrientedGain * volume_with_floor(n.lo, n.hi)) {
+        n.oriented = static_cast<std::uint32_t>(oriented_boxes_.size());
+        oriented_boxes_.push_back(o);
+      }
     }
     const std::uint32_t count = task.end - task.begin;
     const std::optional<std::uint32_t> mid = count <= kLeafSize || task.depth >= kMaxDepth
@@ -768,6 +909,7 @@ std::vector<std::uint32_t> MeshDistance::build_bvh(const TriangleMesh& mesh) {
     tasks.push_back({left, task.begin, *mid, task.depth + 1});
   }
   nodes_.shrink_to_fit();
+  oriented_boxes_.shrink_to_fit();
   return order;
 }
 
@@ -836,11 +978,11 @@ void MeshDistance::build_pseudo_normals() {
 std::size_t MeshDistance::triangle_count() const { return triangles_.size(); }
 
 std::size_t MeshDistance::memory_bytes() const {
-  return nodes_.capacity() * sizeof(Node) + vertices_.capacity() * sizeof(Eigen::Vector3d) +
-         triangles_.capacity() * sizeof(triangles_[0]) + face_normals_.capacity() * sizeof(Eigen::Vector3d) +
-         vertex_normals_.capacity() * sizeof(Eigen::Vector3d) + edge_normals_.capacity() * sizeof(edge_normals_[0]) +
-         corners_.capacity() * sizeof(corners_[0]) + triangle_ids_.capacity() * sizeof(std::uint32_t) +
-         slot_of_triangle_.capacity() * sizeof(std::uint32_t) +
+  return nodes_.capacity() * sizeof(Node) + oriented_boxes_.capacity() * sizeof(OrientedBoxData) +
+         vertices_.capacity() * sizeof(Eigen::Vector3d) + triangles_.capacity() * sizeof(triangles_[0]) +
+         face_normals_.capacity() * sizeof(Eigen::Vector3d) + vertex_normals_.capacity() * sizeof(Eigen::Vector3d) +
+         edge_normals_.capacity() * sizeof(edge_normals_[0]) + corners_.capacity() * sizeof(corners_[0]) +
+         triangle_ids_.capacity() * sizeof(std::uint32_t) + slot_of_triangle_.capacity() * sizeof(std::uint32_t) +
          bounding_spheres_.capacity() * sizeof(bounding_spheres_[0]);
 }
 
@@ -868,6 +1010,9 @@ MeshDistance::Candidate MeshDistance::nearest_to_point(const Eigen::Vector3d& p,
   const auto reach = [&](const Node& n, double& key) {
     const double d = point_box_sq(p, n.lo, n.hi);
     if (d > best.distance_sq) return false;
+    if (n.oriented != kNoHint && std::isfinite(best_d) &&
+        oriented_box(n, oriented_boxes_).point_beyond(p - box_centre(n.lo, n.hi), best_d))
+      return false;
     key = d > 0 ? d : -1.0 / (1.0 + (p - box_centre(n.lo, n.hi)).squaredNorm());
     return true;
   };
@@ -933,7 +1078,7 @@ MeshDistance::Candidate MeshDistance::nearest_to_segment(const Eigen::Vector3d& 
       best_d = std::sqrt(d2);
     }
   }
-  traverse([&](const Node& n, double& key) { return seg.may_reach(n.lo, n.hi, best_d, key); },
+  traverse([&](const Node& n, double& key) { return segment_may_reach(seg, n, oriented_boxes_, best_d, key); },
            [&](const Node& nd) {
              for (std::uint32_t s = nd.first; s < nd.first + nd.count; ++s) {
                const auto& bs = bounding_spheres_[s];
@@ -990,7 +1135,7 @@ bool MeshDistance::capsule_overlaps(const Eigen::Vector3d& a, const Eigen::Vecto
     if (segment_triangle_sq(a, b, seg.d, seg.dd, corners_[s], face_normals_[s], r2, t, q) <= r2) return true;
   }
   bool overlaps = false;
-  traverse([&](const Node& n, double& key) { return seg.may_reach(n.lo, n.hi, r, key); },
+  traverse([&](const Node& n, double& key) { return segment_may_reach(seg, n, oriented_boxes_, r, key); },
            [&](const Node& nd) {
              for (std::uint32_t s = nd.first; s < nd.first + nd.count; ++s) {
                const auto& bs = bounding_spheres_[s];
@@ -1134,6 +1279,9 @@ bool MeshDistance::sweep_forward(const Eigen::Vector3d& origin, const Eigen::Vec
     double tb = 0;
     if (!ray_hits_box(origin, inv, n.lo, n.hi, r, 0.0, best_t, tb)) return false;
     if (!ray_ball_entry(origin, dir, box_centre(n.lo, n.hi), n.radius + r, best_t, ts)) return false;
+    if (n.oriented != kNoHint &&
+        !oriented_box(n, oriented_boxes_).ray_meets(origin - box_centre(n.lo, n.hi), dir, r, best_t))
+      return false;
     t_enter = std::max(ts, tb);
     return true;
   };
@@ -1236,7 +1384,11 @@ SweepHit MeshDistance::sphere_cast(const Eigen::Vector3d& origin, const Eigen::V
         }
         inside = true;
       } else {
-        inside = contains(origin);
+        // No surface within r of the origin: the ray-parity test is well conditioned there (and
+        // falls back to the pseudo-normal test when the ray grazes an edge or a plane).
+        bool decided = false;
+        const bool parity = inside_by_ray_parity(origin, decided);
+        inside = decided ? parity : contains(origin);
         if (!inside) return hit;
       }
     }

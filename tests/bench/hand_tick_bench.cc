@@ -1,19 +1,26 @@
 // BM_HandTick/<object>/{closing,grasp,holding}: one full simulation tick of one hand (selection,
-// interaction manager, finger movement, grasping logic, metrics and contacts) against a YCB mesh
-// read from $TELEGRASP_OBJECTS_DIR (default ../shared/data/ycb), or the built-in stand-ins:
+// interaction manager, finger movement, grasping logic, metrics and contacts) against a mesh:
 // closing = the ticks of the squeeze before the grasp (averaged), grasp = the one tick the grasp
-// rule turns true (metrics and contacts taken), holding = a tick while holding.
+// rule turns true (metrics and contacts taken), holding = a tick while holding. Counters:
+// tick_us and the same figure named after the kind (closing_us, grasp_us, holding_us).
+// Two sets: "ycb", the meshes of $TELEGRASP_OBJECTS_DIR (default ../shared/data/ycb; the
+// built-in stand-ins when missing), and "unseen", generated stand-ins for meshes nobody tuned
+// for (tests/bench/unseen_meshes.h: those YCB meshes under random rotations, and procedural
+// markers, spoons and airplanes). bench_main.cc prints each set's worst object per kind.
+#include "hand_tick_bench.h"
 #include "telegrasp/sim/hand_controller.h"
 #include "telegrasp/sim/mesh_loading.h"
 #include "telegrasp/sim/scripted_operator.h"
 #include "telegrasp/sim/standin_objects.h"
 #include "telegrasp/sim/world.h"
+#include "unseen_meshes.h"
 
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <mutex>
 
@@ -48,44 +55,55 @@ ControllerInput squeeze(const GraspPlan& plan, int tick) {
   return in;
 }
 
-// Loads and plans once per object (outside the timed loops).
-const Fixture& fixture(const std::string& source) {
+/// Makes an object's model (loads or generates its mesh).
+using ModelMaker = std::function<ObjectModelPtr()>;
+
+// Makes the model and plans once per object (outside the timed loops).
+const Fixture& fixture(const std::string& name, const ModelMaker& make_model) {
   static std::map<std::string, Fixture> cache;
   static std::mutex mutex;
   std::lock_guard lock(mutex);
-  auto it = cache.find(source);
+  auto it = cache.find(name);
   if (it != cache.end()) return it->second;
   Fixture f;
-  const auto known = find_protocol_object(source);
-  f.model = std::filesystem::exists(source) ? load_protocol_object_model(source) : make_standin_model(*known);
+  f.model = make_model();
   f.X_WorldObject = World::resting_pose(*f.model, 0.45, 0.0, 0.4);
   f.plan = plan_grasp(rig(), {}, *f.model, f.X_WorldObject, kDt);
   HandController dry_run(rig(), {});
   const ObjectView view{ObjectId(0), f.X_WorldObject, f.model.get()};
   for (int t = 0; t < 90 && f.grasp_tick < 0; ++t)
     if (dry_run.tick(squeeze(f.plan, t), kDt, {&view, 1}).grasped) f.grasp_tick = t;
-  return cache.emplace(source, std::move(f)).first->second;
+  return cache.emplace(name, std::move(f)).first->second;
+}
+
+// Seconds of CPU time per tick (shown in us), as tick_us and as `kind_counter`.
+void set_tick_counters(benchmark::State& state, const char* kind_counter, int ticks_per_iteration) {
+  const auto per_tick = [&] {
+    return benchmark::Counter(ticks_per_iteration,
+                              benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  };
+  state.counters["tick_us"] = per_tick();
+  state.counters[kind_counter] = per_tick();
 }
 
 // Every tick of the squeeze before the grasp tick, averaged.
-void BM_Closing(benchmark::State& state, const std::string& source) {
-  const Fixture& f = fixture(source);
+void BM_Closing(benchmark::State& state, const std::string& name, const ModelMaker& make_model) {
+  const Fixture& f = fixture(name, make_model);
   const ObjectView view{ObjectId(0), f.X_WorldObject, f.model.get()};
   for (auto _ : state) {
     HandController hand(rig(), {});
     for (int t = 0; t < f.grasp_tick; ++t) hand.tick(squeeze(f.plan, t), kDt, {&view, 1});
     benchmark::DoNotOptimize(hand.state().q.data());
   }
-  state.counters["tick_us"] =
-      benchmark::Counter(f.grasp_tick, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  set_tick_counters(state, "closing_us", f.grasp_tick);
   state.counters["ticks"] = f.grasp_tick;
   state.counters["model_MB"] = static_cast<double>(f.model->memory_bytes()) / 1e6;
 }
 
 // The grasp tick alone: the rule turns true, metrics (ND sweeps, exact signed distances) and
 // contacts are computed. Each iteration copies the hand as it was one tick earlier (included).
-void BM_GraspTick(benchmark::State& state, const std::string& source) {
-  const Fixture& f = fixture(source);
+void BM_GraspTick(benchmark::State& state, const std::string& name, const ModelMaker& make_model) {
+  const Fixture& f = fixture(name, make_model);
   const ObjectView view{ObjectId(0), f.X_WorldObject, f.model.get()};
   HandController before(rig(), {});
   for (int t = 0; t < f.grasp_tick; ++t) before.tick(squeeze(f.plan, t), kDt, {&view, 1});
@@ -95,14 +113,13 @@ void BM_GraspTick(benchmark::State& state, const std::string& source) {
     grasped = hand.tick(squeeze(f.plan, f.grasp_tick), kDt, {&view, 1}).grasped;
     benchmark::DoNotOptimize(hand.state().q.data());
   }
-  state.counters["tick_us"] =
-      benchmark::Counter(1, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  set_tick_counters(state, "grasp_us", 1);
   state.counters["grasped"] = grasped;
 }
 
 // Ticks while holding the grasped object (trigger held at 1, hand still).
-void BM_Holding(benchmark::State& state, const std::string& source) {
-  const Fixture& f = fixture(source);
+void BM_Holding(benchmark::State& state, const std::string& name, const ModelMaker& make_model) {
+  const Fixture& f = fixture(name, make_model);
   const ObjectView view{ObjectId(0), f.X_WorldObject, f.model.get()};
   HandController hand(rig(), {});
   for (int t = 0; t <= f.grasp_tick; ++t) hand.tick(squeeze(f.plan, t), kDt, {&view, 1});
@@ -111,32 +128,55 @@ void BM_Holding(benchmark::State& state, const std::string& source) {
     hand.tick(in, kDt, {&view, 1});
     benchmark::DoNotOptimize(hand.state().q.data());
   }
-  state.counters["tick_us"] =
-      benchmark::Counter(1, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  set_tick_counters(state, "holding_us", 1);
   state.counters["grasped"] = hand.state().grasped.valid();
 }
 
-// Registers one triple per mesh file (or per stand-in when the folder is missing).
+// Registers the closing, grasp and holding benchmarks of one object.
+void register_object(const std::string& name, const ModelMaker& make_model) {
+  benchmark::RegisterBenchmark(("BM_HandTick/" + name + "/closing").c_str(), BM_Closing, name, make_model)
+      ->Unit(benchmark::kMicrosecond);
+  benchmark::RegisterBenchmark(("BM_HandTick/" + name + "/grasp").c_str(), BM_GraspTick, name, make_model)
+      ->Unit(benchmark::kMicrosecond);
+  benchmark::RegisterBenchmark(("BM_HandTick/" + name + "/holding").c_str(), BM_Holding, name, make_model)
+      ->Unit(benchmark::kMicrosecond);
+}
+
+// A generated mesh's model; unknown objects weigh their volume x 500 kg/m^3.
+ModelMaker generated(std::string name, std::function<TriangleMesh()> make_mesh) {
+  return [name = std::move(name), make_mesh = std::move(make_mesh)] {
+    return make_object_model(name, make_mesh(), 0.0, "generated by tests/bench/unseen_meshes.cc");
+  };
+}
+
+// The "ycb" set: one object per mesh file (or per stand-in when the folder is missing); the
+// "unseen" set: each of those files under a random rotation, then the procedural meshes.
 const bool registered = [] {
-  std::vector<std::pair<std::string, std::string>> objects;  // name, source
+  std::vector<std::pair<std::string, std::string>> files;  // stem, path
   std::error_code ec;
   if (std::filesystem::is_directory(objects_dir(), ec)) {
     for (const auto& e : std::filesystem::directory_iterator(objects_dir(), ec))
-      if (is_mesh_file(e.path().string())) objects.emplace_back(e.path().stem().string(), e.path().string());
+      if (is_mesh_file(e.path().string())) files.emplace_back(e.path().stem().string(), e.path().string());
   }
-  if (objects.empty())
-    for (const auto& o : protocol_objects()) objects.emplace_back(o.name + "_standin", o.name);
-  std::sort(objects.begin(), objects.end());
-  for (const auto& [name, source] : objects) {
-    benchmark::RegisterBenchmark(("BM_HandTick/" + name + "/closing").c_str(), BM_Closing, source)
-        ->Unit(benchmark::kMicrosecond);
-    benchmark::RegisterBenchmark(("BM_HandTick/" + name + "/grasp").c_str(), BM_GraspTick, source)
-        ->Unit(benchmark::kMicrosecond);
-    benchmark::RegisterBenchmark(("BM_HandTick/" + name + "/holding").c_str(), BM_Holding, source)
-        ->Unit(benchmark::kMicrosecond);
+  std::sort(files.begin(), files.end());
+  if (files.empty())
+    for (const auto& o : protocol_objects())
+      register_object(o.name + "_standin", [o] { return make_standin_model(o); });
+  for (const auto& [stem, path] : files) register_object(stem, [path] { return load_protocol_object_model(path); });
+  unsigned seed = 1;
+  for (const auto& [stem, path] : files) {
+    const std::string name = stem + "_rotated";
+    register_object(name,
+                    generated(name, [path, seed] { return bench::randomly_rotated(load_mesh_file(path), seed); }));
+    ++seed;
   }
+  for (const auto& m : bench::procedural_unseen_meshes())
+    register_object(m.name, generated(m.name, [mesh = m.mesh] { return mesh; }));
   return true;
 }();
 
 }  // namespace
+
+bool is_unseen_object(const std::string& name) { return name.rfind("gen_", 0) == 0 || name.ends_with("_rotated"); }
+
 }  // namespace telegrasp::sim

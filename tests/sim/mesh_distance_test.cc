@@ -917,5 +917,106 @@ TEST_F(IcosphereBruteForce, SphereCastIsFirstContact) {
   EXPECT_GT(hits, 50);
 }
 
+// A thin plate (an icosphere squashed to 180 x 30 x 3 mm) turned by a random rotation: its BVH
+// nodes' axis-aligned boxes are loose, so the oriented boxes do the pruning. Every query must
+// still match brute force exactly.
+class TiltedThinPlateBruteForce : public ::testing::Test {
+ protected:
+  static inline const Vector3d kHalf{0.09, 0.015, 0.0015};
+  Eigen::Matrix3d R_ = Eigen::Quaterniond(0.3, -0.5, 0.7, 0.4).normalized().toRotationMatrix();
+  TriangleMesh mesh_ = tilted_plate();
+  MeshDistance md_{mesh_};
+  std::mt19937 rng_{777};
+
+  TriangleMesh tilted_plate() const {
+    TriangleMesh m = make_icosphere(1.0, 4);  // 5120 triangles
+    for (Vector3d& v : m.vertices) v = R_ * kHalf.cwiseProduct(v);
+    return m;
+  }
+  /// A point within about 15 mm of the plate.
+  Vector3d random_point() {
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const Vector3d local(u(rng_) * (kHalf.x() + 0.01), u(rng_) * (kHalf.y() + 0.01), u(rng_) * 0.015);
+    return R_ * local;
+  }
+  /// True when p lies outside the smooth ellipsoid, hence outside the mesh inscribed in it.
+  bool outside_ellipsoid(const Vector3d& p) const { return (R_.transpose() * p).cwiseQuotient(kHalf).norm() > 1.0; }
+};
+
+TEST_F(TiltedThinPlateBruteForce, ClosestPointMatchesBruteForce) {
+  for (int i = 0; i < 1000; ++i) {
+    const Vector3d p = random_point();
+    const PointQuery q = md_.closest_point(p);
+    ASSERT_TRUE(q.found);
+    const double expected = brute_point_distance(mesh_, p);
+    ASSERT_NEAR(q.distance, expected, 1e-12) << i;
+    if (outside_ellipsoid(p)) EXPECT_GT(q.signed_distance, 0.0) << i;
+    // Bounded searches find it exactly when it lies within the bound, and nothing beyond.
+    EXPECT_TRUE(md_.closest_point(p, expected * (1 + 1e-9) + 1e-12).found) << i;
+    EXPECT_FALSE(md_.closest_point(p, expected * (1 - 1e-9) - 1e-12).found) << i;
+  }
+}
+
+TEST_F(TiltedThinPlateBruteForce, ClosestToSegmentMatchesBruteForce) {
+  std::uniform_real_distribution<double> len(0.0, 0.03);
+  for (int i = 0; i < 1000; ++i) {
+    const Vector3d a = random_point();
+    const Vector3d b = a + len(rng_) * random_unit(rng_);
+    const double expected = brute_segment_distance(mesh_, a, b);
+    const SegmentQuery q = md_.closest_to_segment(a, b);
+    ASSERT_TRUE(q.found);
+    ASSERT_NEAR(q.distance, expected, 1e-12) << i;
+    EXPECT_NEAR((q.point_on_segment - q.point_on_mesh).norm(), expected, 1e-12);
+    const SegmentQuery bounded = md_.closest_to_segment(a, b, expected * (1 + 1e-9) + 1e-12, q.triangle);
+    ASSERT_TRUE(bounded.found) << i;
+    EXPECT_NEAR(bounded.distance, expected, 1e-12) << i;
+  }
+}
+
+TEST_F(TiltedThinPlateBruteForce, CapsuleOverlapsMatchesBruteForce) {
+  std::uniform_real_distribution<double> len(0.0, 0.03);
+  std::uniform_real_distribution<double> rad(0.0, 0.01);
+  int overlaps = 0;
+  int checked = 0;
+  for (int i = 0; i < 1000; ++i) {
+    const Vector3d a = random_point();
+    const Vector3d b = a + len(rng_) * random_unit(rng_);
+    const double r = rad(rng_);
+    const double d = brute_segment_distance(mesh_, a, b);
+    if (std::abs(d - r) < 1e-9) continue;  // too close to call
+    if (d > r && !outside_ellipsoid(a)) continue;  // not classified analytically
+    EXPECT_EQ(md_.capsule_overlaps(a, b, r), d <= r) << i;
+    overlaps += d <= r;
+    ++checked;
+  }
+  EXPECT_GT(overlaps, 100);
+  EXPECT_GT(checked - overlaps, 100);
+}
+
+TEST_F(TiltedThinPlateBruteForce, SphereCastIsFirstContact) {
+  std::uniform_real_distribution<double> rad(0.001, 0.01);
+  int hits = 0;
+  for (int i = 0; i < 200; ++i) {
+    Vector3d o = random_point();
+    if (!outside_ellipsoid(o)) continue;
+    const Vector3d dir = random_unit(rng_);
+    const double r = rad(rng_);
+    if (brute_point_distance(mesh_, o) <= r) continue;  // touching at the start: not a sweep
+    const SweepHit h = md_.sphere_cast(o, dir, r, 0.1);
+    const double t_end = h.hit ? h.t : 0.1;
+    for (int k = 0; k < 20; ++k) {
+      const double t = t_end * k / 20.0;
+      EXPECT_GT(brute_point_distance(mesh_, o + t * dir), r - 1e-12) << i << " t=" << t;
+    }
+    if (h.hit) {
+      ++hits;
+      EXPECT_NEAR(brute_point_distance(mesh_, o + h.t * dir), r, 1e-12) << i;
+    } else {
+      EXPECT_GT(brute_point_distance(mesh_, o + 0.1 * dir), r);
+    }
+  }
+  EXPECT_GT(hits, 20);
+}
+
 }  // namespace
 }  // namespace telegrasp::sim

@@ -96,14 +96,26 @@ class MeshDistance {
 
  private:
   // Implementation-defined; see mesh_distance.cc.
-  /// One BVH node: a bounding box and either two adjacent children or a triangle range.
-  /// Box corners are rounded outwards to float, so every bound derived from them stays conservative.
+  /// One BVH node: a bounding box and either two adjacent children or a triangle range, and
+  /// maybe an oriented box. Box corners are rounded outwards to float, so every bound derived from
+  /// them stays conservative.
   struct Node {
     float lo[3] = {0, 0, 0};
     float hi[3] = {0, 0, 0};
     float radius = 0;  // rounded-up half diagonal: the box lies in this ball around its centre
     std::uint32_t first = 0;  // leaf: first triangle (BVH order); inner: left child (right = first + 1)
     std::uint32_t count = 0;  // leaf: number of triangles (> 0); inner: 0
+    std::uint32_t oriented = kNoHint;  // index in oriented_boxes_, or kNoHint when it has none
+  };
+  /// A node's oriented box: its triangles lie where u_i . (x - c) is in [lo[i], hi[i]] for the rows
+  /// u_i of `axes` (its triangles' principal axes) and c the node's box centre. It stays tight on a
+  /// thin or nearly flat patch however the mesh is turned, where the axis-aligned box of a tilted
+  /// patch is loose; kept only for nodes where it is markedly smaller. Bounds are rounded outwards
+  /// and the queries allow for the axes being orthonormal only to float precision.
+  struct OrientedBoxData {
+    float axes[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    float lo[3] = {0, 0, 0};
+    float hi[3] = {0, 0, 0};
   };
   /// Squared distance, parameter and feature of the best triangle found by a traversal.
   struct Candidate {
@@ -134,6 +146,7 @@ class MeshDistance {
                                                       double hint_t) const;
 
   std::vector<Node> nodes_;
+  std::vector<OrientedBoxData> oriented_boxes_;
   std::vector<Eigen::Vector3d> vertices_;
   std::vector<std::array<std::uint32_t, 3>> triangles_;
   std::vector<Eigen::Vector3d> face_normals_;
