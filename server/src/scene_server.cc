@@ -71,7 +71,13 @@ void SceneServer::spawn_initial_scene() {
     auto it = models_.find(s.model);
     if (it == models_.end())
       throw std::runtime_error("scene object '" + s.model + "': no such model (see --list-models)");
-    spawn(it->second, sim::World::resting_pose(*it->second, s.x, s.y, s.yaw));
+    sim::ObjectModelPtr model = it->second;
+    if (s.friction) {  // this object's own friction: a copy of the shared model
+      auto own = std::make_shared<sim::ObjectModel>(*model);
+      own->friction = s.friction;
+      model = std::move(own);
+    }
+    spawn(model, sim::World::resting_pose(*model, s.x, s.y, s.yaw));
   }
 }
 

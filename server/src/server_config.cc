@@ -39,7 +39,8 @@ void apply_config(const proto::ServerConfig& c, ServerSettings& s, const std::st
   if (has("fill_standins")) s.fill_standins = c.fill_standins();
   for (const auto& o : c.objects()) {
     if (o.model().empty()) throw std::runtime_error(origin + ": objects.model must name a model");
-    s.objects.push_back({o.model(), o.x(), o.y(), o.yaw()});
+    s.objects.push_back({o.model(), o.x(), o.y(), o.yaw(), {}});
+    if (o.has_friction()) s.objects.back().friction = o.friction();
   }
   if (has("empty_scene")) s.empty_scene = c.empty_scene();
   if (has("right_rig")) s.right_rig = c.right_rig();
@@ -96,6 +97,9 @@ void validate_settings(const ServerSettings& s, const std::string& origin) {
   for (const auto& o : s.objects)
     if (!std::isfinite(o.x) || !std::isfinite(o.y) || !std::isfinite(o.yaw))
       fail("objects '" + o.model + "': x, y, yaw must be finite");
+  for (const auto& o : s.objects)
+    if (o.friction && !(*o.friction >= 0 && std::isfinite(*o.friction)))
+      fail("objects '" + o.model + "': friction must be a finite value >= 0");
   if (s.empty_scene && !s.objects.empty()) fail("empty_scene and objects exclude each other");
 }
 
@@ -113,6 +117,7 @@ proto::ServerConfig to_proto(const ServerSettings& s) {
     p->set_x(o.x);
     p->set_y(o.y);
     p->set_yaw(o.yaw);
+    if (o.friction) p->set_friction(*o.friction);
   }
   c.set_empty_scene(s.empty_scene);
   c.set_right_rig(s.right_rig);

@@ -94,6 +94,9 @@ HandRig HandRig::parse(const std::string& text, const std::string& source) {
   rig.nd_sweep_beyond_ = msg.nd_sweep_beyond();
   if (!(rig.nd_sweep_beyond_ > 0) || !std::isfinite(rig.nd_sweep_beyond_))
     fail(source, "nd_sweep_beyond", "must be > 0");
+  if (msg.has_friction()) rig.friction_ = msg.friction();
+  if (!(rig.friction_ >= 0) || !std::isfinite(rig.friction_))
+    fail(source, "friction", "must be a finite value >= 0 (got " + std::to_string(rig.friction_) + ")");
   rig.palm_half_extent_ = to_eigen(msg.palm_half_extent());
   if (!finite(rig.palm_half_extent_) || rig.palm_half_extent_.minCoeff() <= 0)
     fail(source, "palm_half_extent", "must be positive in x, y and z");

@@ -8,6 +8,15 @@
 #include <string>
 
 namespace telegrasp::sim {
+namespace {
+
+double max_vertex_radius(const TriangleMesh& mesh) {
+  double r = 0;
+  for (const Eigen::Vector3d& v : mesh.vertices) r = std::max(r, v.norm());
+  return r;
+}
+
+}  // namespace
 
 std::size_t ObjectModel::memory_bytes() const {
   return sizeof(*this) + mesh.vertices.capacity() * sizeof(Eigen::Vector3d) +
@@ -29,6 +38,7 @@ ObjectModelPtr make_object_model(const std::string& name, const TriangleMesh& me
   model->mass_kg = mass_kg > 0 ? mass_kg : model->mass_properties.volume * 500.0;
   model->p_ObjectMin = model->mesh.min_corner();
   model->p_ObjectMax = model->mesh.max_corner();
+  model->max_radius = max_vertex_radius(model->mesh);
   model->distance = MeshDistance(model->mesh);
   return model;
 }
@@ -56,6 +66,7 @@ ObjectModelPtr make_object_model_in_model_frame(const std::string& name, Triangl
   model->p_ObjectMin = model->mesh.min_corner();
   model->p_ObjectMax = model->mesh.max_corner();
   model->p_OriginalCenterOfMass = p_OriginalCenterOfMass;
+  model->max_radius = max_vertex_radius(model->mesh);
   model->distance = MeshDistance(model->mesh);
   return model;
 }

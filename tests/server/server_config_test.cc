@@ -1,6 +1,8 @@
 // Tests server/src/server_config: reading a text config, and errors that name the field.
 #include "server_config.h"
 
+#include "server_config.pb.h"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -63,6 +65,27 @@ TEST(ServerConfigTest, ErrorsNameTheFileAndField) {
   EXPECT_NE(typo.find("telegrasp_server_config_test_bad"), std::string::npos);
   ServerSettings s;
   EXPECT_THROW(load_server_config("/no/such/file.textproto", s), std::runtime_error);
+}
+
+// A scene object may set the friction of hand contacts on it (grasp quality); it stays unset
+// otherwise, goes into the recorded configuration, and must be finite and >= 0.
+TEST(ServerConfigTest, SceneObjectFriction) {
+  ServerSettings s;
+  load_server_config(write_temp("friction", R"(
+    objects { model: "005_tomato_soup_can" x: 0.4 friction: 0.8 }
+    objects { model: "006_mustard_bottle" x: 0.2 }
+  )"),
+                     s);
+  ASSERT_EQ(s.objects.size(), 2u);
+  EXPECT_EQ(s.objects[0].friction, 0.8);
+  EXPECT_FALSE(s.objects[1].friction.has_value());
+  const ServerSettings back = settings_from_proto(to_proto(s), "recording");
+  EXPECT_EQ(back.objects[0].friction, 0.8);
+  EXPECT_FALSE(back.objects[1].friction.has_value());
+  const std::string negative = error_of("objects { model: \"005_tomato_soup_can\" friction: -0.1 }");
+  EXPECT_NE(negative.find("friction"), std::string::npos);
+  EXPECT_NE(negative.find("005_tomato_soup_can"), std::string::npos);
+  EXPECT_NE(error_of("objects { model: \"005_tomato_soup_can\" friction: nan }").find("friction"), std::string::npos);
 }
 
 // The example shipped for deployments loads as it is.

@@ -3,10 +3,14 @@
 #include "telegrasp/sim/hand_controller.h"
 
 #include "telegrasp/sim/hand_kinematics.h"
+#include "telegrasp/sim/scripted_operator.h"
+#include "telegrasp/sim/standin_objects.h"
+#include "telegrasp/sim/world.h"
 #include "test_meshes.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <utility>
@@ -530,6 +534,58 @@ TEST(HandControllerTest, GraspMetricsAndContactsEqualFreshExactQueries) {
     const double r = hand.rig().phalanges()[ids[i].value].capsule->radius;
     EXPECT_NEAR(mb.capsules[i].signed_distance, box.model->distance.capsule_signed_distance(a, b, r), 1e-12) << i;
     EXPECT_NE(mb.capsules[i].signed_distance, m.capsules[i].signed_distance) << i;
+  }
+}
+
+// The grasp tick's quality is that of the grasp's contacts (object frame, about the centre of
+// mass) with the rig's friction and the object's radius; an object's own friction replaces the
+// rig's, and while held the quality follows the contacts.
+TEST(HandControllerTest, GraspQualityIsThatOfTheContacts) {
+  auto rig = std::make_shared<const HandRig>(HandRig::load(HandRig::builtin_path("human_right")));
+  const ObjectModelPtr bottle = make_standin_model(*find_protocol_object("006_mustard_bottle"));
+  auto slippery = std::make_shared<ObjectModel>(*bottle);
+  slippery->friction = 0.0;
+  EXPECT_NEAR(bottle->max_radius,
+              std::max_element(bottle->mesh.vertices.begin(), bottle->mesh.vertices.end(),
+                               [](const auto& a, const auto& b) { return a.norm() < b.norm(); })
+                  ->norm(),
+              0.0);
+  auto quality_of = [&](const HandController& hand, const ObjectModel& model, double mu) {
+    std::vector<QualityContact> qc;
+    for (const Contact& c : hand.contacts()) qc.push_back({c.p_ObjectContact, c.n_Object});
+    return grasp_quality(qc, mu, model.max_radius);
+  };
+  for (const ObjectModelPtr& model : {bottle, ObjectModelPtr(slippery)}) {
+    const Eigen::Isometry3d X_WorldObject = World::resting_pose(*model, 0.45, 0.0, 0.4);
+    const GraspPlan plan = plan_grasp(rig, {}, *model, X_WorldObject, kDt);
+    const ObjectView view{ObjectId(1), X_WorldObject, model.get()};
+    HandController hand(rig, {});
+    ControllerInput in;
+    in.X_WorldPalm = plan.X_WorldPalm;
+    bool grasped = false;
+    for (int t = 0; t < 90 && !grasped; ++t) {
+      in.trigger = std::min(1.0, t * kDt / 0.35);
+      grasped = hand.tick(in, kDt, {&view, 1}).grasped;
+    }
+    ASSERT_TRUE(grasped) << model->name;
+    const double mu = model->friction.value_or(0.5);
+    const GraspQuality expected = quality_of(hand, *model, mu);
+    const GraspQuality& q = hand.grasp_metrics()->quality;
+    EXPECT_EQ(q.epsilon, expected.epsilon);
+    EXPECT_EQ(q.volume, expected.volume);
+    EXPECT_EQ(q.force_closure, expected.force_closure);
+    // Squeezing on, new phalanges block: hold_metrics() follows the contacts.
+    in.trigger = 1.0;
+    for (int t = 0; t < 30; ++t) hand.tick(in, kDt, {&view, 1});
+    ASSERT_TRUE(hand.state().grasped.valid());
+    const GraspQuality held = quality_of(hand, *model, mu);
+    EXPECT_EQ(hand.hold_metrics()->quality.epsilon, held.epsilon);
+    EXPECT_EQ(hand.hold_metrics()->quality.volume, held.volume);
+    if (mu > 0) {
+      EXPECT_GT(held.volume, 0.0);  // several contacts with friction: a 6-D wrench space
+    } else if (hand.contacts().size() <= 6) {
+      EXPECT_EQ(held.volume, 0.0);  // frictionless: one wrench per contact, 7 needed to span 6-D
+    }
   }
 }
 

@@ -102,5 +102,17 @@ TEST(HandRigTest, BadFieldsAreNamed) {
       std::string::npos);
 }
 
+TEST(HandRigTest, FrictionDefaultsToHalfAndMustBeFiniteAndNonNegative) {
+  const std::string good = read_builtin("human_right");
+  EXPECT_EQ(HandRig::parse(good, "good").friction(), 0.5);
+  const std::string without = edit(good, "friction: 0.5", "");
+  EXPECT_EQ(HandRig::parse(without, "without").friction(), 0.5);
+  EXPECT_EQ(HandRig::parse(edit(good, "friction: 0.5", "friction: 0"), "zero").friction(), 0.0);
+  EXPECT_EQ(HandRig::parse(edit(good, "friction: 0.5", "friction: 0.8"), "high").mirrored().friction(), 0.8);
+  EXPECT_NE(error_of(edit(good, "friction: 0.5", "friction: -0.1")).find("field 'friction'"), std::string::npos);
+  EXPECT_NE(error_of(edit(good, "friction: 0.5", "friction: nan")).find("field 'friction'"), std::string::npos);
+  EXPECT_NE(error_of(edit(good, "friction: 0.5", "friction: inf")).find("field 'friction'"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace telegrasp::sim

@@ -178,6 +178,9 @@ class HandController {
   void forget_bounds(const FingerStep& step);
   void block(int id);
   void refresh_contacts() const;
+  // Grasp quality (GRASPING.md section 4b) of contacts_ with the held object's friction, else the
+  // rig's; recomputed only when the contacts or the object change.
+  GraspQuality contact_quality() const;
   // Exact closest pair between capsule `id`'s segment [a, b] (object frame) and the object's mesh:
   // the cached one while the capsule has not moved since, else searched within `reach` first (a
   // touching capsule's is near), then everywhere.
@@ -199,6 +202,9 @@ class HandController {
   mutable std::vector<double> contacts_key_;
   mutable std::optional<GraspMetrics> hold_metrics_;
   mutable std::vector<double> hold_metrics_key_;
+  mutable std::vector<QualityContact> quality_contacts_;  // what quality_ was computed from
+  mutable const ObjectModel* quality_model_ = nullptr;
+  mutable GraspQuality quality_;
   // reach_[k][m]: bound on the distance from joint k to any point of capsule m's segment.
   std::vector<std::vector<double>> reach_;
   // Per phalanx, the triangle last found nearest to its capsule: a search hint (speed only).

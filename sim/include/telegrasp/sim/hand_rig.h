@@ -85,6 +85,8 @@ class HandRig {
   double nd_sweep_beyond() const { return nd_sweep_beyond_; }
   const Eigen::Vector3d& palm_half_extent() const { return palm_half_extent_; }
   const Eigen::Vector3d& p_PalmGraspCenter() const { return p_PalmGraspCenter_; }
+  /// Coulomb friction coefficient of the hand's contacts (grasp quality; an object may set its own).
+  double friction() const { return friction_; }
   /// Phalanges that carry a capsule, in rig order.
   const std::vector<PhalanxId>& capsule_phalanges() const { return capsule_phalanges_; }
   /// Phalanx by name, or an invalid id.
@@ -103,6 +105,7 @@ class HandRig {
   double nd_sweep_radius_ = 0, nd_sweep_beyond_ = 0;
   Eigen::Vector3d palm_half_extent_{0, 0, 0};
   Eigen::Vector3d p_PalmGraspCenter_{0, 0, 0};
+  double friction_ = 0.5;
   std::vector<PhalanxId> capsule_phalanges_;
 };
 

@@ -7,6 +7,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,8 @@ struct ObjectModel {
   double mass_kg = 0;
   Eigen::Vector3d p_ObjectMin{0, 0, 0}, p_ObjectMax{0, 0, 0};  ///< Bounds of `mesh`.
   Eigen::Vector3d p_OriginalCenterOfMass{0, 0, 0};  ///< Where the origin was in the source file's frame.
+  double max_radius = 0;  ///< Largest distance from the centre of mass to a vertex, m (grasp quality's torque scale).
+  std::optional<double> friction;  ///< Coulomb friction coefficient mu against the hand; unset: the rig's.
 
   /// Heap bytes held by this model (mesh and distance structure).
   [[nodiscard]] std::size_t memory_bytes() const;
