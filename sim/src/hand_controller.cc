@@ -35,6 +35,10 @@ double distance_to_bounds(const ObjectModel& model, const Eigen::Vector3d& p) {
 // changes, and every contact left out saves a tenth to a half of Qhull's time. (Speed only.)
 constexpr double kQualityMergeDistance = 1e-3;
 constexpr double kQualityMergeCos = 0.999;
+// Contacts that moved less than this since the last hull keep its quality: the Qhull hull costs
+// milliseconds, and rounding (a two-hand hold re-attaching each tick) must not rebuild it.
+constexpr double kQualitySameDistance = 1e-6;  // m
+constexpr double kQualitySameNormal = 1e-6;
 
 // Blocked capsules lie within the contact tolerance (plus hysteresis) of the surface; searches
 // for their closest point need look no farther than this beyond the radius.
@@ -835,7 +839,9 @@ GraspQuality HandController::contact_quality() const {
   const bool same =
       quality_model_ == held_model_ && kept.size() == quality_contacts_.size() &&
       std::equal(kept.begin(), kept.end(), quality_contacts_.begin(),
-                 [](const QualityContact& a, const QualityContact& b) { return a.p == b.p && a.n == b.n; });
+                 [](const QualityContact& a, const QualityContact& b) {
+                   return (a.p - b.p).norm() <= kQualitySameDistance && (a.n - b.n).norm() <= kQualitySameNormal;
+                 });
   if (!same) {
     const double mu = held_model_->friction.value_or(rig_->friction());
     quality_ = grasp_quality(kept, mu, held_model_->max_radius);
