@@ -55,6 +55,12 @@ Eigen::Isometry3d PoseResolver::candidate(const Eigen::Isometry3d& X_WorldResolv
   Eigen::Isometry3d X = X_WorldTracked;
   X.translation() += d;
   X.linear() = R_left * X_WorldTracked.linear();
+  // Held back by a surface last tick: no nearer to it than the hand is now (it would only be
+  // pushed back out), until the tracked pose and offset come out on their own.
+  if (pushed_) {
+    const double in = (X.translation() - X_WorldResolved.translation()).dot(push_normal_);
+    if (in < 0) X.translation() -= in * push_normal_;
+  }
   return X;
 }
 
@@ -71,6 +77,9 @@ void PoseResolver::gather(const Eigen::Isometry3d& X0, const Eigen::Isometry3d& 
   }
   const Eigen::Vector3d p0 = X0.translation(), p1 = X1.translation();
   const double margin = hand_radius + settings_.tolerance;
+  std::vector<Obstacle> last = std::move(obstacles_);
+  std::vector<double> last_bound = std::move(bound_);
+  std::vector<std::uint32_t> last_hint = std::move(hint_);
   obstacles_.clear();
   const double H = settings_.table_half_extent;
   if (H > 0 && std::min(p0.z(), p1.z()) < margin && std::min(std::abs(p0.x()), std::abs(p1.x())) < H + margin &&
@@ -81,12 +90,33 @@ void PoseResolver::gather(const Eigen::Isometry3d& X0, const Eigen::Isometry3d& 
     const ObjectModel& m = *view.model;
     const Eigen::Vector3d c = view.X_WorldObject * (0.5 * (m.p_ObjectMin + m.p_ObjectMax));
     const double r = 0.5 * (m.p_ObjectMax - m.p_ObjectMin).norm();
-    if (distance_to_segment(c, p0, p1) < r + margin) obstacles_.push_back({&m, view.X_WorldObject.inverse()});
+    if (distance_to_segment(c, p0, p1) < r + margin) obstacles_.push_back({&m, view.X_WorldObject.inverse(), view.id});
   }
   const std::size_t pairs = obstacles_.size() * volumes.size();
   bound_.assign(pairs, -kInf);
   floor_.assign(pairs, 0.0);
   hint_.assign(pairs, MeshDistance::kNoHint);
+  if (last_volumes_.size() == volumes.size()) carry_over(last, last_bound, last_hint, last_volumes_);
+  last_volumes_.assign(volumes.begin(), volumes.end());
+}
+
+// Last tick's gap bounds and hints, for obstacles that have not moved, less how far each volume
+// moved in the palm frame (the fingers); the hand starts where last tick's resolve left it.
+void PoseResolver::carry_over(const std::vector<Obstacle>& last, const std::vector<double>& last_bound,
+                              const std::vector<std::uint32_t>& last_hint,
+                              const std::vector<HandVolume>& last_volumes) {
+  const std::size_t nv = volumes_.size();
+  for (std::size_t o = 0; o < obstacles_.size(); ++o)
+    for (std::size_t l = 0; l < last.size(); ++l) {
+      if (last[l].id != obstacles_[o].id || last[l].model != obstacles_[o].model) continue;
+      const bool still = last[l].X_ObjectWorld.matrix() == obstacles_[o].X_ObjectWorld.matrix();
+      for (std::size_t v = 0; v < nv; ++v) {
+        hint_[o * nv + v] = last_hint[l * nv + v];
+        const double moved = std::max((volumes_[v].p_PalmA - last_volumes[v].p_PalmA).norm(),
+                                      (volumes_[v].p_PalmB - last_volumes[v].p_PalmB).norm());
+        if (still && volumes_[v].radius == last_volumes[v].radius) bound_[o * nv + v] = last_bound[l * nv + v] - moved;
+      }
+    }
 }
 
 // The gap between volume v at X_WorldPalm and obstacle o, exact when within `horizon`.
@@ -106,8 +136,13 @@ PoseResolver::Gap PoseResolver::gap(std::size_t o, std::size_t v, const Eigen::I
   const Eigen::Isometry3d X_ObjectPalm = obs.X_ObjectWorld * X_WorldPalm;
   const Eigen::Vector3d a = X_ObjectPalm * vol.p_PalmA, b = X_ObjectPalm * vol.p_PalmB;
   std::uint32_t& hint = hint_[o * volumes_.size() + v];
-  if (!mesh.capsule_overlaps(a, b, vol.radius + horizon, hint)) return {horizon, {0, 0, 1}, true};
+  // A volume last seen near the surface is searched for at once; others first by the early-out test.
+  const double last = bound_[o * volumes_.size() + v];
+  if (!(last > -kInf && last < 0.5 * horizon) && !mesh.capsule_overlaps(a, b, vol.radius + horizon, hint))
+    return {horizon, {0, 0, 1}, true};
   SegmentQuery q = mesh.closest_to_segment(a, b, vol.radius + horizon, hint);
+  if (!q.found && last > -kInf && last < 0.5 * horizon && !mesh.capsule_overlaps(a, b, vol.radius + horizon, hint))
+    return {horizon, {0, 0, 1}, true};
   if (q.found) hint = q.triangle;
   const Eigen::Matrix3d R_WorldObject = obs.X_ObjectWorld.linear().transpose();
   if (q.found && q.distance > 0 && (q.point_on_segment - q.point_on_mesh).dot(q.normal) > 0)
@@ -152,6 +187,8 @@ bool PoseResolver::push_out(Eigen::Isometry3d& X_WorldPalm) {
     if (iter == kMaxPushes) break;
     const double shift = worst + 0.5 * settings_.tolerance;
     X_WorldPalm.translation() += shift * n;
+    pushed_ = true;
+    push_normal_ = n;
     for (double& b : bound_) b -= shift;
   }
   return false;
@@ -184,13 +221,17 @@ Eigen::Isometry3d PoseResolver::resolve(const Eigen::Isometry3d& X_WorldResolved
   last_objects_.clear();
   for (const ObjectView& view : objects)
     if (view.id != held) last_objects_.emplace_back(view.id, view.X_WorldObject);
+  // Last tick's bounds hold where last tick's resolve left the hand, X0.
+  if (!has_previous || !last_valid_) last_volumes_.clear();
   gather(X0, X1, volumes, objects, held);
   last_valid_ = true;
+  pushed_ = false;
   if (obstacles_.empty()) return X1;
   set_floors(X0);
 
-  // The motion in sub-steps, each moving no volume point by more than half its radius: a volume
-  // outside before a sub-step cannot reach past the middle of anything after it.
+  // The motion in sub-steps, each moving no volume point by more than 0.9 of its radius: the axis of
+  // a volume outside before a sub-step stays outside after it, so the push-out finds the side it
+  // came from (no tunnelling through thin objects).
   const Eigen::Vector3d dp = X1.translation() - X0.translation();
   const Eigen::AngleAxisd turn(X1.linear() * X0.linear().transpose());
   double max_rate = 0;
@@ -198,7 +239,7 @@ Eigen::Isometry3d PoseResolver::resolve(const Eigen::Isometry3d& X_WorldResolved
   for (std::size_t v = 0; v < volumes.size(); ++v) {
     const double rate = dp.norm() + turn.angle() * reach_[v];
     max_rate = std::max(max_rate, rate);
-    n = std::max(n, static_cast<int>(std::ceil(rate / (0.5 * volumes[v].radius))));
+    n = std::max(n, static_cast<int>(std::ceil(rate / (0.9 * volumes[v].radius))));
   }
   n = std::min(n, kMaxSubSteps);
   const Eigen::Matrix3d R_step = Eigen::AngleAxisd(turn.angle() / n, turn.axis()).toRotationMatrix();
@@ -218,6 +259,7 @@ Eigen::Isometry3d PoseResolver::resolve(const Eigen::Isometry3d& X_WorldResolved
     horizon_ = max_rate * (n - k) / n + settings_.tolerance;
     if (!push_out(X)) {  // caught between surfaces: stop where the last sub-step left the hand
       last_valid_ = false;
+      last_volumes_.clear();
       return before;
     }
   }

@@ -60,6 +60,7 @@ class PoseResolver {
   struct Obstacle {
     const ObjectModel* model = nullptr;
     Eigen::Isometry3d X_ObjectWorld = Eigen::Isometry3d::Identity();
+    ObjectId id;  // invalid for the table
   };
   // What a gap query found: the gap (> horizon when `far`) and the world direction that opens it.
   struct Gap {
@@ -69,6 +70,8 @@ class PoseResolver {
   };
   Eigen::Isometry3d candidate(const Eigen::Isometry3d& X_WorldResolved, const Eigen::Isometry3d& X_WorldTrackedBefore,
                               const Eigen::Isometry3d& X_WorldTracked, double dt) const;
+  void carry_over(const std::vector<Obstacle>& last, const std::vector<double>& last_bound,
+                  const std::vector<std::uint32_t>& last_hint, const std::vector<HandVolume>& last_volumes);
   void gather(const Eigen::Isometry3d& X0, const Eigen::Isometry3d& X1, std::span<const HandVolume> volumes,
               std::span<const ObjectView> objects, ObjectId held);
   Gap gap(std::size_t o, std::size_t v, const Eigen::Isometry3d& X_WorldPalm, double horizon);
@@ -89,6 +92,11 @@ class PoseResolver {
   // What the last resolve saw, to skip the work when nothing moved.
   bool last_valid_ = false;
   std::vector<std::pair<ObjectId, Eigen::Isometry3d>> last_objects_;
+  // The volumes as last resolved (to carry bounds over to the next tick), and the normal of the
+  // last push if the hand ended last tick held back by a surface.
+  std::vector<HandVolume> last_volumes_;
+  bool pushed_ = false;
+  Eigen::Vector3d push_normal_{0, 0, 1};
 };
 
 }  // namespace telegrasp::sim
