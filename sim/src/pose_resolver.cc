@@ -156,11 +156,20 @@ PoseResolver::Gap PoseResolver::gap(std::size_t o, std::size_t v, const Eigen::I
 // finger against the table (which fingers close through) or resting inside in discrete mode may
 // not go deeper than it starts.
 void PoseResolver::set_floors(const Eigen::Isometry3d& X_WorldPalm) {
+  const double tol = settings_.tolerance;
   for (std::size_t o = 0; o < obstacles_.size(); ++o)
     for (std::size_t v = 0; v < volumes_.size(); ++v) {
-      if (volumes_[v].palm || (obstacles_[o].model && !settings_.fingers_may_rest_inside)) continue;
-      const Gap g = gap(o, v, X_WorldPalm, settings_.tolerance);
-      floor_[o * volumes_.size() + v] = std::min(0.0, g.gap);
+      const std::size_t ov = o * volumes_.size() + v;
+      const bool object = obstacles_[o].model != nullptr;
+      if (volumes_[v].palm) continue;
+      if (object && obstacles_[o].id == finger_object_ && !settings_.fingers_may_rest_inside) {
+        // Soft: a finger outside now may be pushed in a little; one left inside is pushed out.
+        const bool outside = bound_[ov] >= -tol || gap(o, v, X_WorldPalm, tol).gap >= -tol;
+        floor_[ov] = outside ? -kSoftDepth : 0.0;
+        continue;
+      }
+      if (object && !settings_.fingers_may_rest_inside) continue;
+      floor_[ov] = std::min(0.0, gap(o, v, X_WorldPalm, tol).gap);
     }
 }
 
