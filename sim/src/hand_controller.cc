@@ -531,15 +531,6 @@ void HandController::track(const ControllerInput& input, double dt, std::span<co
         const Eigen::Isometry3d& X = state_.X_PalmPhalanx[id.value];
         volumes_[palm_volume_count_ + i] = {X * c.p_PhalanxA, X * c.p_PhalanxB, c.radius, false};
       }
-      // Precise fingers that close or hold this tick bend back out of the selected object (step_finger's
-      // depenetrate): against it the hand may push them in a little. Opening or open fingers are not checked.
-      bool fingers_hold = settings_.mode == ClosingMode::kPrecise;
-      for (std::size_t f = 0; f < rig_->fingers().size() && fingers_hold; ++f) {
-        const double u = input.curls.empty() ? input.trigger : input.curls[f];
-        const double before = state_.curls.empty() ? state_.trigger : state_.curls[f];
-        fingers_hold = u > 0 && u >= before;
-      }
-      resolver_.set_finger_object(fingers_hold ? state_.selected : ObjectId());
       X_WorldResolved = resolver_.resolve(state_.X_WorldPalm, state_.X_WorldTracked, input.X_WorldPalm, state_.has_pose,
                                           dt, volumes_, objects, state_.grasped);
     }
