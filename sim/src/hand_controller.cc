@@ -114,8 +114,22 @@ HandController::ScratchHolder::ScratchHolder(ScratchHolder&& other) noexcept = d
 HandController::ScratchHolder& HandController::ScratchHolder::operator=(ScratchHolder&& other) noexcept = default;
 HandController::ScratchHolder::~ScratchHolder() = default;
 
+namespace {
+
+ResolverSettings resolver_settings(const GraspSettings& s) {
+  ResolverSettings out;
+  out.rejoin_speed = s.rejoin_speed;
+  out.rejoin_turn = s.rejoin_turn;
+  out.table_half_extent = s.table_half_extent;
+  out.tolerance = s.contact_tolerance;
+  out.fingers_may_rest_inside = s.mode == ClosingMode::kDiscrete;
+  return out;
+}
+
+}  // namespace
+
 HandController::HandController(std::shared_ptr<const HandRig> rig, GraspSettings settings)
-    : rig_(std::move(rig)), settings_(settings) {
+    : rig_(std::move(rig)), settings_(settings), resolver_(resolver_settings(settings_)) {
   if (!(settings_.contact_tolerance > 0) || !std::isfinite(settings_.contact_tolerance))
     throw std::invalid_argument("GraspSettings.contact_tolerance must be a positive number of metres");
   if (!(settings_.speed_scale > 0) || !std::isfinite(settings_.speed_scale))
@@ -144,6 +158,9 @@ HandController::HandController(std::shared_ptr<const HandRig> rig, GraspSettings
     }
     palm_reach_[m] = r;  // past the root joint: from the palm origin
   }
+  volumes_ = palm_volumes(rig_->palm_half_extent());
+  palm_volume_count_ = volumes_.size();
+  volumes_.resize(palm_volume_count_ + rig_->capsule_phalanges().size());
 }
 
 void HandController::update_finger_poses(int finger) {
@@ -504,36 +521,49 @@ namespace {
 // The input a tick uses in place of an invalid one: the hand's last pose, trigger and curls.
 ControllerInput last_input(const HandState& state) {
   ControllerInput input;
-  input.X_WorldPalm = state.X_WorldPalm;
+  input.X_WorldPalm = state.X_WorldTracked;
   input.trigger = state.trigger;
   input.curls = state.curls;
   input.tracking_valid = state.has_pose;
   return input;
 }
 
-// Pose and hand velocity (from the last pose, zero when tracking is lost), trigger and curls.
-void track_input(HandState& state, const ControllerInput& input, double dt) {
-  if (input.tracking_valid) {
-    if (state.has_pose) {
-      state.v_WorldPalm = (input.X_WorldPalm.translation() - state.X_WorldPalm.translation()) / dt;
-      const Eigen::AngleAxisd dR(input.X_WorldPalm.linear() * state.X_WorldPalm.linear().transpose());
-      state.w_WorldPalm = dR.axis() * (dR.angle() / dt);
-    } else {
-      state.v_WorldPalm.setZero();
-      state.w_WorldPalm.setZero();
-    }
-    state.X_WorldPalm = input.X_WorldPalm;
-    state.X_WorldTracked = input.X_WorldPalm;
-    state.has_pose = true;
-  } else {
-    state.v_WorldPalm.setZero();
-    state.w_WorldPalm.setZero();
-  }
-  state.trigger = input.trigger;
-  state.curls = input.curls;
-}
-
 }  // namespace
+
+// Pose and hand velocity (from the last resolved pose, zero when tracking is lost), trigger and
+// curls. The resolved pose treats the hand as rigid this tick: the palm and every capsule as the
+// fingers are posed now (precise fingers keep themselves out as they close).
+void HandController::track(const ControllerInput& input, double dt, std::span<const ObjectView> objects) {
+  if (input.tracking_valid) {
+    Eigen::Isometry3d X_WorldResolved = input.X_WorldPalm;
+    if (settings_.resolve_pose) {
+      for (std::size_t i = 0; i < rig_->capsule_phalanges().size(); ++i) {
+        const PhalanxId id = rig_->capsule_phalanges()[i];
+        const CapsuleSpec& c = *rig_->phalanges()[id.value].capsule;
+        const Eigen::Isometry3d& X = state_.X_PalmPhalanx[id.value];
+        volumes_[palm_volume_count_ + i] = {X * c.p_PhalanxA, X * c.p_PhalanxB, c.radius, false};
+      }
+      X_WorldResolved = resolver_.resolve(state_.X_WorldPalm, state_.X_WorldTracked, input.X_WorldPalm, state_.has_pose,
+                                          dt, volumes_, objects, state_.grasped);
+    }
+    if (state_.has_pose) {
+      state_.v_WorldPalm = (X_WorldResolved.translation() - state_.X_WorldPalm.translation()) / dt;
+      const Eigen::AngleAxisd dR(X_WorldResolved.linear() * state_.X_WorldPalm.linear().transpose());
+      state_.w_WorldPalm = dR.axis() * (dR.angle() / dt);
+    } else {
+      state_.v_WorldPalm.setZero();
+      state_.w_WorldPalm.setZero();
+    }
+    state_.X_WorldPalm = X_WorldResolved;
+    state_.X_WorldTracked = input.X_WorldPalm;
+    state_.has_pose = true;
+  } else {
+    state_.v_WorldPalm.setZero();
+    state_.w_WorldPalm.setZero();
+  }
+  state_.trigger = input.trigger;
+  state_.curls = input.curls;
+}
 
 // 1. Object selection (a grasped object stays selected, posed by the hand in `held_view`; one
 // gone from `objects` is released). Returns the object the fingers work on, or nullptr.
@@ -614,7 +644,7 @@ HandTickEvents HandController::tick(const ControllerInput& raw_input, double dt,
   const bool valid = validate_input(raw_input, *rig_).empty();
   if (!valid) fallback = last_input(state_);
   const ControllerInput& input = valid ? raw_input : fallback;
-  track_input(state_, input, dt);
+  track(input, dt, objects);
 
   ObjectView held_view;
   const ObjectView* object = choose_object(objects, held_view, events);

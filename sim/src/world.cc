@@ -197,6 +197,8 @@ struct World::Impl {
 World::World(WorldSettings settings) : impl_(std::make_unique<Impl>()) {
   if (!(settings.dt > 0)) throw std::invalid_argument("WorldSettings.dt must be > 0");
   impl_->settings = settings;
+  // The hands keep out of the table too (unless the caller gave them a table of their own).
+  if (!(settings.grasp.table_half_extent > 0)) impl_->settings.grasp.table_half_extent = settings.table_half_extent;
   impl_->dynamics.setGravity(to_bt(settings.gravity));
   if (!(settings.table_half_extent > 0)) throw std::invalid_argument("WorldSettings.table_half_extent must be > 0");
   impl_->table_shape =

@@ -218,12 +218,14 @@ TEST(HandControllerTest, UnblocksWhenTheHandOpens) {
 
 // The hand moves 3 mm further down onto the plate after the finger blocked on it (no grasp, so
 // the plate stays): precise mode bends the finger back so it rests on the surface instead of
-// sinking in; discrete mode sinks.
+// sinking in; discrete mode sinks. (The finger layer alone: the resolved pose would not let the
+// hand move in; pose_resolver_test covers that.)
 TEST(HandControllerTest, FingerPushedIntoObjectBendsBackInPreciseMode) {
   BoxScene plate({0.1, 0.1, 0.01}, {0.1, 0, -0.025});
   for (ClosingMode mode : {ClosingMode::kPrecise, ClosingMode::kDiscrete}) {
     GraspSettings settings;
     settings.mode = mode;
+    settings.resolve_pose = false;
     HandController hand(finger_rig_without_grasp(), settings);
     for (int t = 0; t < 60; ++t) hand.tick(at_identity(1.0), kDt, {&plate.view, 1});
     ASSERT_TRUE(hand.state().blocked[2]) << "the distal capsule rests on the plate";
@@ -246,12 +248,15 @@ TEST(HandControllerTest, FingerPushedIntoObjectBendsBackInPreciseMode) {
 // The hand is placed 3 mm into a plate: precise mode bends the finger back past its open angle
 // (limit -20 deg) onto the surface, a capsule blocks there and the rule (f_mid | f_dist) grasps.
 // Releasing the trigger must let go even though the blocked angles lie below the open angle.
+// (The finger layer alone: a resolved hand would be pushed out of the plate first.)
 TEST(HandControllerTest, GraspAfterBendingBackReleasesWhenTheTriggerIsReleased) {
   auto rig = finger_rig_with({{"open_deg: 0 closed_deg: 90 min_deg: 0", "open_deg: 0 closed_deg: 90 min_deg: -20"},
                               {"open_deg: 0 closed_deg: 90 min_deg: 0", "open_deg: 0 closed_deg: 90 min_deg: -20"},
                               {"open_deg: 0 closed_deg: 70 min_deg: 0", "open_deg: 0 closed_deg: 70 min_deg: -20"}});
   BoxScene plate({0.1, 0.1, 0.01}, {0.1, 0, -0.012});  // top at z = -0.002: the open finger sinks 3 mm
-  HandController hand(rig, {});
+  GraspSettings settings;
+  settings.resolve_pose = false;
+  HandController hand(rig, settings);
   const HandTickEvents grasp = hand.tick(at_identity(0.3), kDt, {&plate.view, 1});
   ASSERT_TRUE(grasp.grasped);
   EXPECT_LT(hand.state().q[0], 0.0) << "bent back past the open angle";

@@ -6,6 +6,7 @@
 #include "telegrasp/sim/hand_rig.h"
 #include "telegrasp/sim/ids.h"
 #include "telegrasp/sim/object_model.h"
+#include "telegrasp/sim/pose_resolver.h"
 
 #include <Eigen/Geometry>
 
@@ -43,6 +44,12 @@ struct GraspSettings {
   SelectionMetric selection = SelectionMetric::kSurface;
   double contact_tolerance = 0.05e-3;  ///< Precise mode: a blocked capsule's gap lies in [0, this] (m).
   double speed_scale = 1.0;  ///< Multiplies every joint's max speed.
+  /// Keep the resolved pose (HandState::X_WorldPalm) outside every object and the table while the
+  /// tracked pose goes through them (pose_resolver.h); false: the resolved pose is the tracked one.
+  bool resolve_pose = true;
+  double table_half_extent = 0;  ///< > 0: the table top z = 0 over [-this, this]^2 is an obstacle (m).
+  double rejoin_speed = 1.0;  ///< The resolved pose closes its offset to the tracked one at most this fast (m/s).
+  double rejoin_turn = 6.283185307179586;  ///< ... and its turn at most this fast (rad/s).
 };
 
 /// One controller sample for one hand.
@@ -157,6 +164,8 @@ class HandController {
  private:
   struct Capsule;  // a capsule placed in the object frame
   Capsule capsule_in_object(PhalanxId id, const Eigen::Isometry3d& X_ObjectPalm) const;
+  // Sets the tracked pose, the resolved pose and the hand's velocity from `input`.
+  void track(const ControllerInput& input, double dt, std::span<const ObjectView> objects);
   // Recomputes X_PalmPhalanx along one finger from state_.q.
   void update_finger_poses(int finger);
   // The phases of tick(), in order (interaction manager and finger movement in step_finger).
@@ -229,6 +238,10 @@ class HandController {
     std::unique_ptr<Scratch> scratch;
   };
   ScratchHolder scratch_;
+  // The resolved pose's search, and the hand's volumes it keeps outside (palm, then capsules).
+  PoseResolver resolver_;
+  std::vector<HandVolume> volumes_;
+  std::size_t palm_volume_count_ = 0;
 };
 
 }  // namespace telegrasp::sim
