@@ -82,13 +82,15 @@ TEST(ScriptedOperatorTest, BadProfilesAreRejectedWithTheLine) {
 }
 
 TEST(ScriptedOperatorTest, ScaledSkillSpeedsUpEveryTime) {
-  const OperatorSkill base = skill_profile("experienced");
+  OperatorSkill base = skill_profile("experienced");
+  base.aperture_time = 0.8;
   const OperatorSkill s = base.scaled(2.0, 0.5);
   EXPECT_DOUBLE_EQ(s.reach_speed, 2.0 * base.reach_speed);
   EXPECT_DOUBLE_EQ(s.reaction_time, base.reaction_time / 2.0);
   EXPECT_DOUBLE_EQ(s.squeeze_time, base.squeeze_time / 2.0);
   EXPECT_DOUBLE_EQ(s.fitts_intercept, base.fitts_intercept / 2.0);
   EXPECT_DOUBLE_EQ(s.fitts_slope, base.fitts_slope / 2.0);
+  EXPECT_DOUBLE_EQ(s.aperture_time, 0.4);
   EXPECT_DOUBLE_EQ(s.position_error, base.position_error / 2.0);
   EXPECT_DOUBLE_EQ(s.orientation_error, base.orientation_error / 2.0);
 }

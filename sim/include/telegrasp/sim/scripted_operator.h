@@ -20,10 +20,10 @@ namespace telegrasp::sim {
 /// fitts_time): the transport to the pre-grasp pose and the final approach are each
 /// `a + b log2(1 + D / W)` seconds, D the distance and W the target's tolerance; the final
 /// approach starts a stand-off away from the grasp that grows with the object's size (the open
-/// hand clears it), so larger objects take longer. Practice shortens reaction and movements (see
-/// practice_factor). A pose error beyond correction_tolerance is corrected before squeezing.
-/// With fitts_slope = 0 the legs take 1.5 D / reach_speed instead (the
-/// "perfect" profile, a robot-like operator).
+/// hand clears it) and takes aperture_time per m of size longer, so larger objects take longer. Practice shortens
+/// reaction and movements (see practice_factor). A pose error beyond correction_tolerance is corrected before
+/// squeezing. With fitts_slope = 0 the legs take 1.5 D / reach_speed instead (the "perfect" profile, a robot-like
+/// operator).
 struct OperatorSkill {
   std::string name;
   double position_error = 0;  ///< Std dev of the grasp position error per axis, m.
@@ -37,6 +37,9 @@ struct OperatorSkill {
   double approach_tolerance = 0.02;  ///< W of the final approach to the grasp pose, m.
   double approach_clearance = 0.10;  ///< Stand-off of the pre-grasp pose for a point-sized object, m.
   double size_standoff = 0;  ///< Extra stand-off per m of the object's largest extent.
+  /// Opening the hand to the object's size and placing it around it: the final approach takes
+  /// this many s longer per m of the object's largest extent (grip aperture grows with size).
+  double aperture_time = 0;
   double learning_gain = 0;  ///< Practice: the first grasp is (1 + gain) times slower than a practised one.
   double learning_exponent = 0.5;  ///< Practice: power-law exponent of the slowdown's decay with grasps done.
   /// Seeing the hand arrive off the planned pose, the operator corrects it (a corrective
@@ -183,6 +186,7 @@ class ScriptedOperator {
   double trigger_ = 0;
   double practice_ = 1;  // practice_factor of this trial
   double standoff_ = 0.10;  // pre-grasp stand-off of this trial's object, m
+  double aperture_s_ = 0;  // extra final-approach time for this trial's object's size, s
   double correction_tolerance_ = 0;  // correction tolerance for this trial's object, m
   int attempts_ = 0;
   bool held_after_lift_ = false;
