@@ -56,9 +56,12 @@ a bot participant reacts, reaches, grasps, lifts 10 cm, holds 1 s and releases e
 time from spawn to grasp, per-capsule ND, HandError, exact signed distances and contacts come
 from the server's GraspEvent topic.
 
-Operators: the group's skill profile (experienced: pose error 4 mm / 3 deg, reach 0.6 m/s,
-reaction 0.25 s, squeeze 0.30 s; inexperienced: 8 mm / 6 deg, 0.4 m/s, 0.40 s, 0.45 s), scaled
-per participant by a speed factor ~ lognormal(0, 0.15) (reach speed x, reaction and squeeze
+Operators: the group's skill profile, fitted to the paper's mean times (README, "Calibration"):
+reaction 0.22 / 0.28 s (experienced / inexperienced), Fitts's-law reach (a 0.05 s, b 0.0643 /
+0.0325 s/bit) with a stand-off and an extra 1 s per m growing with the object's size, a
+corrective submovement to within 4 mm (less on thin objects), practice slowing the first grasps
+(gain 0.1 / 2.0), squeeze 0.30 / 0.40 s, pose error 4 mm / 3 deg and 8 mm / 6 deg; scaled per
+participant by a speed factor ~ lognormal(0, 0.15) (reach speed x; reaction, squeeze and reach
 times /) and a precision factor ~ lognormal(0, 0.2) (pose errors x), drawn from the seed: a
 participant is the same person, and sees the same placements, in every mode.
 

@@ -43,7 +43,8 @@ def skills_text(theta):
     for g in ("experienced", "inexperienced"):
         lines.append(f"[{g}]")
         values = dict(FIXED[g])
-        values.update(fitts_slope=theta[f"b_{g}"], learning_gain=theta[f"g_{g}"], size_standoff=theta["size"])
+        values.update(fitts_slope=theta[f"b_{g}"], learning_gain=theta[f"g_{g}"], size_standoff=theta["size"],
+                      aperture_time=theta["aperture"])
         lines += [f"{k} = {v:.6g}" for k, v in values.items()]
     return "\n".join(lines) + "\n"
 
@@ -145,10 +146,10 @@ def solve_slopes(ev, theta, seeds, log):
         nxt = dict(theta)
         for g in PAPER:
             b, m = theta[f"b_{g}"], res[g]["mean_s"]
-            slope = 7.0  # s of mean time per s/bit of Fitts slope (about the bits of a reach): a first guess, then measured
+            slope = 10.0  # s of mean time per s/bit of Fitts slope (about the bits of a reach): a first guess, then measured
             if prev and abs(prev[0][f"b_{g}"] - b) > 1e-6:
                 slope = (prev[1][g]["mean_s"] - m) / (prev[0][f"b_{g}"] - b)
-                slope = slope if slope > 1.0 else 7.0
+                slope = slope if slope > 1.0 else 10.0
             nxt[f"b_{g}"] = max(0.01, b + (PAPER[g] - m) / slope)
         prev = (theta, res)
         theta = nxt
@@ -162,9 +163,11 @@ def main():
     p.add_argument("--paper", default="sim/tools/report/paper_results_per_object.csv")
     p.add_argument("--fit-seeds", default="1,2")
     p.add_argument("--confirm-seeds", default="3,4")
-    p.add_argument("--sizes", default="0.3,0.6,1.0", help="size_standoff grid")
-    p.add_argument("--gains-experienced", default="0.0,0.15", help="learning_gain grid, experienced")
-    p.add_argument("--gains-inexperienced", default="0.3,0.6,0.9", help="learning_gain grid, inexperienced")
+    p.add_argument("--sizes", default="0.8", help="size_standoff grid")
+    p.add_argument("--apertures", default="0.6,1.0", help="aperture_time grid (both groups)")
+    p.add_argument("--gains-experienced", default="0.1", help="learning_gain grid, experienced")
+    p.add_argument("--gains-inexperienced", default="1.2,2.0", help="learning_gain grid, inexperienced")
+    p.add_argument("--slopes-start", default="0.074,0.045", help="Fitts slopes to start from, experienced,inexperienced")
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--log", default="fit_skill_profiles.log")
     args = p.parse_args()
@@ -181,12 +184,13 @@ def main():
         logf.flush()
 
     best = None
-    theta = {"b_experienced": 0.085, "b_inexperienced": 0.08}
-    grid = itertools.product([float(x) for x in args.sizes.split(",")],
+    start = [float(x) for x in args.slopes_start.split(",")]
+    theta = {"b_experienced": start[0], "b_inexperienced": start[1]}
+    grid = itertools.product([float(x) for x in args.sizes.split(",")], [float(x) for x in args.apertures.split(",")],
                              [float(x) for x in args.gains_experienced.split(",")],
                              [float(x) for x in args.gains_inexperienced.split(",")])
-    for size, ge, gi in grid:
-        theta = dict(theta, size=size, g_experienced=ge, g_inexperienced=gi)
+    for size, aperture, ge, gi in grid:
+        theta = dict(theta, size=size, aperture=aperture, g_experienced=ge, g_inexperienced=gi)
         theta, res = solve_slopes(ev, theta, fit, log)
         if best is None or res["J"] < best[1]["J"]:
             best = (theta, res)
