@@ -12,10 +12,12 @@ the paper's, per group and both groups pooled; held penalty: 1 per grasp held fe
 --min-held (per seed, summed over groups). The paper's per-object times enter only through rho:
 the per-object differences come from the operator model (object size, practice, pose error).
 
-Search: for each point of a small grid over the shape parameters (size_standoff, learning_gain of
-each group), the groups' Fitts slopes are solved for the paper's means by the secant method (the
-mean is nearly linear in the slope), then the grid point with the lowest J wins. The winner is
-then run on the CONFIRM seeds, which the fit never saw, and both are printed.
+Search: for each point of a small grid over the shape parameters (size_standoff, aperture_time,
+the learning_gain of each group), the groups' Fitts slopes are solved for the paper's means by
+the secant method (the mean is nearly linear in the slope), then the grid point with the lowest J
+wins. The winner is then run on the CONFIRM seeds, which the fit never saw, and both are printed.
+Every run is logged as a JSON line to --log. A grid of one point re-solves the slopes only (the
+final stage of the calibration, on more seeds).
 """
 import argparse
 import itertools

@@ -149,9 +149,10 @@ class ScriptedOperator {
                    GraspSettings settings = {}, double dt = 1.0 / 90.0);
 
   /// Starts a trial at time `t0` for the object at X_WorldObject, the hand at X_WorldPalm, after
-  /// `grasps_done` grasps of the session (see practice_factor).
+  /// `grasps_done` grasps of the session (see practice_factor); without it, a practised operator
+  /// (factor 1: tools that do not run sessions, such as telegrasp-bot and telegrasp-eval run).
   void begin(const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject, const Eigen::Isometry3d& X_WorldPalm,
-             double t0, int grasps_done = 0);
+             double t0, std::optional<int> grasps_done = std::nullopt);
   /// The input for time `t`; `grasped` is whether the hand holds the trial's object now.
   ControllerInput next(double t, bool grasped);
 
