@@ -5,13 +5,13 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <sstream>
 #include <stdexcept>
 
 namespace telegrasp::sim {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
-constexpr double kApproachDistance = 0.10;  // pre-grasp stand-off along the approach, m
 
 // Minimum-jerk time scaling of s in [0, 1].
 double min_jerk(double s) {
@@ -147,11 +147,174 @@ NdSearchResult nd_pose_search(const std::shared_ptr<const HandRig>& rig, const O
   return out;
 }
 
+OperatorSkill OperatorSkill::scaled(double speed, double precision) const {
+  OperatorSkill s = *this;
+  s.reach_speed *= speed;
+  s.reaction_time /= speed;
+  s.squeeze_time /= speed;
+  s.fitts_intercept /= speed;
+  s.fitts_slope /= speed;
+  s.aperture_time /= speed;
+  s.position_error *= precision;
+  s.orientation_error *= precision;
+  return s;
+}
+
+namespace {
+
+// The paper's two groups of people (README, "Calibration"): the pose errors are the previous
+// profiles'; the timing constants are assumed typical human values, except the Fitts slopes,
+// the size terms and the practice gains, which were fitted to the paper's mean times per group
+// and per-object order with sim/tools/eval/fit_skill_profiles.py.
+OperatorSkill human_profile(bool experienced) {
+  OperatorSkill s;
+  s.name = experienced ? "experienced" : "inexperienced";
+  s.position_error = experienced ? 0.004 : 0.008;
+  s.orientation_error = (experienced ? 3.0 : 6.0) * kDeg;
+  s.reach_speed = experienced ? 0.6 : 0.4;  // the lift's speed
+  // Assumed.
+  s.reaction_time = experienced ? 0.22 : 0.28;
+  s.squeeze_time = experienced ? 0.30 : 0.40;
+  s.fitts_intercept = 0.05;
+  s.transport_tolerance = 0.05;
+  s.approach_tolerance = 0.02;
+  s.approach_clearance = 0.05;
+  s.learning_exponent = 0.5;
+  s.correction_tolerance = 0.004;
+  s.thin_tolerance_fraction = 0.1;
+  // Fitted.
+  s.fitts_slope = experienced ? 0.0643 : 0.0325;
+  s.size_standoff = 0.8;
+  s.aperture_time = 1.0;
+  s.learning_gain = experienced ? 0.1 : 2.0;
+  return s;
+}
+
+}  // namespace
+
 OperatorSkill skill_profile(const std::string& name) {
   if (name == "perfect") return {"perfect", 0.0, 0.0, 0.8, 0.0, 0.25};
-  if (name == "experienced") return {"experienced", 0.004, 3.0 * kDeg, 0.6, 0.25, 0.30};
-  if (name == "inexperienced") return {"inexperienced", 0.008, 6.0 * kDeg, 0.4, 0.40, 0.45};
+  if (name == "experienced" || name == "inexperienced") return human_profile(name == "experienced");
   throw std::invalid_argument("unknown operator skill '" + name + "' (expected perfect, experienced or inexperienced)");
+}
+
+namespace {
+
+// The fields of OperatorSkill by their names in skill profile text, with the factor from text units.
+struct SkillField {
+  const char* key;
+  double OperatorSkill::*field;
+  double unit;
+};
+constexpr SkillField kSkillFields[] = {
+    {"position_error", &OperatorSkill::position_error, 1.0},
+    {"orientation_error_deg", &OperatorSkill::orientation_error, kDeg},
+    {"reach_speed", &OperatorSkill::reach_speed, 1.0},
+    {"reaction_time", &OperatorSkill::reaction_time, 1.0},
+    {"squeeze_time", &OperatorSkill::squeeze_time, 1.0},
+    {"fitts_intercept", &OperatorSkill::fitts_intercept, 1.0},
+    {"fitts_slope", &OperatorSkill::fitts_slope, 1.0},
+    {"transport_tolerance", &OperatorSkill::transport_tolerance, 1.0},
+    {"approach_tolerance", &OperatorSkill::approach_tolerance, 1.0},
+    {"approach_clearance", &OperatorSkill::approach_clearance, 1.0},
+    {"size_standoff", &OperatorSkill::size_standoff, 1.0},
+    {"aperture_time", &OperatorSkill::aperture_time, 1.0},
+    {"learning_gain", &OperatorSkill::learning_gain, 1.0},
+    {"learning_exponent", &OperatorSkill::learning_exponent, 1.0},
+    {"correction_tolerance", &OperatorSkill::correction_tolerance, 1.0},
+    {"thin_tolerance_fraction", &OperatorSkill::thin_tolerance_fraction, 1.0},
+};
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r");
+  if (b == std::string::npos) return "";
+  return s.substr(b, s.find_last_not_of(" \t\r") - b + 1);
+}
+
+// Sets `key` of `skill` from `value`; throws std::invalid_argument saying why it cannot.
+void set_skill_field(OperatorSkill& skill, const std::string& key, const std::string& value) {
+  for (const SkillField& f : kSkillFields) {
+    if (key != f.key) continue;
+    std::size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(value, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != value.size()) throw std::invalid_argument("'" + value + "' is not a number");
+    skill.*f.field = v * f.unit;
+    return;
+  }
+  throw std::invalid_argument("unknown key '" + key + "'");
+}
+
+// The built-in profile of `name`, or a copy of "experienced" renamed for a new name.
+OperatorSkill base_profile(const std::string& name) {
+  try {
+    return skill_profile(name);
+  } catch (const std::invalid_argument&) {
+    OperatorSkill s = skill_profile("experienced");
+    s.name = name;
+    return s;
+  }
+}
+
+}  // namespace
+
+std::string validate_skill(const OperatorSkill& skill) {
+  if (skill.name.empty()) return "the profile has no name";
+  for (const SkillField& f : kSkillFields) {
+    const double v = skill.*f.field;
+    if (!std::isfinite(v) || v < 0) return std::string(f.key) + " must be finite and >= 0";
+  }
+  if (skill.reach_speed <= 0) return "reach_speed must be > 0";
+  if (skill.squeeze_time <= 0) return "squeeze_time must be > 0";
+  if (skill.transport_tolerance <= 0 || skill.approach_tolerance <= 0) return "the Fitts tolerances must be > 0";
+  if (skill.approach_clearance <= 0) return "approach_clearance must be > 0";
+  return "";
+}
+
+std::vector<OperatorSkill> parse_skill_profiles(const std::string& text) {
+  std::vector<OperatorSkill> out;
+  std::istringstream in(text);
+  int line_no = 0;
+  auto check_last = [&] {
+    if (out.empty()) return;
+    if (const std::string why = validate_skill(out.back()); !why.empty())
+      throw std::invalid_argument("skill profile '" + out.back().name + "' (before line " + std::to_string(line_no) +
+                                  "): " + why);
+  };
+  for (std::string raw; std::getline(in, raw);) {
+    ++line_no;
+    const std::string line = trim(raw.substr(0, raw.find('#')));
+    if (line.empty()) continue;
+    const std::string where = "skill profiles line " + std::to_string(line_no) + ": ";
+    if (line.front() == '[' && line.back() == ']') {
+      check_last();
+      out.push_back(base_profile(trim(line.substr(1, line.size() - 2))));
+      continue;
+    }
+    const auto eq = line.find('=');
+    if (out.empty() || eq == std::string::npos)
+      throw std::invalid_argument(where + "expected [name] or key = value inside a profile");
+    try {
+      set_skill_field(out.back(), trim(line.substr(0, eq)), trim(line.substr(eq + 1)));
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(where + e.what());
+    }
+  }
+  ++line_no;
+  check_last();
+  return out;
+}
+
+double fitts_time(double a, double b, double distance, double width) {
+  return a + b * std::log2(1.0 + std::max(0.0, distance) / width);
+}
+
+double practice_factor(const OperatorSkill& skill, int grasps_done) {
+  return 1.0 + skill.learning_gain * std::pow(1.0 + std::max(0, grasps_done), -skill.learning_exponent);
 }
 
 GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSettings& settings, const ObjectModel& model,
@@ -246,15 +409,29 @@ Eigen::Isometry3d ScriptedOperator::noisy(const Eigen::Isometry3d& X) {
 }
 
 void ScriptedOperator::begin(const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject,
-                             const Eigen::Isometry3d& X_WorldPalm, double t0) {
+                             const Eigen::Isometry3d& X_WorldPalm, double t0, std::optional<int> grasps_done) {
   plan_ = plan_grasp(rig_, settings_, model, X_WorldObject, dt_, 0.0);
+  practice_ = grasps_done ? practice_factor(skill_, *grasps_done) : 1.0;
+  const Eigen::Vector3d extent = model.p_ObjectMax - model.p_ObjectMin;
+  standoff_ = skill_.approach_clearance + skill_.size_standoff * extent.maxCoeff();
+  aperture_s_ = practice_ * skill_.aperture_time * extent.maxCoeff();
+  correction_tolerance_ = skill_.correction_tolerance;
+  if (skill_.thin_tolerance_fraction > 0)
+    correction_tolerance_ = std::min(correction_tolerance_, skill_.thin_tolerance_fraction * extent.minCoeff());
   X_last_ = X_WorldPalm;
   attempts_ = 0;
   held_after_lift_ = false;
   trigger_ = 0;
   phase_ = OperatorPhase::kReact;
   t_phase_ = t0;
-  t_end_ = t0 + skill_.reaction_time;
+  t_end_ = t0 + practice_ * skill_.reaction_time;
+}
+
+// The duration of one leg of the reach: Fitts's law, slowed by lack of practice; or, with no
+// Fitts slope, the time at which a minimum-jerk move averages the reach speed (it peaks at 1.875x).
+double ScriptedOperator::leg_time(double distance, double width) const {
+  if (skill_.fitts_slope <= 0) return std::max(0.15, 1.5 * distance / skill_.reach_speed);
+  return std::max(0.15, practice_ * fitts_time(skill_.fitts_intercept, skill_.fitts_slope, distance, width));
 }
 
 void ScriptedOperator::start_attempt(double t) {
@@ -262,13 +439,30 @@ void ScriptedOperator::start_attempt(double t) {
   X_start_ = X_last_;
   X_goal_ = noisy(plan_.X_WorldPalm);
   X_pre_ = X_goal_;
-  X_pre_.translation() -= kApproachDistance * plan_.approach_World;
+  X_pre_.translation() -= standoff_ * plan_.approach_World;
   const double d1 = (X_pre_.translation() - X_start_.translation()).norm();
-  const double d2 = kApproachDistance;
   phase_ = OperatorPhase::kReach;
   t_phase_ = t;
-  t_via_ = t + std::max(0.15, 1.5 * d1 / skill_.reach_speed);  // min-jerk peaks at 1.875x mean speed
-  t_end_ = t_via_ + std::max(0.15, 1.5 * d2 / skill_.reach_speed);
+  t_via_ = t + leg_time(d1, skill_.transport_tolerance);
+  t_end_ = t_via_ + leg_time(standoff_, skill_.approach_tolerance) + aperture_s_;
+  // The corrective submovement: the grasp centre's error shrunk to the tolerance, same direction.
+  const Eigen::Vector3d& gc = rig_->p_PalmGraspCenter();
+  const double error = (X_goal_ * gc - plan_.X_WorldPalm * gc).norm();
+  const double tolerance = correction_tolerance_;
+  X_fixed_ = X_goal_;
+  t_fixed_ = t_end_;
+  if (tolerance > 0 && error > tolerance) {
+    X_fixed_ = interpolate(plan_.X_WorldPalm, X_goal_, tolerance / error);
+    t_fixed_ += practice_ * fitts_time(skill_.fitts_intercept, skill_.fitts_slope, error, tolerance);
+  }
+}
+
+// Where the reach puts the hand at `t`: transport, final approach, then the correction, each a
+// minimum-jerk move.
+Eigen::Isometry3d ScriptedOperator::reach_pose(double t) const {
+  if (t < t_via_) return interpolate(X_start_, X_pre_, min_jerk((t - t_phase_) / (t_via_ - t_phase_)));
+  if (t < t_end_ || t_fixed_ <= t_end_) return interpolate(X_pre_, X_goal_, min_jerk((t - t_via_) / (t_end_ - t_via_)));
+  return interpolate(X_goal_, X_fixed_, min_jerk((t - t_end_) / (t_fixed_ - t_end_)));
 }
 
 ControllerInput ScriptedOperator::next(double t, bool grasped) {
@@ -277,14 +471,10 @@ ControllerInput ScriptedOperator::next(double t, bool grasped) {
       if (t >= t_end_) start_attempt(t);
       break;
     case OperatorPhase::kReach:
-      if (t < t_via_) {
-        X_last_ = interpolate(X_start_, X_pre_, min_jerk((t - t_phase_) / (t_via_ - t_phase_)));
-      } else {
-        X_last_ = interpolate(X_pre_, X_goal_, min_jerk((t - t_via_) / (t_end_ - t_via_)));
-        if (t >= t_end_) {
-          phase_ = OperatorPhase::kSqueeze;
-          t_phase_ = t;
-        }
+      X_last_ = reach_pose(t);
+      if (t >= t_fixed_) {
+        phase_ = OperatorPhase::kSqueeze;
+        t_phase_ = t;
       }
       break;
     case OperatorPhase::kSqueeze:

@@ -7,8 +7,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 
 namespace telegrasp::sim {
 namespace {
@@ -26,6 +28,98 @@ TEST(ScriptedOperatorTest, UnknownSkillIsNamed) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("wizard"), std::string::npos);
   }
+}
+
+TEST(ScriptedOperatorTest, FittsTimeIsShannonsFormula) {
+  // a + b log2(1 + D / W): D = 0.3 m, W = 0.1 m gives log2(4) = 2 bits.
+  EXPECT_DOUBLE_EQ(fitts_time(0.1, 0.2, 0.3, 0.1), 0.1 + 0.2 * 2.0);
+  EXPECT_DOUBLE_EQ(fitts_time(0.1, 0.2, 0.0, 0.05), 0.1);  // no distance: the intercept
+  EXPECT_DOUBLE_EQ(fitts_time(0.0, 0.15, 0.07, 0.01), 0.15 * 3.0);  // log2(8)
+}
+
+TEST(ScriptedOperatorTest, PracticeFactorFollowsThePowerLaw) {
+  OperatorSkill s = skill_profile("inexperienced");
+  s.learning_gain = 0.6;
+  s.learning_exponent = 0.5;
+  EXPECT_DOUBLE_EQ(practice_factor(s, 0), 1.6);
+  EXPECT_DOUBLE_EQ(practice_factor(s, 3), 1.0 + 0.6 / 2.0);  // (1 + 3)^-0.5
+  s.learning_gain = 0;
+  EXPECT_DOUBLE_EQ(practice_factor(s, 7), 1.0);
+}
+
+TEST(ScriptedOperatorTest, BuiltInProfilesValidate) {
+  for (const char* name : {"perfect", "experienced", "inexperienced"})
+    EXPECT_EQ(validate_skill(skill_profile(name)), "") << name;
+}
+
+TEST(ScriptedOperatorTest, ProfilesParseFromText) {
+  const std::vector<OperatorSkill> p = parse_skill_profiles(
+      "# fitted\n[experienced]\nreaction_time = 0.2  # s\norientation_error_deg = 2\n\n[novice]\nfitts_slope=0.1\n");
+  ASSERT_EQ(p.size(), 2u);
+  EXPECT_EQ(p[0].name, "experienced");
+  EXPECT_DOUBLE_EQ(p[0].reaction_time, 0.2);
+  EXPECT_NEAR(p[0].orientation_error, 2.0 * std::acos(-1.0) / 180.0, 1e-15);
+  EXPECT_DOUBLE_EQ(p[0].position_error, skill_profile("experienced").position_error);  // kept from the built-in
+  EXPECT_EQ(p[1].name, "novice");  // a new name starts from "experienced"
+  EXPECT_DOUBLE_EQ(p[1].fitts_slope, 0.1);
+  EXPECT_DOUBLE_EQ(p[1].squeeze_time, skill_profile("experienced").squeeze_time);
+}
+
+TEST(ScriptedOperatorTest, BadProfilesAreRejectedWithTheLine) {
+  auto error = [](const std::string& text) {
+    try {
+      parse_skill_profiles(text);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error("[experienced]\nspeed = 2\n").find("line 2: unknown key 'speed'"), std::string::npos);
+  EXPECT_NE(error("[experienced]\nreaction_time = fast\n").find("line 2"), std::string::npos);
+  EXPECT_NE(error("reaction_time = 0.2\n").find("line 1"), std::string::npos);
+  EXPECT_NE(error("[experienced]\nsqueeze_time = 0\n").find("squeeze_time"), std::string::npos);
+  EXPECT_NE(error("[experienced]\nfitts_slope = -0.1\n").find("fitts_slope"), std::string::npos);
+  EXPECT_NE(error("[experienced]\napproach_tolerance = nan\n").find("approach_tolerance"), std::string::npos);
+}
+
+TEST(ScriptedOperatorTest, ScaledSkillSpeedsUpEveryTime) {
+  OperatorSkill base = skill_profile("experienced");
+  base.aperture_time = 0.8;
+  const OperatorSkill s = base.scaled(2.0, 0.5);
+  EXPECT_DOUBLE_EQ(s.reach_speed, 2.0 * base.reach_speed);
+  EXPECT_DOUBLE_EQ(s.reaction_time, base.reaction_time / 2.0);
+  EXPECT_DOUBLE_EQ(s.squeeze_time, base.squeeze_time / 2.0);
+  EXPECT_DOUBLE_EQ(s.fitts_intercept, base.fitts_intercept / 2.0);
+  EXPECT_DOUBLE_EQ(s.fitts_slope, base.fitts_slope / 2.0);
+  EXPECT_DOUBLE_EQ(s.aperture_time, 0.4);
+  EXPECT_DOUBLE_EQ(s.position_error, base.position_error / 2.0);
+  EXPECT_DOUBLE_EQ(s.orientation_error, base.orientation_error / 2.0);
+}
+
+// The first input after the reaction at which the hand has reached the grasp pose and squeezes.
+double squeeze_start(const OperatorSkill& skill, const std::string& object, std::optional<int> grasps_done) {
+  auto model = standin(object);
+  ScriptedOperator op(rig("human_right"), skill, 5);
+  op.begin(*model, World::resting_pose(*model, 0.45, 0.0, 0.3), Eigen::Isometry3d(Eigen::Translation3d(0.2, -0.2, 0.3)),
+           0.0, grasps_done);
+  for (int t = 0; t < 900; ++t) {
+    op.next(t / 90.0, false);
+    if (op.phase() == OperatorPhase::kSqueeze) return t / 90.0;
+  }
+  return 1e9;
+}
+
+TEST(ScriptedOperatorTest, LargerObjectsAndLessPracticeTakeLonger) {
+  OperatorSkill s = skill_profile("experienced");
+  s.position_error = s.orientation_error = 0;
+  s.fitts_intercept = 0.1;
+  s.fitts_slope = 0.15;
+  s.size_standoff = 0.5;
+  s.learning_gain = 0.5;
+  EXPECT_GT(squeeze_start(s, "003_cracker_box", 10), squeeze_start(s, "018_plum", 10) + 0.05);
+  EXPECT_GT(squeeze_start(s, "018_plum", 0), squeeze_start(s, "018_plum", 10) + 0.2);
+  // Without a session, a practised operator: faster than even after 10 grasps.
+  EXPECT_LT(squeeze_start(s, "018_plum", std::nullopt), squeeze_start(s, "018_plum", 10));
 }
 
 std::vector<double> inputs(std::uint64_t seed) {

@@ -48,6 +48,7 @@ Options:
   --profile NAME    Fast DDS participant profile (default loopback)
   --profiles FILE   Fast DDS XML profiles (default: the shipped file)
   --group NAME      experienced | inexperienced (default experienced)
+  --skills FILE     skill profiles overriding the built-in ones (see telegrasp-eval protocol --help)
   --participant P   participant number, 1-based (default 1)
   --seed S          the run's seed (default 1)
   --mode M          the server's closing mode, written into the records (default precise)
@@ -69,7 +70,9 @@ constexpr double kDt = 1.0 / 90.0;  // the operator's step; the server's tick is
 
 struct Options {
   int domain = 0, participant = 1, count = 30;
-  std::string profile = "loopback", profiles_file, group = "experienced", mode = "precise", objects_dir, json_path;
+  std::string profile = "loopback", profiles_file, group = "experienced", mode = "precise", objects_dir, json_path,
+              skills_path;
+  std::vector<sim::OperatorSkill> skills;  // from --skills
   std::uint64_t seed = 1;
   double timeout_s = 20;
 };
@@ -125,7 +128,7 @@ class Participant {
         client_(c),
         models_(std::move(models)),
         rig_(std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")))),
-        skill_(participant_skill(opt.group, opt.seed, opt.participant)) {
+        skill_(participant_skill(opt.group, opt.seed, opt.participant, &opt.skills)) {
     const auto& order = paper_object_order();
     objects_.assign(order.begin(),
                     order.begin() + std::min<std::size_t>(order.size(), static_cast<std::size_t>(opt.count)));
@@ -227,7 +230,7 @@ class Participant {
     op_ = std::make_unique<sim::ScriptedOperator>(
         rig_, skill_, grasp_seed(opt_.seed, opt_.participant, static_cast<int>(index_)), sim::GraspSettings{}, kDt);
     // Planning takes a while; the lockstep server waits for this answer, so simulated time does not run.
-    op_->begin(*models_.at(o.name), o.X_WorldObject, home_palm_pose(), 0.0);
+    op_->begin(*models_.at(o.name), o.X_WorldObject, home_palm_pose(), 0.0, static_cast<int>(index_));
     input_ = op_->next(0.0, false);
     stage_ = Stage::kRun;
   }
@@ -324,7 +327,13 @@ class Participant {
 }  // namespace
 
 int run_participant(int argc, char** argv) {
-  const Options opt = parse(argc, argv);
+  Options opt = parse(argc, argv);
+  try {
+    if (!opt.skills_path.empty()) opt.skills = load_skill_file(opt.skills_path);
+  } catch (const std::exception& e) {
+    std::cerr << kTool << ": --skills " << e.what() << "\n";
+    return cli::kExitFailure;
+  }
   std::map<std::string, sim::ObjectModelPtr> models;
   try {
     models = protocol_models(opt.objects_dir, nullptr);

@@ -8,7 +8,9 @@
 #include "experiment_report.h"
 #include "progress_line.h"
 #include "grasp_report.h"
+#include "paper_correlation.h"
 #include "protocol_common.h"
+#include "protocol_in_process.h"
 #include "questionnaire.h"
 #include "telegrasp/sim/hand_controller.h"
 #include "telegrasp/sim/hand_rig.h"
@@ -17,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -53,9 +56,12 @@ a bot participant reacts, reaches, grasps, lifts 10 cm, holds 1 s and releases e
 time from spawn to grasp, per-capsule ND, HandError, exact signed distances and contacts come
 from the server's GraspEvent topic.
 
-Operators: the group's skill profile (experienced: pose error 4 mm / 3 deg, reach 0.6 m/s,
-reaction 0.25 s, squeeze 0.30 s; inexperienced: 8 mm / 6 deg, 0.4 m/s, 0.40 s, 0.45 s), scaled
-per participant by a speed factor ~ lognormal(0, 0.15) (reach speed x, reaction and squeeze
+Operators: the group's skill profile, fitted to the paper's mean times (README, "Calibration"):
+reaction 0.22 / 0.28 s (experienced / inexperienced), Fitts's-law reach (a 0.05 s, b 0.0643 /
+0.0325 s/bit) with a stand-off and an extra 1 s per m growing with the object's size, a
+corrective submovement to within 4 mm (less on thin objects), practice slowing the first grasps
+(gain 0.1 / 2.0), squeeze 0.30 / 0.40 s, pose error 4 mm / 3 deg and 8 mm / 6 deg; scaled per
+participant by a speed factor ~ lognormal(0, 0.15) (reach speed x; reaction, squeeze and reach
 times /) and a precision factor ~ lognormal(0, 0.2) (pose errors x), drawn from the seed: a
 participant is the same person, and sees the same placements, in every mode.
 
@@ -90,6 +96,12 @@ Options:
   --record DIR           each server records its run (telegrasp-server --record) to
                          DIR/<mode>-p<participant>.tgrec, for telegrasp-replay
   --keep-logs DIR        keep each server's and participant's log and records in DIR
+  --skills FILE          skill profiles overriding the built-in ones: "[experienced]" then
+                         "key = value" lines (OperatorSkill's fields, orientation_error_deg in
+                         degrees; see README, "Calibration")
+  --in-process           run every participant in this process against a sim::World set up as
+                         the lockstep server's, no DDS (same simulated times, for fitting; the
+                         records have no contacts or grasp pictures)
   -h, --help             this text
 
 Progress goes to stderr (in place on a terminal, a line every few seconds in a log); the
@@ -104,8 +116,10 @@ struct Options {
   int experienced = 4, inexperienced = 6, count = 30, jobs = 2, domain = -1;
   std::vector<std::string> modes{sim::closing_mode_name(sim::ClosingMode::kPrecise)};  // names, as records write them
   std::string objects_dir, json_path, csv_path, report_path, questionnaire_path, profile = "loopback", profiles_file,
-                                                                                 logs_dir, record_dir;
+                                                                                 logs_dir, record_dir, skills_path;
   std::uint64_t seed = 1;
+  bool in_process = false;
+  std::vector<sim::OperatorSkill> skills;  // from --skills
 };
 
 constexpr const char* kTool = "telegrasp-eval protocol";
@@ -163,6 +177,10 @@ Options parse(int argc, char** argv) {
       o.logs_dir = value();
     else if (a == "--record")
       o.record_dir = value();
+    else if (a == "--skills")
+      o.skills_path = value();
+    else if (a == "--in-process")
+      o.in_process = true;
     else
       return false;
     return true;
@@ -360,6 +378,7 @@ void start_job(Job& j, int slot, const Options& opt, const Setup& setup) {
   }
   if (!opt.profiles_file.empty())
     for (const char* a : {"--profiles", opt.profiles_file.c_str()}) server.push_back(a), bot.push_back(a);
+  if (!opt.skills_path.empty()) bot.insert(bot.end(), {"--skills", opt.skills_path});
   if (!opt.record_dir.empty())
     server.insert(server.end(), {"--record", (fs::path(opt.record_dir) / (name + ".tgrec")).string()});
   j.server.start(server, (setup.work / (name + ".server.log")).string());
@@ -455,6 +474,30 @@ double run_jobs(std::vector<Job>& jobs, const Options& opt, const Setup& setup, 
   return wall;
 }
 
+// Runs every job in this process (--in-process), opt.jobs threads at a time; returns the wall time (s).
+double run_jobs_in_process(std::vector<Job>& jobs, const Options& opt, const ReportInputs& in) {
+  const auto t0 = Clock::now();
+  std::atomic<std::size_t> next{0};
+  auto worker = [&] {
+    for (std::size_t k = next++; k < jobs.size(); k = next++) {
+      Job& j = jobs[k];
+      InProcessParticipant p{j.mode,    j.group,  j.participant,
+                             opt.count, opt.seed, participant_skill(j.group, opt.seed, j.participant, &opt.skills)};
+      try {
+        j.records = run_participant_in_process(p, in.pictures.models, in.pictures.rig);
+      } catch (const std::exception& e) {
+        j.failed = true;
+        j.error = "participant " + std::to_string(j.participant) + " (" + j.mode + ") failed: " + e.what() + "\n";
+      }
+      j.finished = true;
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int i = 0; i < opt.jobs; ++i) pool.emplace_back(worker);
+  for (std::thread& t : pool) t.join();
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
 // ---------------------------------------------------------------------------------------------
 // Collection and reports
 
@@ -528,6 +571,7 @@ bool write_reports(const report::ExperimentRun& run, const json& summaries, cons
       report::write_text_file(opt.json_path, json{{"grasps", grasps},
                                                   {"summaries", summaries},
                                                   {"aggregates", report::aggregate_json(run)},
+                                                  {"paper_correlation", report::paper_correlation_json(run, in.paper)},
                                                   {"standin_objects", run.standin_objects}}
                                                      .dump(1) +
                                                  "\n");
@@ -553,25 +597,32 @@ bool write_reports(const report::ExperimentRun& run, const json& summaries, cons
 }  // namespace
 
 int run_protocol(int argc, char** argv) {
-  const Options opt = parse(argc, argv);
+  Options opt = parse(argc, argv);
+  try {
+    if (!opt.skills_path.empty()) opt.skills = load_skill_file(opt.skills_path);
+  } catch (const std::exception& e) {
+    std::cerr << kTool << ": --skills " << e.what() << "\n";
+    return cli::kExitFailure;
+  }
   const std::optional<ReportInputs> inputs = load_report_inputs(opt);
   if (!inputs) return cli::kExitFailure;
-  const std::optional<Setup> setup = prepare_setup(opt);
-  if (!setup) return cli::kExitFailure;
+  std::optional<Setup> setup;
+  if (!opt.in_process && !(setup = prepare_setup(opt))) return cli::kExitFailure;
   std::vector<Job> jobs = make_jobs(opt);
   const int total = static_cast<int>(jobs.size()) * opt.count;
   print_plan(opt, total, inputs->standins.size());
 
-  const double wall = run_jobs(jobs, opt, *setup, total);
+  const double wall = opt.in_process ? run_jobs_in_process(jobs, opt, *inputs) : run_jobs(jobs, opt, *setup, total);
   int failures = 0;
   std::vector<report::Record> records = collect_records(jobs, failures);
-  if (opt.logs_dir.empty()) fs::remove_all(setup->work);
+  if (setup && opt.logs_dir.empty()) fs::remove_all(setup->work);
   std::cerr << kTool << ": " << records.size() << " grasp records in " << report::fmt(wall, 1) << " s"
             << (failures ? ", " + std::to_string(failures) + " run(s) failed" : "") << "\n";
 
   const json summaries = print_summaries(records, opt);
   const report::ExperimentRun run = experiment_run(argc, argv, opt, wall, inputs->standins, std::move(records));
   print_worst_objects(report::aggregate_json(run));
+  report::print_paper_correlation(report::paper_correlation_json(run, inputs->paper));
   if (!write_reports(run, summaries, *inputs, opt)) return cli::kExitFailure;
   return failures ? cli::kExitFailure : 0;
 }

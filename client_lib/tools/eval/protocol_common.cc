@@ -3,9 +3,13 @@
 #include "telegrasp/sim/standin_objects.h"
 
 #include <cmath>
+#include <fstream>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <set>
+#include <sstream>
+#include <stdexcept>
 
 namespace telegrasp::eval {
 namespace {
@@ -42,17 +46,29 @@ std::map<std::string, sim::ObjectModelPtr> protocol_models(const std::string& ob
   return models;
 }
 
-sim::OperatorSkill participant_skill(const std::string& group, std::uint64_t seed, int participant) {
-  sim::OperatorSkill s = sim::skill_profile(group);
+sim::OperatorSkill participant_skill(const std::string& group, std::uint64_t seed, int participant,
+                                     const std::vector<sim::OperatorSkill>* profiles) {
+  std::optional<sim::OperatorSkill> base;
+  if (profiles)
+    for (const sim::OperatorSkill& p : *profiles)
+      if (p.name == group) base = p;
+  if (!base) base = sim::skill_profile(group);
   auto rng = generator(seed, 1, participant);
   const double speed = std::exp(std::normal_distribution<double>(0.0, 0.15)(rng));
   const double precision = std::exp(std::normal_distribution<double>(0.0, 0.2)(rng));
-  s.reach_speed *= speed;
-  s.reaction_time /= speed;
-  s.squeeze_time /= speed;
-  s.position_error *= precision;
-  s.orientation_error *= precision;
-  return s;
+  return base->scaled(speed, precision);
+}
+
+std::vector<sim::OperatorSkill> load_skill_file(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  if (!in) throw std::runtime_error(path + ": cannot read");
+  try {
+    return sim::parse_skill_profiles(text.str());
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(path + ": " + e.what());
+  }
 }
 
 Placement object_placement(std::uint64_t seed, int participant, int index) {

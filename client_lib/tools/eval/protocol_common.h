@@ -25,11 +25,18 @@ const std::vector<std::string>& paper_object_order();
 std::map<std::string, sim::ObjectModelPtr> protocol_models(const std::string& objects_dir,
                                                            std::vector<std::string>* standins);
 
-/// The operator model of one participant: the group's skill profile (sim::skill_profile), scaled
-/// by the person: a speed factor s ~ lognormal(0, 0.15) multiplies the reach speed and divides
-/// the reaction and squeeze times; a precision factor p ~ lognormal(0, 0.2) multiplies the pose
-/// errors. Drawn from (seed, participant), so a participant is the same person in every mode.
-sim::OperatorSkill participant_skill(const std::string& group, std::uint64_t seed, int participant);
+/// The operator model of one participant: the group's skill profile (the one named `group` in
+/// `profiles` if given and there, else sim::skill_profile), scaled by the person
+/// (OperatorSkill::scaled): a speed factor s ~ lognormal(0, 0.15) multiplies the reach speed and
+/// divides the reaction, squeeze and Fitts times; a precision factor p ~ lognormal(0, 0.2)
+/// multiplies the pose errors. Drawn from (seed, participant), so a participant is the same
+/// person in every mode.
+sim::OperatorSkill participant_skill(const std::string& group, std::uint64_t seed, int participant,
+                                     const std::vector<sim::OperatorSkill>* profiles = nullptr);
+
+/// The skill profiles of a --skills file (sim::parse_skill_profiles). Throws std::runtime_error
+/// naming the file when it cannot be read or parsed.
+std::vector<sim::OperatorSkill> load_skill_file(const std::string& path);
 
 /// Where object number `index` (0-based, protocol order) is spawned for `participant`: resting on
 /// the table at a uniform random (x, y) in the reach area (x 0.40..0.55 m, y -0.10..0.10 m in

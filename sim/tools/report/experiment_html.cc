@@ -3,6 +3,7 @@
 // tables, the paper's published numbers beside ours, and the questionnaire's scores.
 #include "experiment_aggregate.h"
 #include "grasp_svg.h"
+#include "paper_correlation.h"
 
 #include <algorithm>
 #include <cctype>
@@ -742,6 +743,7 @@ std::string html_report(const ExperimentRun& run, const std::vector<PaperRow>& p
   if (pictures) body += pictures_section(run, d, *pictures);
   body += mode_charts_section(d);
   body += paper_section(paper, d);
+  body += paper_correlation_html(paper_correlation_json(run, paper));
   if (questionnaire) body += questionnaire_section(*questionnaire);
   return page("telegrasp experiment report", body);
 }

@@ -16,19 +16,67 @@
 
 namespace telegrasp::sim {
 
-/// How well and how fast an operator moves.
+/// How well and how fast an operator moves. The time to reach a grasp follows Fitts's law (see
+/// fitts_time): the transport to the pre-grasp pose and the final approach are each
+/// `a + b log2(1 + D / W)` seconds, D the distance and W the target's tolerance; the final
+/// approach starts a stand-off away from the grasp that grows with the object's size (the open
+/// hand clears it) and takes aperture_time per m of size longer, so larger objects take longer. Practice shortens
+/// reaction and movements (see practice_factor). A pose error beyond correction_tolerance is corrected before
+/// squeezing. With fitts_slope = 0 the legs take 1.5 D / reach_speed instead (the "perfect" profile, a robot-like
+/// operator).
 struct OperatorSkill {
   std::string name;
   double position_error = 0;  ///< Std dev of the grasp position error per axis, m.
   double orientation_error = 0;  ///< Std dev of the grasp orientation error, rad.
-  double reach_speed = 0.5;  ///< Mean hand speed while reaching, m/s.
+  double reach_speed = 0.5;  ///< Mean hand speed of the lift (and of reaching when fitts_slope = 0), m/s.
   double reaction_time = 0.3;  ///< Delay after the object appears, s.
   double squeeze_time = 0.35;  ///< Trigger 0 -> 1, s.
+  double fitts_intercept = 0;  ///< Fitts's law a: time of a zero-difficulty movement, s.
+  double fitts_slope = 0;  ///< Fitts's law b: s per bit of difficulty; 0 = speed-based reach.
+  double transport_tolerance = 0.05;  ///< W of the transport to the pre-grasp pose, m.
+  double approach_tolerance = 0.02;  ///< W of the final approach to the grasp pose, m.
+  double approach_clearance = 0.10;  ///< Stand-off of the pre-grasp pose for a point-sized object, m.
+  double size_standoff = 0;  ///< Extra stand-off per m of the object's largest extent.
+  /// Opening the hand to the object's size and placing it around it: the final approach takes
+  /// this many s longer per m of the object's largest extent (grip aperture grows with size).
+  double aperture_time = 0;
+  double learning_gain = 0;  ///< Practice: the first grasp is (1 + gain) times slower than a practised one.
+  double learning_exponent = 0.5;  ///< Practice: power-law exponent of the slowdown's decay with grasps done.
+  /// Seeing the hand arrive off the planned pose, the operator corrects it (a corrective
+  /// submovement) until the grasp centre is within this distance of the plan's, taking
+  /// fitts_time(a, b, error, tolerance); 0 = no correction.
+  double correction_tolerance = 0;
+  /// Thin objects are approached more carefully: the correction tolerance is at most this
+  /// fraction of the object's smallest extent; 0 = no such bound.
+  double thin_tolerance_fraction = 0;
+
+  /// The skill of one person of a group: `speed` multiplies the reach speed and divides the
+  /// reaction, squeeze and Fitts times; `precision` multiplies the pose errors.
+  OperatorSkill scaled(double speed, double precision) const;
 };
 
 /// Built-in skill profiles: "perfect", "experienced", "inexperienced".
 /// Throws std::invalid_argument naming the unknown profile.
 OperatorSkill skill_profile(const std::string& name);
+
+/// Why `skill` is not usable (a negative or non-finite value, a zero speed, tolerance or squeeze
+/// time), or empty if it is.
+std::string validate_skill(const OperatorSkill& skill);
+
+/// Skill profiles from text: `[name]` starts a profile, which begins as the built-in profile of
+/// that name (or "experienced" for a new name); `key = value` lines set its fields (the names of
+/// OperatorSkill's members; angles in degrees as `orientation_error_deg`); `#` starts a comment.
+/// Throws std::invalid_argument naming the line on an unknown key, a bad number or a profile that
+/// fails validate_skill.
+std::vector<OperatorSkill> parse_skill_profiles(const std::string& text);
+
+/// Fitts's law, Shannon form: a + b log2(1 + distance / width), s. Width must be positive.
+double fitts_time(double a, double b, double distance, double width);
+
+/// How much slower than practised the operator is after `grasps_done` grasps of the session:
+/// 1 + learning_gain (1 + grasps_done)^-learning_exponent, normalised so that a fully practised
+/// operator is 1 (the power law of practice).
+double practice_factor(const OperatorSkill& skill, int grasps_done);
 
 /// Phases of one trial.
 enum class OperatorPhase { kReact, kReach, kSqueeze, kLift, kHold, kRelease, kDone };
@@ -100,9 +148,11 @@ class ScriptedOperator {
   ScriptedOperator(std::shared_ptr<const HandRig> rig, OperatorSkill skill, std::uint64_t seed,
                    GraspSettings settings = {}, double dt = 1.0 / 90.0);
 
-  /// Starts a trial at time `t0` for the object at X_WorldObject, the hand at X_WorldPalm.
+  /// Starts a trial at time `t0` for the object at X_WorldObject, the hand at X_WorldPalm, after
+  /// `grasps_done` grasps of the session (see practice_factor); without it, a practised operator
+  /// (factor 1: tools that do not run sessions, such as telegrasp-bot and telegrasp-eval run).
   void begin(const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject, const Eigen::Isometry3d& X_WorldPalm,
-             double t0);
+             double t0, std::optional<int> grasps_done = std::nullopt);
   /// The input for time `t`; `grasped` is whether the hand holds the trial's object now.
   ControllerInput next(double t, bool grasped);
 
@@ -120,6 +170,8 @@ class ScriptedOperator {
  private:
   void start_attempt(double t);
   Eigen::Isometry3d noisy(const Eigen::Isometry3d& X);
+  double leg_time(double distance, double width) const;
+  Eigen::Isometry3d reach_pose(double t) const;
 
   std::shared_ptr<const HandRig> rig_;
   OperatorSkill skill_;
@@ -128,11 +180,15 @@ class ScriptedOperator {
   std::mt19937_64 rng_;
   GraspPlan plan_;
   OperatorPhase phase_ = OperatorPhase::kDone;
-  // Waypoints of the current motion: from -> via -> to, with their times.
-  Eigen::Isometry3d X_start_, X_pre_, X_goal_, X_lifted_;
+  // Waypoints of the current motion: from -> via -> to -> corrected, with their times.
+  Eigen::Isometry3d X_start_, X_pre_, X_goal_, X_fixed_, X_lifted_;
   Eigen::Isometry3d X_last_ = Eigen::Isometry3d::Identity();
-  double t_phase_ = 0, t_via_ = 0, t_end_ = 0;
+  double t_phase_ = 0, t_via_ = 0, t_end_ = 0, t_fixed_ = 0;
   double trigger_ = 0;
+  double practice_ = 1;  // practice_factor of this trial
+  double standoff_ = 0.10;  // pre-grasp stand-off of this trial's object, m
+  double aperture_s_ = 0;  // extra final-approach time for this trial's object's size, s
+  double correction_tolerance_ = 0;  // correction tolerance for this trial's object, m
   int attempts_ = 0;
   bool held_after_lift_ = false;
 };
