@@ -254,9 +254,13 @@ Eigen::Isometry3d PoseResolver::resolve(const Eigen::Isometry3d& X_WorldResolved
   const Eigen::Matrix3d R_step = Eigen::AngleAxisd(turn.angle() / n, turn.axis()).toRotationMatrix();
   Eigen::Isometry3d X = X0;
   horizon_ = max_rate + settings_.tolerance;
-  if (!push_out(X)) {  // inside from the start and no way out: stay
+  if (!push_out(X)) {  // inside from the start and no way out
     last_valid_ = false;
-    return X0;
+    if (!has_previous) return X0;
+    // Start afresh at the tracked pose (pushed out if it can be): a hand left inside, such as one
+    // idle at the origin in the table before its first input, must not stay there for ever.
+    last_objects_.clear();
+    return resolve(X_WorldTracked, X_WorldTracked, X_WorldTracked, false, dt, volumes, objects, held);
   }
   for (int k = 1; k <= n; ++k) {
     const Eigen::Isometry3d before = X;
