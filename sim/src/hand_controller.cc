@@ -4,8 +4,6 @@
 #include "telegrasp/sim/grasp_rule.h"
 #include "telegrasp/sim/hand_kinematics.h"
 
-#include "palm_distance.h"
-
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -814,8 +812,14 @@ GraspMetrics HandController::measure(const ObjectView& object) const {
   }
   for (std::size_t f = 0; f < finger_sum.size(); ++f)
     if (finger_count[f] > 0) out.hand_error_mm += 1000.0 * finger_sum[f] / finger_count[f];
-  // The palm volume is the palm box, as the planners' "palm outside the object" checks use.
-  out.palm_signed_distance = box_signed_distance(model, X_ObjectPalm, rig_->palm_half_extent());
+  // The palm volume is the one the resolved pose keeps outside (pose_resolver.h palm_volumes: the
+  // palm box with rounded edges, as capsules): its exact signed distance is their lowest.
+  out.palm_signed_distance = kInf;
+  for (std::size_t v = 0; v < palm_volume_count_; ++v)
+    out.palm_signed_distance =
+        std::min(out.palm_signed_distance,
+                 model.distance.capsule_signed_distance(X_ObjectPalm * volumes_[v].p_PalmA,
+                                                        X_ObjectPalm * volumes_[v].p_PalmB, volumes_[v].radius));
   return out;
 }
 
