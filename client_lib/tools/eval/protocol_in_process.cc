@@ -80,6 +80,7 @@ class InProcessTrial {
       if (!e.metrics) continue;
       rec.hand_error_mm = rec.grasp_tick_hand_error_mm = e.metrics->hand_error_mm;
       rec.capsules = rec.grasp_tick_capsules = report::capsule_records(*e.metrics, *rig_);
+      rec.figures = rec.grasp_tick_figures = report::grasp_figures(*e.metrics);
     }
   }
 
