@@ -81,7 +81,23 @@ class InProcessTrial {
       rec.hand_error_mm = rec.grasp_tick_hand_error_mm = e.metrics->hand_error_mm;
       rec.capsules = rec.grasp_tick_capsules = report::capsule_records(*e.metrics, *rig_);
       rec.figures = rec.grasp_tick_figures = report::grasp_figures(*e.metrics);
+      for (const sim::Contact& c : e.contacts)
+        rec.contacts.push_back({c.phalanx.valid() ? rig_->phalanges()[c.phalanx.value].name : std::string("palm"),
+                                c.p_WorldContact, c.n_World, c.p_ObjectContact, c.n_Object});
+      record_grasp_tick_hand(e, rec);
     }
+  }
+
+  // The hand as the grasp tick left it (the event is of the step just taken), in the object frame,
+  // as the participant takes it from that tick's HandSkeleton.
+  void record_grasp_tick_hand(const sim::GraspEvent& e, report::Record& rec) {
+    const sim::HandState& s = world_.hand(hand_).state();
+    const Eigen::Isometry3d X_WorldObject = world_.object_pose(e.object);
+    const Eigen::Isometry3d X_ObjectWorld = X_WorldObject.inverse();
+    rec.grasp_tick_X_WorldObject = X_WorldObject;
+    rec.grasp_tick_hand.push_back({"palm", X_ObjectWorld * s.X_WorldPalm});
+    for (std::size_t i = 0; i < s.X_PalmPhalanx.size(); ++i)
+      rec.grasp_tick_hand.push_back({rig_->phalanges()[i].name, X_ObjectWorld * s.X_WorldPalm * s.X_PalmPhalanx[i]});
   }
 
   sim::World& world_;
