@@ -162,12 +162,6 @@ void PoseResolver::set_floors(const Eigen::Isometry3d& X_WorldPalm) {
       const std::size_t ov = o * volumes_.size() + v;
       const bool object = obstacles_[o].model != nullptr;
       if (volumes_[v].palm) continue;
-      if (object && obstacles_[o].id == finger_object_ && !settings_.fingers_may_rest_inside) {
-        // Soft: a finger outside now may be pushed in a little; one left inside is pushed out.
-        const bool outside = bound_[ov] >= -tol || gap(o, v, X_WorldPalm, tol).gap >= -tol;
-        floor_[ov] = outside ? -kSoftDepth : 0.0;
-        continue;
-      }
       if (object && !settings_.fingers_may_rest_inside) continue;
       floor_[ov] = std::min(0.0, gap(o, v, X_WorldPalm, tol).gap);
     }

@@ -53,12 +53,6 @@ class PoseResolver {
                             const Eigen::Isometry3d& X_WorldTracked, bool has_previous, double dt,
                             std::span<const HandVolume> volumes, std::span<const ObjectView> objects, ObjectId held);
 
-  /// The object the fingers keep themselves out of this tick (precise closing bends a finger the
-  /// hand pushed in back onto its surface), or an invalid id: against it a finger capsule outside
-  /// at the start of a tick may be pushed in by the hand up to kSoftDepth, not deeper.
-  void set_finger_object(ObjectId id) { finger_object_ = id; }
-  static constexpr double kSoftDepth = 3e-3;
-
   const ResolverSettings& settings() const { return settings_; }
 
  private:
@@ -87,7 +81,6 @@ class PoseResolver {
                  ObjectId held) const;
 
   ResolverSettings settings_;
-  ObjectId finger_object_;
   std::span<const HandVolume> volumes_;
   std::vector<Obstacle> obstacles_;
   // Per obstacle x volume: a lower bound on the gap (shrunk by every motion), the floor the gap
