@@ -58,22 +58,31 @@ try {
   // keep it if the object was still held just after; a bot holds for about a second, so retry.
   const shot = path.join(out, "view_page.png");
   let heldObject = null, hand = null, palmAt = null, objectAt = null;
-  for (let attempt = 0; attempt < 10 && !hand; ++attempt) {
+  for (let attempt = 0; attempt < 30 && !hand; ++attempt) {
     let held = null;
     if (!(await until(async () => {
       held = (await summary())?.objects.find((o) => o.held) ?? null;
       return held !== null;
     }, 60000, "an object held by a hand"))) break;
     await page.evaluate((key) => window.telegraspView.select(key), held.holder);
-    await sleep(400);
+    await sleep(200);
+    // The camera follows the hand and the bot keeps moving, so the points are read just before
+    // and just after the screenshot, and the pixels are looked for around both: the shot shows
+    // the scene at some moment between the two.
+    const points = () =>
+      page.evaluate(
+        ([key, id]) => [window.telegraspView.screenPoint(`${key}/palm`), window.telegraspView.screenPoint(`object/${id}`)],
+        [held.holder, held.id]);
+    const before = await points();
     await page.screenshot({ path: shot });
+    const after = await points();
     const s = await summary();
     const still = s.objects.find((o) => o.id === held.id && o.held && o.holder === held.holder);
     if (!still) continue;
     heldObject = still;
     hand = s.hands.find((h) => h.key === still.holder);
-    palmAt = await page.evaluate((key) => window.telegraspView.screenPoint(`${key}/palm`), hand.key);
-    objectAt = await page.evaluate((id) => window.telegraspView.screenPoint(`object/${id}`), still.id);
+    palmAt = before[0] && after[0] ? [before[0], after[0]] : null;
+    objectAt = before[1] && after[1] ? [before[1], after[1]] : null;
   }
   checks.check(hand !== null, `screenshot ${shot} taken while ${heldObject?.name} was held by ${heldObject?.holder}`);
   checks.check(palmAt && objectAt, `the palm and the held object project onto the page (${JSON.stringify(palmAt)}, ${JSON.stringify(objectAt)})`);
@@ -113,8 +122,8 @@ try {
     let distinct = new Set();
     for (let i = 0; i < data.length; i += 4 * 97) distinct.add(`${data[i] >> 3},${data[i + 1] >> 3},${data[i + 2] >> 3}`);
     return {
-      handPixels: count(palmAt, (p) => isSkin(p) || isRed(p)),
-      objectPixels: count(objectAt, isHolder),
+      handPixels: Math.max(...palmAt.map((at) => count(at, (p) => isSkin(p) || isRed(p)))),
+      objectPixels: Math.max(...objectAt.map((at) => count(at, isHolder))),
       distinctColours: distinct.size,
     };
   }, { png, palmAt, objectAt, handColour: hand.colour, radius: kRadius });
