@@ -3,7 +3,8 @@
 # whose path is printed), starts telegrasp-server in the background on a private DDS domain with
 # the loopback profile, and lets a bot with two hands grasp every object of the scene once over
 # DDS; prints the bot's per-object table, stops the server (SIGTERM), prints its log and where to
-# look next, and exits with the bot's status (0: every trial done; 1 the build or the server failed).
+# look next, and exits with the bot's status (0: every trial done, held or not, as the table shows;
+# 1 the build or the server failed; 130 interrupted).
 # telegrasp-view runs beside them: open the URL it prints (http://localhost:8765/) to watch the
 # grasps in the browser, or connect Foxglove / Lichtblick to ws://localhost:8765.
 #
@@ -104,6 +105,10 @@ if [ "$finished" = "$server_pid" ]; then
 fi
 bot_pid=""
 echo "run-demo: bot finished with status $status in $((SECONDS - start)) s" >&2
+if [ "$status" = 3 ]; then  # every trial done, some object not held: the table above says which
+  echo "run-demo: every trial done; not every object was held (see the table and the bot's last line)" >&2
+  status=0
+fi
 if [ "$view_seconds" -gt 0 ] && kill -0 "$view_pid" 2>/dev/null; then
   echo "run-demo: the view stays up for $view_seconds s at http://localhost:8765/" >&2
   sleep "$view_seconds"
