@@ -18,7 +18,7 @@ class ServerConfig;
 struct SceneObjectSpec {
   std::string model;
   double x = 0, y = 0, yaw = 0;
-  std::optional<double> friction;  ///< Coulomb mu of hand contacts on it (grasp quality); unset: the rig's.
+  std::optional<double> friction{};  ///< Coulomb mu of hand contacts on it (grasp quality); unset: the rig's.
 };
 
 /// Everything the server needs to start; defaults are the built-in demo scene on loopback.

@@ -892,6 +892,24 @@ TEST(MeshDistance, SegmentsAlongAFineIcosphereMatchBruteForceAndTheSphere) {
   }
 }
 
+// Sweeps a sphere of radius r from o along dir for at most max_length and checks it against
+// brute force: the swept centre path stays farther than r from every triangle before the hit
+// (checked coarsely) and is exactly r away at it; a miss stays clear to the end. True on a hit.
+bool expect_first_contact(const TriangleMesh& mesh, const MeshDistance& md, const Vector3d& o, const Vector3d& dir,
+                          double r, double max_length) {
+  const SweepHit h = md.sphere_cast(o, dir, r, max_length);
+  const double t_end = h.hit ? h.t : max_length;
+  for (int k = 0; k < 20; ++k) {
+    const double t = t_end * k / 20.0;
+    EXPECT_GT(brute_point_distance(mesh, o + t * dir), r - 1e-12) << "t=" << t;
+  }
+  if (h.hit)
+    EXPECT_NEAR(brute_point_distance(mesh, o + h.t * dir), r, 1e-12);
+  else
+    EXPECT_GT(brute_point_distance(mesh, o + max_length * dir), r);
+  return h.hit;
+}
+
 TEST_F(IcosphereBruteForce, SphereCastIsFirstContact) {
   std::uniform_real_distribution<double> rad(0.001, 0.01);
   int hits = 0;
@@ -899,20 +917,8 @@ TEST_F(IcosphereBruteForce, SphereCastIsFirstContact) {
     const Vector3d o = (kRadius + 0.02 + 0.02 * (i % 7) / 7.0) * random_unit(rng_);
     const Vector3d dir = (0.03 * random_unit(rng_) - o).normalized();
     const double r = rad(rng_);
-    const SweepHit h = md_.sphere_cast(o, dir, r, 0.2);
-    // The swept centre path stays farther than r from every triangle before t (checked coarsely),
-    // and is exactly r away at t.
-    const double t_end = h.hit ? h.t : 0.2;
-    for (int k = 0; k < 20; ++k) {
-      const double t = t_end * k / 20.0;
-      EXPECT_GT(brute_point_distance(mesh_, o + t * dir), r - 1e-12) << i << " t=" << t;
-    }
-    if (h.hit) {
-      ++hits;
-      EXPECT_NEAR(brute_point_distance(mesh_, o + h.t * dir), r, 1e-12) << i;
-    } else {
-      EXPECT_GT(brute_point_distance(mesh_, o + 0.2 * dir), r);
-    }
+    SCOPED_TRACE(i);
+    hits += expect_first_contact(mesh_, md_, o, dir, r, 0.2);
   }
   EXPECT_GT(hits, 50);
 }
@@ -950,7 +956,9 @@ TEST_F(TiltedThinPlateBruteForce, ClosestPointMatchesBruteForce) {
     ASSERT_TRUE(q.found);
     const double expected = brute_point_distance(mesh_, p);
     ASSERT_NEAR(q.distance, expected, 1e-12) << i;
-    if (outside_ellipsoid(p)) EXPECT_GT(q.signed_distance, 0.0) << i;
+    if (outside_ellipsoid(p)) {
+      EXPECT_GT(q.signed_distance, 0.0) << i;
+    }
     // Bounded searches find it exactly when it lies within the bound, and nothing beyond.
     EXPECT_TRUE(md_.closest_point(p, expected * (1 + 1e-9) + 1e-12).found) << i;
     EXPECT_FALSE(md_.closest_point(p, expected * (1 - 1e-9) - 1e-12).found) << i;
@@ -1002,18 +1010,8 @@ TEST_F(TiltedThinPlateBruteForce, SphereCastIsFirstContact) {
     const Vector3d dir = random_unit(rng_);
     const double r = rad(rng_);
     if (brute_point_distance(mesh_, o) <= r) continue;  // touching at the start: not a sweep
-    const SweepHit h = md_.sphere_cast(o, dir, r, 0.1);
-    const double t_end = h.hit ? h.t : 0.1;
-    for (int k = 0; k < 20; ++k) {
-      const double t = t_end * k / 20.0;
-      EXPECT_GT(brute_point_distance(mesh_, o + t * dir), r - 1e-12) << i << " t=" << t;
-    }
-    if (h.hit) {
-      ++hits;
-      EXPECT_NEAR(brute_point_distance(mesh_, o + h.t * dir), r, 1e-12) << i;
-    } else {
-      EXPECT_GT(brute_point_distance(mesh_, o + 0.1 * dir), r);
-    }
+    SCOPED_TRACE(i);
+    hits += expect_first_contact(mesh_, md_, o, dir, r, 0.1);
   }
   EXPECT_GT(hits, 20);
 }

@@ -6,6 +6,7 @@
 #include "telegrasp/sim/hand_controller.h"
 #include "telegrasp/sim/world.h"
 #include "test_meshes.h"
+#include "test_rigs.h"
 
 #include <gtest/gtest.h>
 
@@ -167,31 +168,10 @@ TEST(PoseResolverTest, FastSweepDoesNotTunnelThroughAThinPlate) {
   }
 }
 
-// The finger rig of hand_controller_test grasping a bar under its fingers, then pushed down:
+// The finger rig (test_rigs.h) grasping a bar under its fingers, then pushed down:
 // the held bar is part of the hand, so the resolved pose follows the controller exactly.
 TEST(PoseResolverTest, HeldObjectIsNotTestedAgainstItself) {
-  auto rig = std::make_shared<const HandRig>(HandRig::parse(R"(
-name: "finger3"
-palm_selection_sphere { center { x: 0.07 } radius: 0.2 }
-palm_contact_volume { radius: 0.005 }
-palm_half_extent { x: 0.04 y: 0.04 z: 0.01 }
-default_max_speed_deg_s: 180
-nd_sweep_radius: 0.001
-nd_sweep_beyond: 0.01
-fingers {
-  name: "f"
-  phalanges { name: "f_prox" rest { translation { x: 0.04 } }
-    joint { axis { y: 1 } open_deg: 0 closed_deg: 90 min_deg: 0 max_deg: 90 } length: 0.03 }
-  phalanges { name: "f_mid" rest { translation { x: 0.03 } }
-    joint { axis { y: 1 } open_deg: 0 closed_deg: 90 min_deg: 0 max_deg: 90 } length: 0.025
-    capsule { a { } b { x: 0.025 } radius: 0.005 ctc { x: 0.0125 z: -0.005 } sp { x: 0.0125 } } }
-  phalanges { name: "f_dist" rest { translation { x: 0.025 } }
-    joint { axis { y: 1 } open_deg: 0 closed_deg: 70 min_deg: 0 max_deg: 70 } length: 0.02
-    capsule { a { } b { x: 0.015 } radius: 0.005 ctc { x: 0.0075 z: -0.005 } sp { x: 0.0075 } } }
-}
-grasp_rule { members: ["f_mid", "f_dist"] }
-)",
-                                                            "finger3"));
+  auto rig = std::make_shared<const HandRig>(HandRig::parse(testing::kFingerRig, "finger3"));
   Box bar({0.0065, 0.05, 0.045}, {0.0815, 0, -0.055});
   HandController hand(rig, {});
   bool grasped = false;

@@ -551,6 +551,17 @@ std::string pictures_section(const ExperimentRun& run, const PageData& d, const 
   return o.str();
 }
 
+// Calls fn(mode, group, aggregate) for every mode and group of the page that has records, in
+// the page's order: one table row each.
+template <typename Fn>
+void for_each_mode_and_group(const ExperimentRun& run, const PageData& d, Fn fn) {
+  for (const std::string& mode : d.modes)
+    for (const std::string& group : d.groups) {
+      const auto records = select(run, mode, group, "");
+      if (!records.empty()) fn(mode, group, aggregate(records));
+    }
+}
+
 // Overall per mode and group: the discrete-vs-precise comparison at a glance, then the worst
 // objects and how our numbers compare with the paper's.
 std::string overall_section(const ExperimentRun& run, const PageData& d) {
@@ -558,15 +569,11 @@ std::string overall_section(const ExperimentRun& run, const PageData& d) {
   body << "<h2>Overall per mode and group</h2>\n<table class=\"numbers\"><tr><th>mode</th><th>group</th><th>trials</th>"
           "<th>grasped</th><th>held after lift</th><th>time to grasp (s)</th><th>mean |ND| at mid-length (mm)</th>"
           "<th>HandError (mm)</th></tr>\n";
-  for (const std::string& mode : d.modes)
-    for (const std::string& group : d.groups) {
-      const auto records = select(run, mode, group, "");
-      if (records.empty()) continue;
-      const Aggregate a = aggregate(records);
-      body << "<tr><td>" << esc(mode_name(mode)) << "</td><td>" << esc(group) << "</td><td>" << a.n << "</td><td>"
-           << a.grasped << "</td><td>" << a.held << "</td><td>" << mean_sd(a.time) << "</td><td>" << mean_sd(a.nd, 3)
-           << "</td><td>" << mean_sd(a.hand_error) << "</td></tr>\n";
-    }
+  for_each_mode_and_group(run, d, [&](const std::string& mode, const std::string& group, const Aggregate& a) {
+    body << "<tr><td>" << esc(mode_name(mode)) << "</td><td>" << esc(group) << "</td><td>" << a.n << "</td><td>"
+         << a.grasped << "</td><td>" << a.held << "</td><td>" << mean_sd(a.time) << "</td><td>" << mean_sd(a.nd, 3)
+         << "</td><td>" << mean_sd(a.hand_error) << "</td></tr>\n";
+  });
   body << "</table>\n";
   return body.str() + mode_times_section(run, d) + worst_objects_paragraph(run) + unit_caveat(run);
 }
@@ -577,23 +584,20 @@ std::string fidelity_section(const ExperimentRun& run, const PageData& d) {
   std::ostringstream body;
   body << "<h2 id=\"fidelity\">Fidelity: ND at the contact and exact signed distances</h2>\n<p>At the grasp tick, "
           "over the blocked capsules: <code>nd_contact</code> (the paper's sweep taken toward the point of the "
-          "capsule's axis nearest its contact) and the exact capsule-to-object signed distance; and the palm box's "
+          "capsule's axis nearest its contact) and the exact capsule-to-object signed distance; and the palm's "
           "exact signed distance. The paper comparison below uses <code>nd_midlength</code>; the fidelity targets "
           "(|nd_contact| median &le; 0.05 mm, p95 &le; 0.1 mm, nothing below -0.1 mm) are set on these.</p>\n"
           "<table class=\"numbers\"><tr><th>mode</th><th>group</th><th>blocked capsules</th><th>without "
           "nd_contact</th><th>|nd_contact| median (mm)</th><th>|nd_contact| p95 (mm)</th><th>min signed distance "
           "(mm)</th><th>capsules &lt; -0.1 mm</th><th>palm min signed distance (mm)</th><th>palms &lt; -0.1 "
           "mm</th></tr>\n";
-  for (const std::string& mode : d.modes)
-    for (const std::string& group : d.groups) {
-      const auto records = select(run, mode, group, "");
-      if (records.empty()) continue;
-      const Fidelity f = aggregate(records).fidelity;
-      body << "<tr><td>" << esc(mode_name(mode)) << "</td><td>" << esc(group) << "</td><td>" << f.blocked << "</td><td>"
-           << f.blocked_without_contact << "</td><td>" << fmt(percentile(f.nd_contact_abs, 0.5), 3) << "</td><td>"
-           << fmt(percentile(f.nd_contact_abs, 0.95), 3) << "</td><td>" << fmt(f.min_signed_distance, 3) << "</td><td>"
-           << f.blocked_below << "</td><td>" << fmt(f.palm_min, 3) << "</td><td>" << f.palm_below << "</td></tr>\n";
-    }
+  for_each_mode_and_group(run, d, [&](const std::string& mode, const std::string& group, const Aggregate& a) {
+    const Fidelity& f = a.fidelity;
+    body << "<tr><td>" << esc(mode_name(mode)) << "</td><td>" << esc(group) << "</td><td>" << f.blocked << "</td><td>"
+         << f.blocked_without_contact << "</td><td>" << fmt(percentile(f.nd_contact_abs, 0.5), 3) << "</td><td>"
+         << fmt(percentile(f.nd_contact_abs, 0.95), 3) << "</td><td>" << fmt(f.min_signed_distance, 3) << "</td><td>"
+         << f.blocked_below << "</td><td>" << fmt(f.palm_min, 3) << "</td><td>" << f.palm_below << "</td></tr>\n";
+  });
   body << "</table>\n";
   return body.str();
 }
