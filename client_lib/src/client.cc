@@ -101,6 +101,7 @@ struct Client::Impl {
   void received(const msg::SceneState& m, const dds::InstanceHandle_t& instance);
   void received(const msg::ServerStatus& m, const dds::InstanceHandle_t& instance);
   void received(const msg::ObjectGeometry& m, const dds::InstanceHandle_t& instance);
+  void received(const msg::ClientNotice& m, const dds::InstanceHandle_t& instance);
   // The (checked) geometry `m` describes, built from a cached one with the same content hash: the
   // very same object if nothing differs, else a new one with a copy of its mesh; null if none is cached.
   std::shared_ptr<const ObjectGeometry> cached_geometry(const msg::ObjectGeometry& m);
@@ -139,6 +140,7 @@ struct Client::Impl {
   PerHand<ContactSet> contact_sets;
   std::optional<SceneState> scene;
   std::optional<ServerStatus> status;
+  std::optional<Notice> notice;  // the newest of this client
   std::vector<GraspEvent> events;  // for take_grasp_events
   std::map<std::string, std::shared_ptr<const ObjectGeometry>> geometries;  // newest per model
   std::multimap<std::uint64_t, std::weak_ptr<const ObjectGeometry>> geometry_by_hash;  // cache of those in use
@@ -152,6 +154,7 @@ struct Client::Impl {
   Channel<SceneState> scene_state_channel;
   Channel<ServerStatus> server_status_channel;
   Channel<std::shared_ptr<const ObjectGeometry>> geometry_channel;
+  Channel<Notice> notice_channel;
   std::vector<GraspEvent> unseen_events;  // arrived while no event callback was set; under its channel's mutex
   std::atomic<bool> callback_threw{false};
 
@@ -205,6 +208,7 @@ Client::Impl::Impl(ClientOptions options_in) : options(std::move(options_in)) {
     if (options.topics & kSceneStates) reader<msg::SceneStatePubSubType>(idl::kSceneStateTopic);
     if (options.topics & kServerStatuses) reader<msg::ServerStatusPubSubType>(idl::kServerStatusTopic);
     if (options.topics & kObjectGeometries) reader<msg::ObjectGeometryPubSubType>(idl::kObjectGeometryTopic);
+    if (options.topics & kNotices) reader<msg::ClientNoticePubSubType>(idl::kClientNoticeTopic);
   } catch (...) {
     close();
     throw;
@@ -391,6 +395,17 @@ void Client::Impl::received(const msg::ObjectGeometry& m, const dds::InstanceHan
   call(geometry_channel, g, "ObjectGeometry");
 }
 
+void Client::Impl::received(const msg::ClientNotice& m, const dds::InstanceHandle_t&) {
+  if (m.client_id().to_string() != options.client_id) return;  // another client's
+  const Notice n = from_msg(m);
+  std::lock_guard delivery(notice_channel.mutex);
+  {
+    std::lock_guard lock(data_mutex);
+    notice = n;
+  }
+  call(notice_channel, n, "Notice");
+}
+
 Client::Client(ClientOptions options) : impl_(std::make_unique<Impl>(std::move(options))) {}
 
 Client::~Client() = default;
@@ -491,6 +506,11 @@ void Client::on_server_status(std::function<void(const ServerStatus&)> callback)
       "ServerStatus");
 }
 
+void Client::on_notice(std::function<void(const Notice&)> callback) {
+  impl_->set_callback(
+      impl_->notice_channel, std::move(callback), [&] { return optional_as_vector(last_notice()); }, "Notice");
+}
+
 void Client::on_object_geometry(std::function<void(const std::shared_ptr<const ObjectGeometry>&)> callback) {
   impl_->set_callback(
       impl_->geometry_channel, std::move(callback),
@@ -516,6 +536,11 @@ std::map<std::string, std::shared_ptr<const ObjectGeometry>> Client::object_geom
 std::optional<SceneState> Client::latest_scene_state() const {
   std::lock_guard lock(impl_->data_mutex);
   return impl_->scene;
+}
+
+std::optional<Notice> Client::last_notice() const {
+  std::lock_guard lock(impl_->data_mutex);
+  return impl_->notice;
 }
 
 std::optional<ServerStatus> Client::latest_server_status() const {

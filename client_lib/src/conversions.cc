@@ -408,6 +408,13 @@ msg::ServerStatus to_msg(const client::ServerStatus& s) {
   m.commands_accepted(s.commands_accepted);
   m.commands_rejected(s.commands_rejected);
   for (const std::string& model : s.models) m.models().emplace_back(model);
+  for (const auto& [reason, count] : s.commands_rejected_by_reason) {
+    msg::RejectCount r;
+    r.reason(reason);
+    r.count(count);
+    m.commands_rejected_by_reason().push_back(r);
+  }
+  m.notices_sent(s.notices_sent);
   return m;
 }
 
@@ -430,7 +437,22 @@ client::ServerStatus from_msg(const msg::ServerStatus& m) {
   s.commands_rejected = m.commands_rejected();
   s.models.reserve(m.models().size());
   for (const auto& model : m.models()) s.models.push_back(model.to_string());
+  for (const msg::RejectCount& r : m.commands_rejected_by_reason())
+    s.commands_rejected_by_reason[r.reason().to_string()] += r.count();
+  s.notices_sent = m.notices_sent();
   return s;
+}
+
+client::Notice from_msg(const msg::ClientNotice& m) {
+  client::Notice n;
+  n.kind = m.kind() == msg::NOTICE_COMMAND_REJECTED ? client::Notice::Kind::kCommandRejected
+                                                    : client::Notice::Kind::kInputRejected;
+  n.reason = m.reason().to_string();
+  n.detail = m.detail().to_string();
+  n.command_id = m.command_id();
+  n.count = m.count();
+  n.time = m.time();
+  return n;
 }
 
 msg::ObjectGeometry to_msg(const client::ObjectGeometry& g) {

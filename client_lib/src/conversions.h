@@ -95,6 +95,8 @@ client::SceneCommand from_msg(const msg::SceneCommand& command);
 msg::ServerStatus to_msg(const client::ServerStatus& status);
 /// An IDL server status as the client type.
 client::ServerStatus from_msg(const msg::ServerStatus& status);
+/// A refusal notice as the client type.
+client::Notice from_msg(const msg::ClientNotice& notice);
 
 /// An object geometry as the IDL message (vertices and triangles flattened, every field as given).
 msg::ObjectGeometry to_msg(const client::ObjectGeometry& geometry);

@@ -6,8 +6,13 @@
 
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
+
+#include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <deque>
 #include <iostream>
 #include <mutex>
 #include <utility>
@@ -23,6 +28,26 @@ std::int64_t steady_now_ns() {
       .count();
 }
 
+ParticipantKey key_of(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix) {
+  ParticipantKey key;
+  std::memcpy(key.data(), prefix.value, key.size());
+  return key;
+}
+
+// A participant that leaves (or whose lease runs out) frees the client ids it owned.
+class ParticipantListener : public dds::DomainParticipantListener {
+ public:
+  explicit ParticipantListener(InputMailbox& mailbox) : mailbox_(mailbox) {}
+  void on_participant_discovery(dds::DomainParticipant*, eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
+    using Status = eprosima::fastrtps::rtps::ParticipantDiscoveryInfo::DISCOVERY_STATUS;
+    if (info.status == Status::REMOVED_PARTICIPANT || info.status == Status::DROPPED_PARTICIPANT)
+      mailbox_.forget_participant(key_of(info.info.m_guid.guidPrefix));
+  }
+
+ private:
+  InputMailbox& mailbox_;
+};
+
 // Controller states go straight to the mailbox, with the writing participant's GUID prefix.
 class ControllerStateListener : public dds::DataReaderListener {
  public:
@@ -31,9 +56,7 @@ class ControllerStateListener : public dds::DataReaderListener {
     dds::SampleInfo info;
     while (reader->take_next_sample(&sample_, &info) == ReturnCode_t::RETCODE_OK) {
       if (!info.valid_data) continue;  // instance state changes, not samples
-      ParticipantKey writer;
-      std::memcpy(writer.data(), info.sample_identity.writer_guid().guidPrefix.value, writer.size());
-      mailbox_.offer(sample_, writer, steady_now_ns());
+      mailbox_.offer(sample_, key_of(info.sample_identity.writer_guid().guidPrefix), steady_now_ns());
     }
   }
 
@@ -42,6 +65,7 @@ class ControllerStateListener : public dds::DataReaderListener {
   msg::ControllerState sample_;  // reused: one listener thread per reader
 };
 
+// Commands are admitted (owner of the client id, rate) before they are queued for the scene.
 class SceneCommandListener : public dds::DataReaderListener {
  public:
   explicit SceneCommandListener(InputMailbox& mailbox) : mailbox_(mailbox) {}
@@ -51,6 +75,8 @@ class SceneCommandListener : public dds::DataReaderListener {
     bool any = false;
     while (reader->take_next_sample(&c, &info) == ReturnCode_t::RETCODE_OK) {
       if (!info.valid_data) continue;
+      if (!mailbox_.admit_command(c, key_of(info.sample_identity.writer_guid().guidPrefix), steady_now_ns()).empty())
+        continue;
       std::lock_guard lock(mutex);
       queue.push_back(c);
       any = true;
@@ -69,13 +95,19 @@ class SceneCommandListener : public dds::DataReaderListener {
 // Members in destruction order: the participant (and its readers) goes before the listeners.
 struct DdsNode::Impl {
   Impl(int domain, const std::string& profile, const std::string& profiles_file, InputMailbox& mailbox)
-      : input_listener(mailbox), command_listener(mailbox), participant(domain, profile, profiles_file) {}
+      : input_listener(mailbox),
+        command_listener(mailbox),
+        participant_listener(mailbox),
+        participant(domain, profile, profiles_file) {}
 
   ControllerStateListener input_listener;
   SceneCommandListener command_listener;
+  ParticipantListener participant_listener;
   idl::DdsParticipant participant;
   dds::DataWriter *skeleton = nullptr, *grasp_state = nullptr, *contacts = nullptr, *events = nullptr, *scene = nullptr,
-                  *status = nullptr, *geometry = nullptr;
+                  *status = nullptr, *geometry = nullptr, *notices = nullptr;
+  std::mutex notice_mutex;
+  std::deque<std::string> notice_clients;  // clients with a notice instance, oldest first
 };
 
 DdsNode::DdsNode(int domain, const std::string& profile, const std::string& profiles_file, InputMailbox& mailbox)
@@ -89,6 +121,8 @@ DdsNode::DdsNode(int domain, const std::string& profile, const std::string& prof
   d.scene = p.writer<msg::SceneStatePubSubType>(idl::kSceneStateTopic);
   d.status = p.writer<msg::ServerStatusPubSubType>(idl::kServerStatusTopic);
   d.geometry = p.writer<msg::ObjectGeometryPubSubType>(idl::kObjectGeometryTopic);
+  d.notices = p.writer<msg::ClientNoticePubSubType>(idl::kClientNoticeTopic);
+  p.get()->set_listener(&d.participant_listener, dds::StatusMask::none());  // discovery callbacks only
   p.reader<msg::ControllerStatePubSubType>(idl::kControllerStateTopic, &d.input_listener);
   p.reader<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic, &d.command_listener);
 }
@@ -120,6 +154,22 @@ void DdsNode::publish(const msg::ServerStatus& m) { impl_->status->write(const_c
 void DdsNode::publish(const msg::GraspEvent& m) {
   if (!impl_->events->write(const_cast<msg::GraspEvent*>(&m)))
     std::cerr << "telegrasp-server: could not publish grasp event " << m.event_id() << "\n";
+}
+
+void DdsNode::publish(const msg::ClientNotice& m) {
+  Impl& d = *impl_;
+  std::lock_guard lock(d.notice_mutex);
+  const std::string client = m.client_id().to_string();
+  if (auto it = std::find(d.notice_clients.begin(), d.notice_clients.end(), client); it != d.notice_clients.end())
+    d.notice_clients.erase(it);
+  d.notice_clients.push_back(client);
+  if (d.notice_clients.size() > kMaxNoticeInstances) {
+    msg::ClientNotice oldest;
+    oldest.client_id(d.notice_clients.front());
+    d.notices->unregister_instance(&oldest, dds::HANDLE_NIL);
+    d.notice_clients.pop_front();
+  }
+  d.notices->write(const_cast<msg::ClientNotice*>(&m));
 }
 
 void DdsNode::hand_removed(const HandAddress& hand) {

@@ -1,5 +1,6 @@
 // DdsNode: the one owner of the server's Fast DDS entities. Its listeners only hand samples to
-// the InputMailbox (controller states) or a command queue; publishing is an OutputSink.
+// the InputMailbox (controller states) or a command queue (after InputMailbox::admit_command), and
+// tell it when a participant leaves; publishing is an OutputSink.
 #pragma once
 
 #include "input_mailbox.h"
@@ -36,9 +37,13 @@ class DdsNode final : public OutputSink {
   void publish(const msg::GraspEvent& event) override;
   void publish(const msg::SceneState& scene) override;
   void publish(const msg::ServerStatus& status) override;
+  /// Thread-safe (input refusals come from DDS listener threads). One instance per client; beyond
+  /// kMaxNoticeInstances the oldest client's instance is unregistered.
+  void publish(const msg::ClientNotice& notice) override;
   void hand_removed(const HandAddress& hand) override;
 
  private:
+  static constexpr std::size_t kMaxNoticeInstances = 512;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

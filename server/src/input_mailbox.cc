@@ -1,46 +1,176 @@
 #include "input_mailbox.h"
 
+#include <algorithm>
 #include <iostream>
 
 namespace telegrasp::server {
 
+RateLimiter::RateLimiter(double rate_hz) : rate_(rate_hz), burst_(std::max(10.0, rate_hz / 10)), tokens_(burst_) {}
+
+bool RateLimiter::take(std::int64_t now_ns) {
+  if (rate_ <= 0) return true;  // unlimited
+  if (started_ && now_ns > last_ns_) tokens_ = std::min(burst_, tokens_ + rate_ * (now_ns - last_ns_) * 1e-9);
+  if (!started_ || now_ns > last_ns_) last_ns_ = now_ns;
+  started_ = true;
+  if (tokens_ < 1) return false;
+  tokens_ -= 1;
+  return true;
+}
+
+msg::ClientNotice make_client_notice(const Refusal& r) {
+  msg::ClientNotice n;
+  n.client_id(r.client_id.substr(0, 64));
+  n.kind(r.kind);
+  n.reason(r.reason);
+  n.detail(r.detail.substr(0, 256));
+  n.command_id(r.command_id);
+  n.count(r.count);
+  return n;
+}
+
 InputMailbox::InputMailbox(std::array<std::size_t, 2> fingers, int max_hands,
                            std::function<void(const std::string&)> log)
-    : fingers_(fingers), max_hands_(max_hands), log_(std::move(log)) {
+    : InputMailbox(fingers, InputLimits{max_hands}, std::move(log)) {}
+
+InputMailbox::InputMailbox(std::array<std::size_t, 2> fingers, const InputLimits& limits,
+                           std::function<void(const std::string&)> log)
+    : fingers_(fingers), limits_(limits), log_(std::move(log)) {
   if (!log_) log_ = [](const std::string& line) { std::cerr << line << std::endl; };
 }
 
-bool InputMailbox::reject(RejectReason reason, const std::string& client_id) {
+void InputMailbox::set_notifier(std::function<void(const Refusal&)> notifier) {
+  std::lock_guard lock(mutex_);
+  notify_ = std::move(notifier);
+}
+
+void InputMailbox::refuse(Refusal r, std::int64_t now_ns, bool every_time) {
+  const auto key = std::make_pair(r.client_id, r.reason);
+  auto count = refusal_counts_.find(key);
+  if (count == refusal_counts_.end()) {
+    if (refusal_counts_.size() >= kMaxLogged) {  // a flood of fresh ids: counted, not logged nor told
+      if (refusal_counts_.size() == kMaxLogged) {
+        log_("telegrasp-server: more than " + std::to_string(kMaxLogged) +
+             " clients refused: further ones are only counted in ServerStatus");
+        refusal_counts_[{"", ""}] = 0;  // says it once
+      }
+      return;
+    }
+    count = refusal_counts_.emplace(key, 0).first;
+    log_("telegrasp-server: refusing " +
+         std::string(r.kind == msg::NOTICE_INPUT_REJECTED ? "controller states" : "scene commands") +
+         " of client '" + r.client_id + "': " + r.reason + (r.detail.empty() ? "" : " (" + r.detail + ")") +
+         " (counted in ServerStatus; said once per client and reason, and told to the client)");
+  }
+  r.count = ++count->second;
+  auto last = refused_.find(key);
+  if (!every_time && last != refused_.end() && now_ns - last->second < 1'000'000'000) return;
+  refused_[key] = now_ns;
+  if (notify_) {
+    ++notices_;
+    notify_(r);
+  }
+}
+
+bool InputMailbox::reject(RejectReason reason, const std::string& client_id, std::int64_t now_ns) {
   ++rejected_[static_cast<int>(reason)];
-  if (logged_.emplace(client_id, reason).second)
-    log_("telegrasp-server: dropping controller states of client '" + client_id + "': " + std::string(name(reason)) +
-         " (counted in ServerStatus.rejected; said once per client and reason)");
+  std::string detail;
+  switch (reason) {
+    case RejectReason::kClientIdOwnedByAnotherParticipant:
+      detail = "another participant drives this client id: pick another";
+      break;
+    case RejectReason::kTooManyHands:
+      detail = "the scene has its " + std::to_string(limits_.max_hands) + " hands";
+      break;
+    case RejectReason::kTooManyHandsForParticipant:
+      detail = "a participant may drive at most " + std::to_string(limits_.max_hands_per_participant) + " hands";
+      break;
+    case RejectReason::kRateLimited:
+      detail = "more than " + std::to_string(static_cast<int>(limits_.max_input_rate_hz)) + " samples per second per hand";
+      break;
+    default:
+      break;
+  }
+  refuse({client_id, msg::NOTICE_INPUT_REJECTED, std::string(name(reason)), detail, 0, 0}, now_ns, false);
   return false;
+}
+
+bool InputMailbox::owned_by_other(const std::string& client_id, const ParticipantKey& writer) {
+  auto client = clients_.find(client_id);
+  if (client == clients_.end()) {
+    clients_.emplace(client_id, Client{writer, 0, RateLimiter(limits_.max_command_rate_hz)});
+    return false;
+  }
+  return client->second.owner != writer;
 }
 
 bool InputMailbox::offer(const msg::ControllerState& state, const ParticipantKey& writer, std::int64_t received_ns) {
   std::lock_guard lock(mutex_);
   const std::string client_id = state.client_id().to_string();
   RejectReason reason{};
-  if (!validate_controller_state(state, fingers_, reason)) return reject(reason, client_id);
+  if (!validate_controller_state(state, fingers_, reason)) return reject(reason, client_id, received_ns);
   const HandAddress hand{client_id, state.hand_side()};
-  auto client = clients_.find(client_id);
-  if (client != clients_.end() && client->second.owner != writer)
-    return reject(RejectReason::kClientIdOwnedByAnotherParticipant, client_id);
-  auto last = last_sequence_.find(hand);
-  if (last != last_sequence_.end()) {
-    if (state.sequence_number() <= last->second) return reject(RejectReason::kStaleSequence, client_id);
-    last->second = state.sequence_number();
+  auto known = hands_.find(hand);
+  if (known == hands_.end()) {  // a new hand: every check before anything is bound
+    auto client = clients_.find(client_id);
+    if (client != clients_.end() && client->second.owner != writer)
+      return reject(RejectReason::kClientIdOwnedByAnotherParticipant, client_id, received_ns);
+    if (static_cast<int>(hands_.size()) >= limits_.max_hands)
+      return reject(RejectReason::kTooManyHands, client_id, received_ns);
+    if (participant_hands_[writer] >= limits_.max_hands_per_participant)
+      return reject(RejectReason::kTooManyHandsForParticipant, client_id, received_ns);
+    owned_by_other(client_id, writer);  // binds the id if it was free
+    ++clients_.at(client_id).hands;
+    ++participant_hands_[writer];
+    known = hands_.emplace(hand, KnownHand{0, RateLimiter(limits_.max_input_rate_hz)}).first;
+    known->second.last_sequence = state.sequence_number();
   } else {
-    if (static_cast<int>(last_sequence_.size()) >= max_hands_) return reject(RejectReason::kTooManyHands, client_id);
-    last_sequence_.emplace(hand, state.sequence_number());
-    if (client == clients_.end()) client = clients_.emplace(client_id, Client{writer, 0}).first;
-    ++client->second.hands;
+    if (clients_.at(client_id).owner != writer)
+      return reject(RejectReason::kClientIdOwnedByAnotherParticipant, client_id, received_ns);
+    if (state.sequence_number() <= known->second.last_sequence)
+      return reject(RejectReason::kStaleSequence, client_id, received_ns);
+    known->second.last_sequence = state.sequence_number();
   }
+  if (!known->second.samples.take(received_ns)) return reject(RejectReason::kRateLimited, client_id, received_ns);
   ++accepted_;
   pending_[hand] = InputSample{hand, state, received_ns};
   cv_.notify_one();
   return true;
+}
+
+std::string InputMailbox::admit_command(const msg::SceneCommand& command, const ParticipantKey& writer,
+                                        std::int64_t now_ns) {
+  std::lock_guard lock(mutex_);
+  const std::string client_id = command.client_id().to_string();
+  std::string reason, detail;
+  if (client_id.empty()) {
+    reason = "empty_client_id";
+    detail = "a scene command needs the sender's client id";
+  } else if (owned_by_other(client_id, writer)) {
+    reason = "client_id_owned_by_another_participant";
+    detail = "another participant uses this client id";
+  } else if (!clients_.at(client_id).commands.take(now_ns)) {
+    reason = "rate_limited";
+    detail = "more than " + std::to_string(limits_.max_command_rate_hz) + " commands per second";
+  }
+  if (reason.empty()) return "";
+  ++commands_rejected_[reason];
+  refuse({client_id, msg::NOTICE_COMMAND_REJECTED, reason, detail, command.command_id(), 0}, now_ns,
+         reason != "rate_limited");
+  return reason;
+}
+
+void InputMailbox::forget_participant(const ParticipantKey& writer) {
+  std::lock_guard lock(mutex_);
+  for (auto client = clients_.begin(); client != clients_.end();) {
+    if (client->second.owner != writer) {
+      ++client;
+      continue;
+    }
+    for (auto hand = hands_.begin(); hand != hands_.end();)
+      hand = hand->first.client_id == client->first ? hands_.erase(hand) : std::next(hand);
+    client = clients_.erase(client);
+  }
+  participant_hands_.erase(writer);
 }
 
 bool InputMailbox::wait(std::chrono::steady_clock::time_point deadline) {
@@ -72,10 +202,13 @@ std::vector<InputSample> InputMailbox::drain() {
 
 void InputMailbox::forget_hand(const HandAddress& hand) {
   std::lock_guard lock(mutex_);
-  if (last_sequence_.erase(hand) == 0) return;
+  if (hands_.erase(hand) == 0) return;
   pending_.erase(hand);
   auto client = clients_.find(hand.client_id);
-  if (client != clients_.end() && --client->second.hands <= 0) clients_.erase(client);
+  if (client == clients_.end()) return;
+  if (auto p = participant_hands_.find(client->second.owner); p != participant_hands_.end() && --p->second <= 0)
+    participant_hands_.erase(p);
+  if (--client->second.hands <= 0) clients_.erase(client);
 }
 
 std::uint64_t InputMailbox::accepted() const {
@@ -86,6 +219,16 @@ std::uint64_t InputMailbox::accepted() const {
 std::array<std::uint64_t, static_cast<int>(RejectReason::kCount)> InputMailbox::rejected() const {
   std::lock_guard lock(mutex_);
   return rejected_;
+}
+
+std::map<std::string, std::uint64_t> InputMailbox::commands_rejected() const {
+  std::lock_guard lock(mutex_);
+  return commands_rejected_;
+}
+
+std::uint64_t InputMailbox::notices() const {
+  std::lock_guard lock(mutex_);
+  return notices_;
 }
 
 }  // namespace telegrasp::server

@@ -20,6 +20,40 @@ namespace telegrasp::server {
 /// The DDS participant that wrote a sample (its GUID prefix).
 using ParticipantKey = std::array<std::uint8_t, 12>;
 
+/// What one client or participant may send (ServerSettings has the configured values).
+struct InputLimits {
+  int max_hands = 256;                 ///< Hands in the scene, all clients together.
+  int max_hands_per_participant = 16;  ///< Hands one DDS participant may drive.
+  double max_input_rate_hz = 250;      ///< Samples per second per hand (bursts of a tenth of it, at least 10).
+  double max_command_rate_hz = 20;     ///< Scene commands per second per client (bursts likewise).
+};
+
+/// A token bucket: `rate` per second, at most `burst` at once.
+class RateLimiter {
+ public:
+  RateLimiter() = default;
+  explicit RateLimiter(double rate_hz);
+  /// Takes one token at steady time `now_ns`; false if there is none.
+  bool take(std::int64_t now_ns);
+
+ private:
+  double rate_ = 0, burst_ = 0, tokens_ = 0;
+  std::int64_t last_ns_ = 0;
+  bool started_ = false;
+};
+
+/// Why a client is refused, for the client itself (ClientNotice): `kind` is msg::NOTICE_*.
+struct Refusal {
+  std::string client_id;
+  std::uint8_t kind = 0;
+  std::string reason, detail;
+  std::uint64_t command_id = 0, count = 0;
+};
+
+/// The ClientNotice telling `refusal` to its client (time 0: refusals of inputs and of commands
+/// before the scene are taken off the simulation thread, which owns the scene time).
+msg::ClientNotice make_client_notice(const Refusal& refusal);
+
 /// An accepted controller state, as the simulation thread takes it.
 struct InputSample {
   HandAddress hand;
@@ -29,17 +63,36 @@ struct InputSample {
 
 /// Keeps the newest valid sample per hand until the simulation thread drains it. Every offered
 /// sample is validated on its own, then against its hand's history: a client id belongs to the
-/// first participant that drives it until all its hands are forgotten, and sequence numbers must
-/// grow. A dropped sample is counted per reason and logged once per client and reason.
-/// Thread-safe: offer() from any thread; the rest from the simulation thread.
+/// first participant that drives it (or sends a command as it) until all its hands are forgotten
+/// or the participant leaves, sequence numbers must grow, each hand gets at most
+/// max_input_rate_hz samples a second, each participant at most max_hands_per_participant hands.
+/// A dropped sample is counted per reason, logged once per client and reason, and told to the
+/// client (the notifier) at most once a second per reason. Scene commands pass admit_command()
+/// first: the same ownership, and max_command_rate_hz per client.
+/// Thread-safe: offer(), admit_command() and forget_participant() from any thread; the rest from
+/// the simulation thread.
 class InputMailbox {
  public:
   /// `fingers[side]`: finger count of the rig driving that side. `log`: where the one-time
   /// messages go (default stderr).
   InputMailbox(std::array<std::size_t, 2> fingers, int max_hands, std::function<void(const std::string&)> log = {});
+  InputMailbox(std::array<std::size_t, 2> fingers, const InputLimits& limits,
+               std::function<void(const std::string&)> log = {});
+
+  /// Where refusals go to be told to their client (ClientNotice); default: nowhere. Set before
+  /// samples arrive.
+  void set_notifier(std::function<void(const Refusal&)> notifier);
 
   /// Validates and stores `state` from participant `writer`; false if it was dropped.
   bool offer(const msg::ControllerState& state, const ParticipantKey& writer, std::int64_t received_ns);
+
+  /// Checks a scene command from participant `writer` at steady time `now_ns` before it is queued:
+  /// "" if admitted, else the reason (a key of ServerStatus.commands_rejected_by_reason), counted,
+  /// logged once per client and reason, and told to the client.
+  std::string admit_command(const msg::SceneCommand& command, const ParticipantKey& writer, std::int64_t now_ns);
+  /// The participant left the domain: the client ids it owned are free and its hands' histories
+  /// forgotten (the scene removes the hands themselves when they fall silent).
+  void forget_participant(const ParticipantKey& writer);
 
   /// Blocks until a sample is pending, wake() is called, or `deadline` passes. True if woken (a
   /// sample or wake()) before the deadline, false if the deadline came first.
@@ -55,26 +108,45 @@ class InputMailbox {
   std::uint64_t accepted() const;
   /// Drops per reason since construction.
   std::array<std::uint64_t, static_cast<int>(RejectReason::kCount)> rejected() const;
+  /// Commands refused by admit_command(), per reason, since construction.
+  std::map<std::string, std::uint64_t> commands_rejected() const;
+  /// Refusals handed to the notifier.
+  std::uint64_t notices() const;
 
  private:
-  bool reject(RejectReason reason, const std::string& client_id);
+  bool reject(RejectReason reason, const std::string& client_id, std::int64_t now_ns);
+  /// Logs once per client and reason (at most kMaxLogged pairs), tells the client at most once a
+  /// second per reason (always when `every_time`). Called with mutex_ held.
+  void refuse(Refusal refusal, std::int64_t now_ns, bool every_time);
+  /// The owner check shared by inputs and commands; binds a free client id to `writer`.
+  bool owned_by_other(const std::string& client_id, const ParticipantKey& writer);
 
   const std::array<std::size_t, 2> fingers_;
-  const int max_hands_;
+  const InputLimits limits_;
   std::function<void(const std::string&)> log_;
+  std::function<void(const Refusal&)> notify_;
   mutable std::mutex mutex_;
   std::condition_variable cv_;
   bool woken_ = false;
   struct Client {
     ParticipantKey owner{};
     int hands = 0;
+    RateLimiter commands;
   };
+  struct KnownHand {
+    std::uint64_t last_sequence = 0;
+    RateLimiter samples;
+  };
+  static constexpr std::size_t kMaxLogged = 4096;  // (client, reason) pairs remembered for logs and notices
   std::map<std::string, Client> clients_;
-  std::map<HandAddress, std::uint64_t> last_sequence_;  // known hands
+  std::map<ParticipantKey, int> participant_hands_;
+  std::map<HandAddress, KnownHand> hands_;
   std::map<HandAddress, InputSample> pending_;
-  std::set<std::pair<std::string, RejectReason>> logged_;
-  std::uint64_t accepted_ = 0;
+  std::map<std::pair<std::string, std::string>, std::int64_t> refused_;  // last notice time per (client, reason)
+  std::map<std::pair<std::string, std::string>, std::uint64_t> refusal_counts_;
+  std::uint64_t accepted_ = 0, notices_ = 0;
   std::array<std::uint64_t, static_cast<int>(RejectReason::kCount)> rejected_{};
+  std::map<std::string, std::uint64_t> commands_rejected_;
 };
 
 }  // namespace telegrasp::server

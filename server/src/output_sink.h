@@ -16,6 +16,8 @@ class OutputSink {
   virtual void publish(const msg::GraspEvent& event) = 0;
   virtual void publish(const msg::SceneState& scene) = 0;
   virtual void publish(const msg::ServerStatus& status) = 0;
+  /// Why a client's command or input was refused, for that client (default: nowhere).
+  virtual void publish(const msg::ClientNotice& notice) { (void)notice; }
   /// The hand left the scene: its per-hand instances are disposed.
   virtual void hand_removed(const HandAddress& hand) = 0;
 };

@@ -120,6 +120,8 @@ class Recorder : public OutputSink, public SceneCallObserver {
   void publish(const msg::GraspEvent& m) override;
   void publish(const msg::SceneState& m) override;
   void publish(const msg::ServerStatus& m) override;
+  /// Not recorded (a replay derives it from the recorded commands): forwarded.
+  void publish(const msg::ClientNotice& m) override { next_.publish(m); }
   void hand_removed(const HandAddress& hand) override;
 
   /// Records written so far.

@@ -81,9 +81,10 @@ void SceneServer::spawn_initial_scene() {
   }
 }
 
-sim::ObjectId SceneServer::spawn(const sim::ObjectModelPtr& model, const Eigen::Isometry3d& X_WorldObject) {
+sim::ObjectId SceneServer::spawn(const sim::ObjectModelPtr& model, const Eigen::Isometry3d& X_WorldObject,
+                                 const std::string& owner) {
   const sim::ObjectId id = world_->add_object(model, X_WorldObject);
-  objects_[id.value] = {model->name, world_->time(), X_WorldObject};
+  objects_[id.value] = {model->name, owner, world_->time(), X_WorldObject};
   return id;
 }
 
@@ -250,55 +251,134 @@ bool SceneServer::lockstep_ready() const {
   return any_live;
 }
 
+bool SceneServer::is_operator(const std::string& client_id) const {
+  return settings_.open_scene ||
+         std::find(settings_.operators.begin(), settings_.operators.end(), client_id) != settings_.operators.end();
+}
+
+std::optional<Eigen::Vector2d> SceneServer::free_spot(const sim::ObjectModel& model, double x, double y) const {
+  // Footprints as circles about the centre of mass: the new object's horizontal reach (its
+  // bounds turn with yaw), every other object's whole reach (it may lie in any orientation).
+  const Eigen::Vector3d reach = model.p_ObjectMin.cwiseAbs().cwiseMax(model.p_ObjectMax.cwiseAbs());
+  const double radius = std::hypot(reach.x(), reach.y()), gap = 0.005, lim = kTableHalfExtent - 0.05;
+  auto free = [&](const Eigen::Vector2d& p) {
+    if (std::abs(p.x()) > lim || std::abs(p.y()) > lim) return false;
+    for (sim::ObjectId id : world_->objects()) {
+      const Eigen::Vector3d at = world_->object_pose(id).translation();
+      if ((at.head<2>() - p).norm() < radius + world_->object_model(id).max_radius + gap) return false;
+    }
+    return true;
+  };
+  const Eigen::Vector2d want(x, y);
+  if (free(want)) return want;
+  constexpr double kStep = 0.01;  // rings 1 cm apart, points about 1 cm apart on each
+  for (double r = kStep; r <= kFreeSpotSearch + 1e-9; r += kStep) {
+    const int n = std::max(8, static_cast<int>(std::ceil(2 * M_PI * r / kStep)));
+    for (int i = 0; i < n; ++i) {
+      const double a = 2 * M_PI * i / n;
+      const Eigen::Vector2d p = want + r * Eigen::Vector2d(std::cos(a), std::sin(a));
+      if (free(p)) return p;
+    }
+  }
+  return std::nullopt;
+}
+
+std::pair<std::string, std::string> SceneServer::try_spawn(const msg::SceneCommand& c, bool is_operator) {
+  auto it = models_.find(c.model().to_string());
+  if (it == models_.end()) return {"unknown_model", "unknown model '" + c.model().to_string() + "'"};
+  if (world_->objects().size() >= kMaxObjects)
+    return {"scene_full", "the scene is full (" + std::to_string(kMaxObjects) + " objects)"};
+  const std::string client = c.client_id().to_string();
+  if (!is_operator) {
+    const auto own = std::count_if(objects_.begin(), objects_.end(), [&](const auto& o) {
+      return o.second.owner == client && world_->has_object(sim::ObjectId(o.first));
+    });
+    if (own >= settings_.max_objects_per_client)
+      return {"spawn_limit", "a client may have spawned at most " + std::to_string(settings_.max_objects_per_client) +
+                                 " objects at once (remove one first)"};
+  }
+  const sim::ObjectModel& model = *it->second;
+  if (c.on_table()) {
+    const double lim = kTableHalfExtent - 0.05;
+    if (!std::isfinite(c.x()) || !std::isfinite(c.y()) || !std::isfinite(c.yaw()) || std::abs(c.x()) > lim ||
+        std::abs(c.y()) > lim)
+      return {"bad_pose", "spawn on the table needs finite x, y in [-" + std::to_string(lim) + ", " +
+                              std::to_string(lim) + "] and a finite yaw"};
+    const std::optional<Eigen::Vector2d> spot = free_spot(model, c.x(), c.y());
+    if (!spot)
+      return {"no_free_spot", "no free spot within " + std::to_string(kFreeSpotSearch) + " m of the requested one"};
+    spawn(it->second, sim::World::resting_pose(model, spot->x(), spot->y(), c.yaw()), client);
+    return {};
+  }
+  if (!finite_unit_pose(c.pose())) return {"bad_pose", "spawn pose must be finite with a unit quaternion"};
+  const Eigen::Isometry3d X_WorldObject = to_eigen(c.pose());
+  for (sim::ObjectId id : world_->objects())
+    if ((world_->object_pose(id).translation() - X_WorldObject.translation()).norm() <
+        model.max_radius + world_->object_model(id).max_radius)
+      return {"overlap", "the spawn pose overlaps object " + std::to_string(id.value) +
+                             " (spawn on the table to be placed at the nearest free spot)"};
+  spawn(it->second, X_WorldObject, client);
+  return {};
+}
+
+std::pair<std::string, std::string> SceneServer::try_command(const msg::SceneCommand& c) {
+  const std::string client = c.client_id().to_string();
+  const bool op = is_operator(client);
+  switch (c.kind()) {
+    case msg::SCENE_SPAWN:
+      return try_spawn(c, op);
+    case msg::SCENE_REMOVE: {
+      const sim::ObjectId id(c.object_id());
+      if (!world_->has_object(id)) return {"no_such_object", "no object with id " + std::to_string(c.object_id())};
+      const auto holders = world_->holders(id);
+      const bool holds = std::any_of(holders.begin(), holders.end(),
+                                     [&](sim::HandId h) { return address_of_.at(h.value).client_id == client; });
+      if (!op && !holds && objects_.at(id.value).owner != client)
+        return {"not_permitted", "only an operator may remove an object this client neither spawned nor holds"};
+      remove_object(id);
+      return {};
+    }
+    case msg::SCENE_RESET:
+      if (!op) return {"not_permitted", "only an operator may reset the scene"};
+      for (sim::ObjectId id : world_->objects()) remove_object(id);
+      spawn_initial_scene();
+      return {};
+    default:
+      return {"unknown_kind", "unknown command kind " + std::to_string(static_cast<int>(c.kind()))};
+  }
+}
+
 std::string SceneServer::apply_command(const msg::SceneCommand& c) {
   std::uint64_t& seen = commands_seen_[c.client_id().to_string()];
   seen = std::max(seen, c.command_id());
-  std::string why;
-  switch (c.kind()) {
-    case msg::SCENE_SPAWN: {
-      auto it = models_.find(c.model().to_string());
-      if (it == models_.end()) {
-        why = "unknown model '" + c.model().to_string() + "'";
-      } else if (world_->objects().size() >= kMaxObjects) {
-        why = "the scene is full (" + std::to_string(kMaxObjects) + " objects)";
-      } else if (c.on_table()) {
-        const double lim = kTableHalfExtent - 0.05;
-        if (!std::isfinite(c.x()) || !std::isfinite(c.y()) || !std::isfinite(c.yaw()) || std::abs(c.x()) > lim ||
-            std::abs(c.y()) > lim)
-          why = "spawn on the table needs finite x, y in [-" + std::to_string(lim) + ", " + std::to_string(lim) +
-                "] and a finite yaw";
-        else
-          spawn(it->second, sim::World::resting_pose(*it->second, c.x(), c.y(), c.yaw()));
-      } else if (!finite_unit_pose(c.pose())) {
-        why = "spawn pose must be finite with a unit quaternion";
-      } else {
-        spawn(it->second, to_eigen(c.pose()));
-      }
-      break;
-    }
-    case msg::SCENE_REMOVE: {
-      const auto objects = world_->objects();
-      if (std::find(objects.begin(), objects.end(), sim::ObjectId(c.object_id())) == objects.end())
-        why = "no object with id " + std::to_string(c.object_id());
-      else
-        remove_object(sim::ObjectId(c.object_id()));
-      break;
-    }
-    case msg::SCENE_RESET:
-      for (sim::ObjectId id : world_->objects()) remove_object(id);
-      spawn_initial_scene();
-      break;
-    default:
-      why = "unknown command kind " + std::to_string(static_cast<int>(c.kind()));
-  }
-  if (why.empty()) {
+  const auto [reason, detail] = try_command(c);
+  if (reason.empty()) {
     ++commands_accepted_;
-  } else {
-    ++commands_rejected_;
-    std::cerr << "telegrasp-server: rejected scene command " << c.command_id() << " from '" << c.client_id().to_string()
-              << "': " << why << "\n";
+    return "";
   }
-  return why;
+  ++commands_rejected_;
+  ++commands_rejected_by_reason_[reason];
+  const std::string client = c.client_id().to_string();
+  constexpr std::size_t kMaxRefusals = 4096;  // (client, reason) pairs logged; a flood of ids is only counted
+  auto refusals = command_refusals_.find({client, reason});
+  if (refusals == command_refusals_.end() && command_refusals_.size() < kMaxRefusals) {
+    refusals = command_refusals_.emplace(std::make_pair(client, reason), 0).first;
+    std::cerr << "telegrasp-server: rejected scene command " << c.command_id() << " from '" << client << "': " << detail
+              << " (" << reason << "; counted in ServerStatus, said once per client and reason, told to the client)\n";
+  }
+  if (refusals != command_refusals_.end()) {
+    msg::ClientNotice n;
+    n.client_id(client);
+    n.kind(msg::NOTICE_COMMAND_REJECTED);
+    n.reason(reason);
+    n.detail(detail.substr(0, 256));
+    n.command_id(c.command_id());
+    n.count(++refusals->second);
+    n.time(world_->time());
+    sink_.publish(n);
+    ++notices_;
+  }
+  return detail;
 }
 
 msg::ServerStatus SceneServer::status(const LoopStats& loop) const {
@@ -325,8 +405,19 @@ msg::ServerStatus SceneServer::status(const LoopStats& loop) const {
     m.rejected().push_back(std::move(rc));
   }
   m.inputs_rejected(total);
+  std::map<std::string, std::uint64_t> by_reason = mailbox_.commands_rejected();
+  std::uint64_t refused_early = 0;  // before the scene saw them
+  for (const auto& [reason, n] : by_reason) refused_early += n;
+  for (const auto& [reason, n] : commands_rejected_by_reason_) by_reason[reason] += n;
+  for (const auto& [reason, n] : by_reason) {
+    msg::RejectCount rc;
+    rc.reason(reason);
+    rc.count(n);
+    m.commands_rejected_by_reason().push_back(std::move(rc));
+  }
   m.commands_accepted(commands_accepted_);
-  m.commands_rejected(commands_rejected_);
+  m.commands_rejected(commands_rejected_ + refused_early);
+  m.notices_sent(notices_ + mailbox_.notices());
   for (const auto& n : model_names_) m.models().push_back(n);
   return m;
 }

@@ -41,7 +41,11 @@ class SceneServer {
   void on_inputs(std::vector<InputSample> samples, std::int64_t now_ns);
   /// One fixed tick: silent hands frozen or removed, physics and hands stepped, outputs published.
   void tick(std::int64_t now_ns);
-  /// Applies a scene command; returns "" or why it was rejected (counted in the status).
+  /// Applies a scene command; returns "" or why it was rejected (counted in the status per reason,
+  /// logged once per client and reason, and told to its client in a ClientNotice). Any client may
+  /// spawn (up to max_objects_per_client objects at once; an object spawned on the table where it
+  /// would overlap another goes to the nearest free spot within kFreeSpotSearch, else is refused)
+  /// and remove the objects it spawned or holds; operators may also remove any object and reset.
   std::string apply_command(const msg::SceneCommand& command);
   /// Lockstep: true when some hand is live (not frozen) and every live one has answered the current tick
   /// (ControllerState.lockstep_tick) and every command its client sent before that answer has
@@ -57,6 +61,8 @@ class SceneServer {
   static constexpr double kTableHalfExtent = 2.0;
   /// An object below this height fell off the table: it is put back where it was spawned.
   static constexpr double kFallenHeight = -1.0;
+  /// How far from the requested spot a spawn on the table may be moved to a free one, m.
+  static constexpr double kFreeSpotSearch = 0.5;
 
  private:
   struct Hand {
@@ -70,11 +76,20 @@ class SceneServer {
   };
   struct Object {
     std::string name;
+    std::string owner;  // the client that spawned it ("": the configured scene)
     double spawn_time = 0;
     Eigen::Isometry3d X_WorldSpawn = Eigen::Isometry3d::Identity();  // where it goes back if it falls off the table
   };
   void spawn_initial_scene();
-  sim::ObjectId spawn(const sim::ObjectModelPtr& model, const Eigen::Isometry3d& X_WorldObject);
+  sim::ObjectId spawn(const sim::ObjectModelPtr& model, const Eigen::Isometry3d& X_WorldObject,
+                      const std::string& owner = "");
+  /// The command's outcome: {"", ""} or {reason, detail}.
+  std::pair<std::string, std::string> try_command(const msg::SceneCommand& command);
+  std::pair<std::string, std::string> try_spawn(const msg::SceneCommand& command, bool is_operator);
+  /// The nearest spot on the table to (x, y) where `model` overlaps no object, if one is within
+  /// kFreeSpotSearch.
+  std::optional<Eigen::Vector2d> free_spot(const sim::ObjectModel& model, double x, double y) const;
+  bool is_operator(const std::string& client_id) const;
   void remove_hand(std::map<HandAddress, Hand>::iterator it);
   void remove_object(sim::ObjectId id);
   void publish_events();
@@ -92,7 +107,9 @@ class SceneServer {
   std::map<int, Object> objects_;  // by ObjectId; likewise
   std::vector<int> retired_hands_, retired_objects_;  // removed since the last tick's events
   std::uint64_t next_event_id_ = 1;
-  std::uint64_t commands_accepted_ = 0, commands_rejected_ = 0;
+  std::uint64_t commands_accepted_ = 0, commands_rejected_ = 0, notices_ = 0;
+  std::map<std::string, std::uint64_t> commands_rejected_by_reason_;
+  std::map<std::pair<std::string, std::string>, std::uint64_t> command_refusals_;  // per (client, reason), bounded
   std::map<std::string, std::uint64_t> commands_seen_;  // per client: its highest command_id applied
 };
 

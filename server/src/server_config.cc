@@ -64,6 +64,12 @@ void apply_config(const proto::ServerConfig& c, ServerSettings& s, const std::st
   if (has("max_hands")) s.max_hands = c.max_hands();
   if (has("lockstep")) s.lockstep = c.lockstep();
   if (has("record")) s.record_path = c.record();
+  for (const auto& id : c.operators()) s.operators.push_back(id);
+  if (has("open_scene")) s.open_scene = c.open_scene();
+  if (has("max_objects_per_client")) s.max_objects_per_client = c.max_objects_per_client();
+  if (has("max_hands_per_participant")) s.max_hands_per_participant = c.max_hands_per_participant();
+  if (has("max_input_rate_hz")) s.max_input_rate_hz = c.max_input_rate_hz();
+  if (has("max_command_rate_hz")) s.max_command_rate_hz = c.max_command_rate_hz();
   validate_settings(s, origin);
 }
 
@@ -101,6 +107,16 @@ void validate_settings(const ServerSettings& s, const std::string& origin) {
     if (o.friction && !(*o.friction >= 0 && std::isfinite(*o.friction)))
       fail("objects '" + o.model + "': friction must be a finite value >= 0");
   if (s.empty_scene && !s.objects.empty()) fail("empty_scene and objects exclude each other");
+  for (const auto& id : s.operators)
+    if (id.empty() || id.size() > 64) fail("operators: a client id has 1..64 characters, got '" + id + "'");
+  if (s.max_objects_per_client < 0 || s.max_objects_per_client > 128)
+    fail("max_objects_per_client must be in [0, 128]");
+  if (s.max_hands_per_participant < 1 || s.max_hands_per_participant > 4096)
+    fail("max_hands_per_participant must be in [1, 4096]");
+  if (!(s.max_input_rate_hz >= 1 && std::isfinite(s.max_input_rate_hz)))
+    fail("max_input_rate_hz must be a finite value >= 1");
+  if (!(s.max_command_rate_hz >= 0.1 && std::isfinite(s.max_command_rate_hz)))
+    fail("max_command_rate_hz must be a finite value >= 0.1");
 }
 
 proto::ServerConfig to_proto(const ServerSettings& s) {
@@ -131,6 +147,12 @@ proto::ServerConfig to_proto(const ServerSettings& s) {
   c.set_max_hands(s.max_hands);
   c.set_lockstep(s.lockstep);
   c.set_record(s.record_path);
+  for (const auto& id : s.operators) c.add_operators(id);
+  c.set_open_scene(s.open_scene);
+  c.set_max_objects_per_client(s.max_objects_per_client);
+  c.set_max_hands_per_participant(s.max_hands_per_participant);
+  c.set_max_input_rate_hz(s.max_input_rate_hz);
+  c.set_max_command_rate_hz(s.max_command_rate_hz);
   return c;
 }
 

@@ -47,6 +47,14 @@ struct ServerSettings {
   bool lockstep = false;
   /// Write a recording of the run here (recording.h); "": none.
   std::string record_path;
+  /// Client ids that may remove any object and reset the scene (others: only what they spawned
+  /// or hold); open_scene makes every client an operator.
+  std::vector<std::string> operators;
+  bool open_scene = false;
+  int max_objects_per_client = 16;  ///< Objects a non-operator may have spawned at once.
+  int max_hands_per_participant = 16;
+  double max_input_rate_hz = 250;   ///< Per hand.
+  double max_command_rate_hz = 20;  ///< Per client.
 };
 
 /// Reads a protobuf text file onto `settings` (fields present in the file replace the defaults).

@@ -43,6 +43,16 @@ Options (override the --config file):
   --empty-scene       start with no objects (spawn them with SceneCommand)
   --tick-hz HZ        simulation rate (default 90)
   --mode M            finger closing: precise (default) | discrete
+  --operator ID       a client id that may remove any object and reset the scene (repeat for
+                      more; others may spawn, and remove only what they spawned or hold)
+  --open-scene        every client is an operator
+  --max-hands-per-participant N
+                      hands one DDS participant may drive (default 16)
+  --max-input-rate HZ ControllerState samples per second per hand (default 250; more are dropped
+                      and counted as rate_limited)
+  --max-command-rate HZ
+                      SceneCommands per second per client (default 20; both rates are not
+                      limited with --lockstep, which runs faster than real time)
   --two-hand-mode M   a grasp on an object another hand holds: share (default: both hold it, the
                       object follows both hands) | takeover (the newest grasp takes it)
   --no-late-latch     publish skeletons only at ticks, not also on each sample's arrival
@@ -103,6 +113,18 @@ void apply_flags(int argc, char** argv, Flags& f, std::vector<std::string>& conf
       const std::optional<sim::ClosingMode> mode = sim::parse_closing_mode(m);
       if (!mode) usage_error("--mode expects precise or discrete, got '" + m + "'");
       s.closing_mode = *mode;
+    } else if (a == "--operator") {
+      const std::string id = value();
+      if (id.empty() || id.size() > 64) usage_error("--operator expects a client id of 1..64 characters");
+      s.operators.push_back(id);
+    } else if (a == "--open-scene") {
+      s.open_scene = true;
+    } else if (a == "--max-hands-per-participant") {
+      s.max_hands_per_participant = static_cast<int>(cli::parse_number(a, value(), 1, 4096, usage_error));
+    } else if (a == "--max-input-rate") {
+      s.max_input_rate_hz = cli::parse_number(a, value(), 1, 1e6, usage_error);
+    } else if (a == "--max-command-rate") {
+      s.max_command_rate_hz = cli::parse_number(a, value(), 0.1, 1e6, usage_error);
     } else if (a == "--two-hand-mode") {
       const std::string m = value();
       const std::optional<sim::TwoHandMode> mode = sim::parse_two_hand_mode(m);
@@ -137,6 +159,12 @@ Flags parse(int argc, char** argv) {
     usage_error(e.what());
   }
   return f;
+}
+
+// A lockstep run goes faster than real time, paced by its ticks: no rate limits then.
+InputLimits input_limits(const ServerSettings& s) {
+  return {s.max_hands, s.max_hands_per_participant, s.lockstep ? 0 : s.max_input_rate_hz,
+          s.lockstep ? 0 : s.max_command_rate_hz};
 }
 
 // SIGINT and SIGTERM, blocked in every thread (threads started later inherit the mask) and taken
@@ -192,11 +220,12 @@ int main(int argc, char** argv) {
     return cli::kExitFailure;
   }
 
-  InputMailbox mailbox({assets.left_rig->fingers().size(), assets.right_rig->fingers().size()}, settings.max_hands);
+  InputMailbox mailbox({assets.left_rig->fingers().size(), assets.right_rig->fingers().size()}, input_limits(settings));
   const sigset_t stop_signals = block_stop_signals();  // before the DDS threads start
   try {
     DdsNode node(settings.domain, settings.profile, settings.profiles_file, mailbox);
     node.publish_geometries(assets.models);
+    mailbox.set_notifier([&node](const Refusal& r) { node.publish(make_client_notice(r)); });
     // Declared before the scene, so the scene goes first and the recorder then closes the file.
     std::optional<Recorder> recorder;
     if (!settings.record_path.empty()) recorder.emplace(settings.record_path, settings, assets, node);

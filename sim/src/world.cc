@@ -337,6 +337,8 @@ std::vector<ObjectId> World::objects() const {
   return out;
 }
 
+bool World::has_object(ObjectId id) const { return impl_->objects.count(id.value) > 0; }
+
 std::vector<HandId> World::hands() const {
   std::vector<HandId> out;
   for (const auto& [id, h] : impl_->hands) out.emplace_back(id);

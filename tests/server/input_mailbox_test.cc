@@ -127,5 +127,71 @@ TEST_F(MailboxTest, WaitReturnsFalseAtTheDeadline) {
       << "a past deadline returns at once";
 }
 
+// A hand flooding at 5 kHz for 2 s gets its rate (250/s) plus one burst through; the rest are
+// counted as rate_limited, and the client is told at most once a second.
+TEST(MailboxLimitsTest, AFloodingHandIsRateLimitedAndTold) {
+  InputLimits limits;
+  limits.max_input_rate_hz = 250;
+  std::vector<Refusal> told;
+  InputMailbox box({5, 5}, limits, [](const std::string&) {});
+  box.set_notifier([&](const Refusal& r) { told.push_back(r); });
+  int accepted = 0;
+  const std::int64_t period_ns = 200'000;  // 5 kHz
+  for (int i = 0; i < 10'000; ++i) accepted += box.offer(sample("flood", 1, i + 1), kAlicePc, i * period_ns);
+  const int expected = 250 * 2 + 25;  // rate x duration + burst (a tenth of the rate)
+  EXPECT_NEAR(accepted, expected, 2);
+  EXPECT_EQ(box.rejected()[static_cast<int>(RejectReason::kRateLimited)], 10'000u - accepted);
+  ASSERT_EQ(told.size(), 2u);  // at t = 0.005 s and again one second later
+  EXPECT_EQ(told[0].client_id, "flood");
+  EXPECT_EQ(told[0].reason, "rate_limited");
+  EXPECT_EQ(told[0].kind, msg::NOTICE_INPUT_REJECTED);
+  EXPECT_GT(told[1].count, told[0].count);
+  // A 90 Hz client beside it is never limited.
+  for (int i = 0; i < 180; ++i) EXPECT_TRUE(box.offer(sample("calm", 1, i + 1), kMallory, i * 11'111'111LL));
+}
+
+// One participant minting fresh client ids fills at most its share of hand slots: another
+// participant still gets in, and the flooder's ids are counted, not accepted.
+TEST(MailboxLimitsTest, AParticipantMintingClientIdsCannotLockOthersOut) {
+  InputLimits limits;
+  limits.max_hands = 256;
+  limits.max_hands_per_participant = 16;
+  InputMailbox box({5, 5}, limits, [](const std::string&) {});
+  int accepted = 0;
+  for (int i = 0; i < 4500; ++i) accepted += box.offer(sample("id-" + std::to_string(i), 1, 1), kMallory, i);
+  EXPECT_EQ(accepted, 16);
+  EXPECT_EQ(box.rejected()[static_cast<int>(RejectReason::kTooManyHandsForParticipant)], 4500u - 16);
+  EXPECT_TRUE(box.offer(sample("alice", 1, 1), kAlicePc, 0));
+  // The flooder leaves: its ids and hand slots are free again.
+  box.forget_participant(kMallory);
+  EXPECT_TRUE(box.offer(sample("id-0", 1, 1), kAlicePc, 0));
+}
+
+// Commands: the client id belongs to its first participant (inputs and commands alike), and each
+// client gets max_command_rate_hz; every refusal is counted per reason.
+TEST(MailboxLimitsTest, CommandsAreAdmittedByOwnerAndRate) {
+  InputLimits limits;
+  limits.max_command_rate_hz = 20;
+  std::vector<Refusal> told;
+  InputMailbox box({5, 5}, limits, [](const std::string&) {});
+  box.set_notifier([&](const Refusal& r) { told.push_back(r); });
+  msg::SceneCommand c;
+  c.client_id("alice");
+  EXPECT_TRUE(box.offer(sample("alice", 1, 1), kAlicePc, 0));
+  c.command_id(7);
+  EXPECT_EQ(box.admit_command(c, kMallory, 0), "client_id_owned_by_another_participant");
+  ASSERT_EQ(told.size(), 1u);
+  EXPECT_EQ(told[0].command_id, 7u);
+  EXPECT_EQ(told[0].kind, msg::NOTICE_COMMAND_REJECTED);
+  int admitted = 0;
+  for (int i = 0; i < 100; ++i) admitted += box.admit_command(c, kAlicePc, i * 1'000'000LL).empty();  // 1 kHz
+  EXPECT_NEAR(admitted, 10 + 2, 1);  // the burst (10) plus 20/s over 0.1 s
+  const auto by_reason = box.commands_rejected();
+  EXPECT_EQ(by_reason.at("client_id_owned_by_another_participant"), 1u);
+  EXPECT_EQ(by_reason.at("rate_limited"), 100u - admitted);
+  c.client_id("");
+  EXPECT_EQ(box.admit_command(c, kAlicePc, 0), "empty_client_id");
+}
+
 }  // namespace
 }  // namespace telegrasp::server

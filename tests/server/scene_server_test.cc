@@ -30,6 +30,8 @@ struct RecordingSink : OutputSink {
   void publish(const msg::GraspEvent& m) override { events.push_back(m); }
   void publish(const msg::SceneState& m) override { scenes.push_back(m); }
   void publish(const msg::ServerStatus&) override {}
+  std::vector<msg::ClientNotice> notices;
+  void publish(const msg::ClientNotice& m) override { notices.push_back(m); }
   void hand_removed(const HandAddress& hand) override { removed.push_back(hand); }
 };
 
@@ -337,11 +339,15 @@ TEST(SceneServerResetTest, ResetRestoresTheConfiguredScene) {
   ASSERT_EQ(scene.world().objects().size(), 2u);
   msg::SceneCommand c;
   c.kind(msg::SCENE_RESET);
-  EXPECT_EQ(scene.apply_command(c), "");
-  const auto objects = scene.world().objects();
+  c.client_id("op");
+  EXPECT_NE(scene.apply_command(c), "");  // not an operator (yet)
+  settings.operators = {"op"};
+  SceneServer with_operator(settings, standins(), rig("human_right"), rig("human_left"), mailbox, sink);
+  EXPECT_EQ(with_operator.apply_command(c), "");
+  const auto objects = with_operator.world().objects();
   ASSERT_EQ(objects.size(), 2u);
-  EXPECT_EQ(scene.world().object_model(objects[1]).name, "056_tennis_ball");
-  EXPECT_NEAR(scene.world().object_pose(objects[1]).translation().x(), 0.6, 1e-12);
+  EXPECT_EQ(with_operator.world().object_model(objects[1]).name, "056_tennis_ball");
+  EXPECT_NEAR(with_operator.world().object_pose(objects[1]).translation().x(), 0.6, 1e-12);
   settings.objects = {{"no_such_model", 0, 0, 0}};
   EXPECT_THROW(SceneServer(settings, standins(), rig("human_right"), rig("human_left"), mailbox, sink),
                std::runtime_error);
@@ -410,6 +416,113 @@ TEST_F(LockstepTest, AnAnswerToAnOlderTickGetsTheSceneStateAgain) {
   EXPECT_EQ(sink.scenes[1].tick(), 1u);
   answer("alice", 1, 0);
   EXPECT_EQ(sink.scenes.size(), 2u);
+}
+
+// Who may do what: any client spawns and removes what it spawned or holds; only operators remove
+// the rest and reset. Each refusal is counted per reason and told to its client.
+struct PermissionTest : SceneServerTest {
+  void SetUp() override {
+    settings.operators = {"op"};
+    SceneServerTest::SetUp();
+  }
+  std::string command(const std::string& client, msg::SceneCommandKind kind, int object = 0, double x = 0.4,
+                      double y = 0) {
+    msg::SceneCommand c;
+    c.client_id(client);
+    c.command_id(++command_id);
+    c.kind(kind);
+    c.model("056_tennis_ball");
+    c.on_table(true);
+    c.x(x);
+    c.y(y);
+    c.object_id(object);
+    return scene->apply_command(c);
+  }
+  std::uint64_t command_id = 0;
+};
+
+TEST_F(PermissionTest, OnlyOperatorsResetOrRemoveWhatOthersSpawned) {
+  ASSERT_EQ(command("alice", msg::SCENE_SPAWN, 0, 0.4, 0.0), "");
+  const int alices = scene->world().objects().back().value;
+  ASSERT_EQ(command("mallory", msg::SCENE_SPAWN, 0, 0.4, 0.5), "");
+  const int mallorys = scene->world().objects().back().value;
+
+  EXPECT_NE(command("mallory", msg::SCENE_REMOVE, alices), "");
+  EXPECT_NE(command("mallory", msg::SCENE_RESET), "");
+  EXPECT_EQ(scene->world().objects().size(), 2u);
+  ASSERT_EQ(sink.notices.size(), 2u);
+  EXPECT_EQ(sink.notices[0].client_id().to_string(), "mallory");
+  EXPECT_EQ(sink.notices[0].reason().to_string(), "not_permitted");
+  EXPECT_EQ(sink.notices[0].command_id(), 3u);
+  EXPECT_EQ(sink.notices[0].kind(), msg::NOTICE_COMMAND_REJECTED);
+  EXPECT_EQ(sink.notices[1].count(), 2u);  // mallory's second not_permitted
+
+  EXPECT_EQ(command("mallory", msg::SCENE_REMOVE, mallorys), "");  // its own
+  EXPECT_EQ(command("op", msg::SCENE_REMOVE, alices), "");         // an operator's right
+  EXPECT_TRUE(scene->world().objects().empty());
+  EXPECT_EQ(command("op", msg::SCENE_RESET), "");
+
+  const msg::ServerStatus s = scene->status({});
+  EXPECT_EQ(s.commands_rejected(), 2u);
+  ASSERT_EQ(s.commands_rejected_by_reason().size(), 1u);
+  EXPECT_EQ(s.commands_rejected_by_reason()[0].reason().to_string(), "not_permitted");
+  EXPECT_EQ(s.commands_rejected_by_reason()[0].count(), 2u);
+  EXPECT_EQ(s.notices_sent(), 2u);
+}
+
+TEST_F(PermissionTest, AClientMayRemoveTheObjectItHolds) {
+  ASSERT_EQ(command("op", msg::SCENE_SPAWN, 0, 0.45, 0.0), "");
+  const int ball = scene->world().objects().back().value;
+  grasp_and_lift(ball);
+  ASSERT_TRUE(scene->world().holder(sim::ObjectId(ball)).valid());
+  EXPECT_NE(command("bob", msg::SCENE_REMOVE, ball), "");  // bob neither spawned nor holds it
+  EXPECT_EQ(command("alice", msg::SCENE_REMOVE, ball), "");
+}
+
+TEST_F(PermissionTest, OpenSceneMakesEveryClientAnOperator) {
+  settings.open_scene = true;
+  SceneServerTest::SetUp();
+  ASSERT_EQ(command("alice", msg::SCENE_SPAWN), "");
+  EXPECT_EQ(command("mallory", msg::SCENE_REMOVE, scene->world().objects().back().value), "");
+  EXPECT_EQ(command("mallory", msg::SCENE_RESET), "");
+}
+
+// 200 spawns of one ball on one spot: each lands at the nearest free spot (no two footprints
+// overlap) until the client's spawn limit; the physics is not stalled by interpenetration.
+TEST_F(PermissionTest, OverlappingSpawnsGoToTheNearestFreeSpotUpToTheClientsLimit) {
+  int refused_limit = 0;
+  for (int i = 0; i < 200; ++i)
+    if (command("mallory", msg::SCENE_SPAWN, 0, 0.5, 0.0).find("at most") != std::string::npos) ++refused_limit;
+  const auto objects = scene->world().objects();
+  ASSERT_EQ(static_cast<int>(objects.size()), settings.max_objects_per_client);
+  EXPECT_EQ(refused_limit, 200 - settings.max_objects_per_client);
+  const double r = scene->world().object_model(objects[0]).max_radius;  // a ball: its footprint radius too
+  double farthest = 0;
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const Eigen::Vector3d pi = scene->world().object_pose(objects[i]).translation();
+    farthest = std::max(farthest, (pi.head<2>() - Eigen::Vector2d(0.5, 0.0)).norm());
+    for (std::size_t j = 0; j < i; ++j)
+      EXPECT_GE((pi - scene->world().object_pose(objects[j]).translation()).norm(), 2 * r) << i << " " << j;
+  }
+  EXPECT_LT(farthest, SceneServer::kFreeSpotSearch);
+  for (int i = 0; i < 45; ++i) tick();
+  for (sim::ObjectId id : objects)  // resting, not thrown apart
+    EXPECT_LT(scene->world().object_velocity(id).norm(), 0.05);
+  // An operator has no spawn limit, but the spot search has a radius: a spot with no free place
+  // within it is refused.
+  EXPECT_EQ(command("op", msg::SCENE_SPAWN, 0, 0.5, 0.0), "");
+}
+
+TEST_F(PermissionTest, ASpawnPoseOverlappingAnObjectIsRefused) {
+  ASSERT_EQ(command("alice", msg::SCENE_SPAWN, 0, 0.5, 0.0), "");
+  msg::SceneCommand c;
+  c.client_id("alice");
+  c.kind(msg::SCENE_SPAWN);
+  c.model("056_tennis_ball");
+  c.pose() = to_msg(scene->world().object_pose(scene->world().objects().back()));
+  EXPECT_NE(scene->apply_command(c).find("overlaps object"), std::string::npos);
+  c.pose().position().z(0.5);  // above it: free
+  EXPECT_EQ(scene->apply_command(c), "");
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
@@ -32,6 +33,14 @@ using telegrasp::bot::kStaleScene;
 using Options = telegrasp::bot::Options;
 
 constexpr int kExitNotHeld = 3;  // every trial done, some not held
+constexpr int kExitRefused = 4;  // the server refused this bot's inputs or commands (ClientNotice)
+
+// Input refusals after which no grasp can happen: the bot stops at once.
+bool fatal_refusal(const client::Notice& n) {
+  return n.kind == client::Notice::Kind::kInputRejected &&
+         (n.reason == "client_id_owned_by_another_participant" || n.reason == "too_many_hands" ||
+          n.reason == "too_many_hands_for_participant");
+}
 
 constexpr const char* kUsage = R"(Usage: telegrasp-bot [options]
 
@@ -74,8 +83,10 @@ Exit status: 0 every trial done and every object held after the lift in every tr
 failure (the --objects folder or a mesh in it missing or unreadable, the --json file not
 writable, DDS could not start, no server found or it went silent), 2 a usage error (a bad or
 missing option or value), 3 every trial done but some object not held in every trial (or the
-scene had no object: nothing grasped), 130 stopped by SIGINT or SIGTERM (the table shows the
-trials done).
+scene had no object: nothing grasped), 4 the server refused this bot's inputs or commands (its
+ClientNotice is printed; a refusal that keeps its hands out, e.g. the client id taken or no hand
+slot left, stops the bot at once), 130 stopped by SIGINT or SIGTERM (the table shows the trials
+done).
 )";
 
 [[noreturn]] void usage_error(const std::string& what) { telegrasp::cli::usage_exit("telegrasp-bot", what); }
@@ -196,6 +207,20 @@ int main(int argc, char** argv) {
   // server that publishes none leaves the built-in stand-ins).
   wait_until([&] { return telegrasp::bot::geometry_complete(*c, *scene, models); }, std::min(opt.timeout_s, 10.0));
   if (g_stop) return 130;
+  // The server says why it refuses us (ClientNotice): reported, and the exit status says so.
+  std::mutex refusal_mutex;
+  std::optional<client::Notice> refusal;
+  c->on_notice([&](const client::Notice& n) {
+    std::cerr << "telegrasp-bot " << opt.client_id << ": the server refused our "
+              << (n.kind == client::Notice::Kind::kInputRejected ? "controller states" : "scene command") << ": "
+              << n.reason << (n.detail.empty() ? "" : " (" + n.detail + ")") << "\n";
+    std::lock_guard lock(refusal_mutex);
+    if (!refusal || fatal_refusal(n)) refusal = n;
+  });
+  auto refused_fatally = [&] {
+    std::lock_guard lock(refusal_mutex);
+    return refusal && fatal_refusal(*refusal);
+  };
   Bot bot(opt, *c, telegrasp::bot::resolve_models(*c, *scene, std::move(models)));
   if (!bot.set_scene(*scene)) {
     std::cerr << "telegrasp-bot: the server's scene has no objects\n";
@@ -217,6 +242,11 @@ int main(int argc, char** argv) {
   for (std::int64_t tick = 0; !bot.all_done();) {
     if (g_stop) {
       status = 130;
+      break;
+    }
+    if (refused_fatally()) {
+      std::cerr << "telegrasp-bot: the server will not take this bot's hands; stopping\n";
+      status = kExitRefused;
       break;
     }
     if (auto s = c->latest_scene_state(); s && s->tick != last_scene_tick) {
@@ -249,5 +279,9 @@ int main(int argc, char** argv) {
     std::cerr << "telegrasp-bot: " << bot.in_progress() << " trial(s) in progress not counted\n";
   if (!bot.report_results() && status == 0) status = 1;
   if (status == 0 && !bot.all_held()) status = kExitNotHeld;
+  if (status == 0 || status == kExitNotHeld) {
+    std::lock_guard lock(refusal_mutex);
+    if (refusal) status = kExitRefused;
+  }
   return status;
 }

@@ -164,6 +164,8 @@ template <class Json>
 Json server_status(const client::ServerStatus& s) {
   Json rejected = Json::object();
   for (const auto& [reason, count] : s.rejected) rejected[reason] = count;
+  Json commands_rejected_by_reason = Json::object();
+  for (const auto& [reason, count] : s.commands_rejected_by_reason) commands_rejected_by_reason[reason] = count;
   return Json{{"tick", s.tick},
               {"time_s", s.time},
               {"tick_rate_hz", s.tick_rate_hz},
@@ -178,6 +180,8 @@ Json server_status(const client::ServerStatus& s) {
               {"rejected", rejected},
               {"commands_accepted", s.commands_accepted},
               {"commands_rejected", s.commands_rejected},
+              {"commands_rejected_by_reason", commands_rejected_by_reason},
+              {"notices_sent", s.notices_sent},
               {"models", s.models}};
 }
 

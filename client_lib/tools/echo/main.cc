@@ -87,7 +87,8 @@ X_WorldObject is the object's pose in the world frame.
                   it, in grasp order; two may share one object), "spawn_time_s"}
   ServerStatus    "tick_rate_hz", "clients", "hands", "objects", "tick_us_p50", "tick_us_max",
                   "missed_ticks", "inputs_accepted", "inputs_rejected", "rejected" (per reason),
-                  "commands_accepted", "commands_rejected", "models"
+                  "commands_accepted", "commands_rejected", "commands_rejected_by_reason"
+                  (per reason), "notices_sent", "models"
   ObjectGeometry  a summary, never the mesh: "model", "content_hash" (16 hex digits),
                   "vertex_count", "triangle_count", "mesh_omitted", "p_ObjectMin_m",
                   "p_ObjectMax_m" (bounds, model frame), "mass_kg", "volume_m3",

@@ -24,7 +24,8 @@ enum Topics : unsigned {
   kSceneStates = 1u << 4,
   kServerStatuses = 1u << 5,
   kObjectGeometries = 1u << 6,  ///< Each model's mesh and mass, once per model (late joiners too).
-  kAllTopics = (1u << 7) - 1,
+  kNotices = 1u << 7,  ///< Why the server refused this client's inputs or commands (only this client's).
+  kAllTopics = (1u << 8) - 1,
 };
 
 struct ClientOptions {
@@ -68,6 +69,9 @@ class Client {
   void on_server_status(std::function<void(const ServerStatus&)> callback);
   /// Each model's geometry as it arrives; the caught-up snapshot is every model's newest one.
   void on_object_geometry(std::function<void(const std::shared_ptr<const ObjectGeometry>&)> callback);
+  /// The server refused an input or command of this client (the error callback); the caught-up
+  /// snapshot is the newest notice, if any.
+  void on_notice(std::function<void(const Notice&)> callback);
 
   /// Polling: the newest sample of each output (per hand for per-hand outputs).
   std::optional<SceneState> latest_scene_state() const;
@@ -83,6 +87,8 @@ class Client {
   std::shared_ptr<const ObjectGeometry> object_geometry(const std::string& model) const;
   /// Every model's newest geometry, by model name.
   std::map<std::string, std::shared_ptr<const ObjectGeometry>> object_geometries() const;
+  /// The newest refusal of this client, if the server refused anything (kNotices).
+  std::optional<Notice> last_notice() const;
   /// Every grasp event received since the last call, in arrival order.
   std::vector<GraspEvent> take_grasp_events();
 

@@ -165,6 +165,20 @@ struct ServerStatus {
   std::map<std::string, std::uint64_t> rejected;  ///< Per reason, since the server started.
   std::uint64_t commands_accepted = 0, commands_rejected = 0;
   std::vector<std::string> models;  ///< Model names a spawn command accepts.
+  std::map<std::string, std::uint64_t> commands_rejected_by_reason;  ///< Per reason, since the server started.
+  std::uint64_t notices_sent = 0;  ///< Refusals told to their clients (Notice), since the server started.
+};
+
+/// Why the server refused this client's input or command (ClientNotice): the client learns it
+/// instead of being ignored. Input refusals come at most once a second per reason.
+struct Notice {
+  enum class Kind { kInputRejected, kCommandRejected };
+  Kind kind = Kind::kInputRejected;
+  std::string reason;  ///< A key of ServerStatus::rejected or commands_rejected_by_reason, e.g. "rate_limited".
+  std::string detail;  ///< For people: what was wrong.
+  std::uint64_t command_id = 0;  ///< kCommandRejected: the refused command's id (send_command's return).
+  std::uint64_t count = 0;  ///< This client's refusals for this reason, since the server started.
+  double time = 0;  ///< Scene time of a command the scene refused; 0 otherwise.
 };
 
 /// One model's shape and mass as the server publishes it (ObjectGeometry), so a client needs no

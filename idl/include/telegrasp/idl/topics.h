@@ -13,6 +13,7 @@ inline constexpr const char* kSceneStateTopic = "telegrasp/SceneState";
 inline constexpr const char* kSceneCommandTopic = "telegrasp/SceneCommand";
 inline constexpr const char* kServerStatusTopic = "telegrasp/ServerStatus";
 inline constexpr const char* kObjectGeometryTopic = "telegrasp/ObjectGeometry";
+inline constexpr const char* kClientNoticeTopic = "telegrasp/ClientNotice";
 
 /// Participant profiles in deploy/fastdds/telegrasp_profiles.xml (transport and discovery).
 inline constexpr const char* kDefaultParticipantProfile = "loopback";

@@ -95,6 +95,7 @@ class World {
   double time() const;
   std::uint64_t tick() const;
   std::vector<ObjectId> objects() const;
+  bool has_object(ObjectId id) const;
   std::vector<HandId> hands() const;
   const ObjectModel& object_model(ObjectId id) const;
   Eigen::Isometry3d object_pose(ObjectId id) const;
