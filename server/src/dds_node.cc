@@ -38,7 +38,8 @@ ParticipantKey key_of(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix) {
 class ParticipantListener : public dds::DomainParticipantListener {
  public:
   explicit ParticipantListener(InputMailbox& mailbox) : mailbox_(mailbox) {}
-  void on_participant_discovery(dds::DomainParticipant*, eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
+  void on_participant_discovery(dds::DomainParticipant*,
+                                eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
     using Status = eprosima::fastrtps::rtps::ParticipantDiscoveryInfo::DISCOVERY_STATUS;
     if (info.status == Status::REMOVED_PARTICIPANT || info.status == Status::DROPPED_PARTICIPANT)
       mailbox_.forget_participant(key_of(info.info.m_guid.guidPrefix));

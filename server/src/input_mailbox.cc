@@ -57,8 +57,8 @@ void InputMailbox::refuse(Refusal r, std::int64_t now_ns, bool every_time) {
     }
     count = refusal_counts_.emplace(key, 0).first;
     log_("telegrasp-server: refusing " +
-         std::string(r.kind == msg::NOTICE_INPUT_REJECTED ? "controller states" : "scene commands") +
-         " of client '" + r.client_id + "': " + r.reason + (r.detail.empty() ? "" : " (" + r.detail + ")") +
+         std::string(r.kind == msg::NOTICE_INPUT_REJECTED ? "controller states" : "scene commands") + " of client '" +
+         r.client_id + "': " + r.reason + (r.detail.empty() ? "" : " (" + r.detail + ")") +
          " (counted in ServerStatus; said once per client and reason, and told to the client)");
   }
   r.count = ++count->second;
@@ -85,7 +85,8 @@ bool InputMailbox::reject(RejectReason reason, const std::string& client_id, std
       detail = "a participant may drive at most " + std::to_string(limits_.max_hands_per_participant) + " hands";
       break;
     case RejectReason::kRateLimited:
-      detail = "more than " + std::to_string(static_cast<int>(limits_.max_input_rate_hz)) + " samples per second per hand";
+      detail =
+          "more than " + std::to_string(static_cast<int>(limits_.max_input_rate_hz)) + " samples per second per hand";
       break;
     default:
       break;

@@ -22,10 +22,10 @@ using ParticipantKey = std::array<std::uint8_t, 12>;
 
 /// What one client or participant may send (ServerSettings has the configured values).
 struct InputLimits {
-  int max_hands = 256;                 ///< Hands in the scene, all clients together.
+  int max_hands = 256;  ///< Hands in the scene, all clients together.
   int max_hands_per_participant = 16;  ///< Hands one DDS participant may drive.
-  double max_input_rate_hz = 250;      ///< Samples per second per hand (bursts of a tenth of it, at least 10).
-  double max_command_rate_hz = 20;     ///< Scene commands per second per client (bursts likewise).
+  double max_input_rate_hz = 250;  ///< Samples per second per hand (bursts of a tenth of it, at least 10).
+  double max_command_rate_hz = 20;  ///< Scene commands per second per client (bursts likewise).
 };
 
 /// A token bucket: `rate` per second, at most `burst` at once.

@@ -26,10 +26,17 @@ enum class RejectReason {
 };
 
 inline constexpr std::array<std::string_view, static_cast<int>(RejectReason::kCount)> kRejectReasonNames = {
-    "empty_client_id",     "unknown_hand_side",    "non_finite",
-    "quaternion_not_unit", "trigger_out_of_range", "curls_wrong_count",
-    "curls_out_of_range",  "stale_sequence",       "client_id_owned_by_another_participant",
-    "too_many_hands",      "too_many_hands_for_participant",
+    "empty_client_id",
+    "unknown_hand_side",
+    "non_finite",
+    "quaternion_not_unit",
+    "trigger_out_of_range",
+    "curls_wrong_count",
+    "curls_out_of_range",
+    "stale_sequence",
+    "client_id_owned_by_another_participant",
+    "too_many_hands",
+    "too_many_hands_for_participant",
     "rate_limited"};
 
 inline std::string_view name(RejectReason r) { return kRejectReasonNames[static_cast<int>(r)]; }

@@ -53,7 +53,7 @@ struct ServerSettings {
   bool open_scene = false;
   int max_objects_per_client = 16;  ///< Objects a non-operator may have spawned at once.
   int max_hands_per_participant = 16;
-  double max_input_rate_hz = 250;   ///< Per hand.
+  double max_input_rate_hz = 250;  ///< Per hand.
   double max_command_rate_hz = 20;  ///< Per client.
 };
 

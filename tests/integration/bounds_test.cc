@@ -63,8 +63,7 @@ std::uint64_t rejected(const client::ServerStatus& s, const std::string& reason)
 
 struct Server {
   explicit Server(const std::string& name, std::vector<std::string> extra = {}) {
-    std::vector<std::string> argv{bin("telegrasp-server"), "--domain", std::to_string(domain), "--profile",
-                                  "loopback"};
+    std::vector<std::string> argv{bin("telegrasp-server"), "--domain", std::to_string(domain), "--profile", "loopback"};
     argv.insert(argv.end(), extra.begin(), extra.end());
     process.start(argv, work_path(name + "_server.log"));
   }
@@ -92,21 +91,23 @@ TEST(BoundsTest, AParticipantWritingThousandsOfClientIdsLocksNobodyOut) {
           return m.current_count > 0;
         },
         kGuard));
-    for (int i = 0; i < 5000; ++i) {
-      msg::ControllerState s;
-      s.client_id("mint-" + std::to_string(i));
-      s.hand_side(1);
-      s.sequence_number(1);
-      s.palm().orientation().w(1);
-      s.palm().position().z(0.4);
-      ASSERT_TRUE(writers[i % 2]->write(&s)) << "sample " << i;
-      if (i % 100 == 99) std::this_thread::sleep_for(5ms);  // best effort: let the server keep up
-    }
-    // The flood was seen (most of it; best effort may drop some) and refused beyond the share.
+    // Twice over (best effort may drop a sample under load): nearly every id reaches the reader.
+    for (int round = 1; round <= 2; ++round)
+      for (int i = 0; i < 5000; ++i) {
+        msg::ControllerState s;
+        s.client_id("mint-" + std::to_string(i));
+        s.hand_side(1);
+        s.sequence_number(round);
+        s.palm().orientation().w(1);
+        s.palm().position().z(0.4);
+        ASSERT_TRUE(writers[i % 2]->write(&s)) << "sample " << i;
+        if (i % 100 == 99) std::this_thread::sleep_for(5ms);  // let the server keep up
+      }
+    // The flood was seen and refused beyond the participant's share.
     ASSERT_TRUE(eventually(
         [&] {
           auto s = observer.latest_server_status();
-          return s && rejected(*s, "too_many_hands_for_participant") > 4000;
+          return s && rejected(*s, "too_many_hands_for_participant") > 5000;
         },
         kGuard))
         << "the server did not count the minted ids as refused";
@@ -227,9 +228,9 @@ TEST(BoundsTest, ABotWhoseClientIdIsTakenIsToldAndExitsFour) {
       std::this_thread::sleep_for(11ms);
     }
   });
-  ChildProcess bot({bin("telegrasp-bot"), "--domain", std::to_string(server.domain), "--client-id", "taken",
-                    "--timeout", "20"},
-                   work_path("bounds_taken_bot.log"));
+  ChildProcess bot(
+      {bin("telegrasp-bot"), "--domain", std::to_string(server.domain), "--client-id", "taken", "--timeout", "20"},
+      work_path("bounds_taken_bot.log"));
   const int status = bot.wait(60s);
   stop = true;
   keep_alive.join();

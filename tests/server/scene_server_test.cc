@@ -458,7 +458,7 @@ TEST_F(PermissionTest, OnlyOperatorsResetOrRemoveWhatOthersSpawned) {
   EXPECT_EQ(sink.notices[1].count(), 2u);  // mallory's second not_permitted
 
   EXPECT_EQ(command("mallory", msg::SCENE_REMOVE, mallorys), "");  // its own
-  EXPECT_EQ(command("op", msg::SCENE_REMOVE, alices), "");         // an operator's right
+  EXPECT_EQ(command("op", msg::SCENE_REMOVE, alices), "");  // an operator's right
   EXPECT_TRUE(scene->world().objects().empty());
   EXPECT_EQ(command("op", msg::SCENE_RESET), "");
 

@@ -181,8 +181,8 @@ int main(int argc, char** argv) {
   copt.domain = opt.domain;
   copt.profile = opt.profile;
   copt.profiles_file = opt.profiles_file;
-  copt.topics = client::kHandSkeletons | client::kGraspStates | client::kGraspEvents | client::kSceneStates |
-                client::kServerStatuses | client::kObjectGeometries;
+  copt.topics = client::kNotices | client::kHandSkeletons | client::kGraspStates | client::kGraspEvents |
+                client::kSceneStates | client::kServerStatuses | client::kObjectGeometries;
   std::unique_ptr<client::Client> c;
   try {
     c = std::make_unique<client::Client>(copt);

@@ -346,7 +346,8 @@ int run_participant(int argc, char** argv) {
   copt.domain = opt.domain;
   copt.profile = opt.profile;
   copt.profiles_file = opt.profiles_file;
-  copt.topics = client::kGraspEvents | client::kSceneStates | client::kServerStatuses | client::kHandSkeletons;
+  copt.topics =
+      client::kNotices | client::kGraspEvents | client::kSceneStates | client::kServerStatuses | client::kHandSkeletons;
   try {
     client::Client c(copt);
     if (!c.wait_for_server(std::chrono::milliseconds(static_cast<long>(1000 * opt.timeout_s)))) {

@@ -201,11 +201,16 @@ ServerOptions server_options(const CommonOptions& o) {
 
 std::vector<std::string> server_argv(const ServerOptions& o) {
   // The benchmarks drive many hands from one participant at any rate: the per-client limits are lifted.
-  std::vector<std::string> a{o.path,          "--domain",
-                             std::to_string(o.domain), "--profile",
-                             o.profile,       "--empty-scene",
-                             "--max-hands-per-participant", "4096",
-                             "--max-input-rate", "1000000"};
+  std::vector<std::string> a{o.path,
+                             "--domain",
+                             std::to_string(o.domain),
+                             "--profile",
+                             o.profile,
+                             "--empty-scene",
+                             "--max-hands-per-participant",
+                             "4096",
+                             "--max-input-rate",
+                             "1000000"};
   if (!o.profiles_file.empty()) a.insert(a.end(), {"--profiles", o.profiles_file});
   if (!o.late_latch) a.push_back("--no-late-latch");
   if (o.tick_hz > 0) a.insert(a.end(), {"--tick-hz", cli::format_number(o.tick_hz)});
