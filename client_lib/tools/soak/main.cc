@@ -68,6 +68,8 @@ Options:
   --server-pid PID    watch this already running server instead of starting one (it must be on
                       --domain with --profile; its RSS is read from /proc/PID/status)
   --server-config F   the started server's --config file (default: none, the 30 stand-ins)
+  --bot-nice N        run the bots at this nice value, 0..19 (default 10): the server, the
+                      program under test, gets the CPU first when the bots' planning saturates it
   --skill NAME        the bots' skill: perfect | experienced | inexperienced (default experienced)
   --log-dir DIR       where the server's and bots' logs go (default: a new folder in $TMPDIR,
                       printed on stderr)
@@ -91,6 +93,7 @@ struct Options {
   int domain = 0;
   std::string profile = "loopback", profiles_file, server_config, skill = "experienced", log_dir, json_path;
   int server_pid = 0;
+  int bot_nice = 10;
 };
 
 Options parse(int argc, char** argv) {
@@ -114,6 +117,8 @@ Options parse(int argc, char** argv) {
       o.profiles_file = value();
     else if (a == "--server-pid")
       o.server_pid = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 1L << 30, usage_error));
+    else if (a == "--bot-nice")
+      o.bot_nice = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 0, 19, usage_error));
     else if (a == "--server-config")
       o.server_config = value();
     else if (a == "--skill") {
@@ -286,7 +291,10 @@ int main(int argc, char** argv) {
   auto start_bot = [&](std::size_t k) {
     Slot& s = slots[k];
     const std::string id = "soak" + std::to_string(getpid()) + "-" + std::to_string(k) + "-" + std::to_string(s.starts);
-    std::vector<std::string> argv = {bin + "/telegrasp-bot",
+    std::vector<std::string> argv = {"/usr/bin/nice",
+                                     "-n",
+                                     std::to_string(opt.bot_nice),
+                                     bin + "/telegrasp-bot",
                                      "--client-id",
                                      id,
                                      "--hands",
@@ -418,6 +426,7 @@ int main(int argc, char** argv) {
                  {"sample_s", opt.sample_s},
                  {"warmup_s", opt.warmup_s},
                  {"profile", opt.profile},
+                 {"bot_nice", opt.bot_nice},
                  {"server_pid", server_pid},
                  {"server_exit", opt.server_pid ? json(nullptr) : json(server_status)},
                  {"log_dir", log_dir},
