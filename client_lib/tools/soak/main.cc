@@ -36,6 +36,7 @@ using json = nlohmann::ordered_json;
 using Clock = std::chrono::steady_clock;
 
 constexpr int kExitGrowth = 3;  // the run completed but memory was not flat
+constexpr int kExitIdle = 4;  // memory flat, but fewer grasps than --min-grasps
 
 constexpr const char* kUsage = R"(Usage: telegrasp-soak --hands N --minutes M [options]
 
@@ -73,6 +74,8 @@ Options:
   --skill NAME        the bots' skill: perfect | experienced | inexperienced (default experienced)
   --log-dir DIR       where the server's and bots' logs go (default: a new folder in $TMPDIR,
                       printed on stderr)
+  --min-grasps N      fail (exit 4) when fewer grasp events than N arrived over the run
+                      (default 0): the hands were not grasping
   --json FILE         also write the JSON result to FILE
   -h, --help          this text
 
@@ -80,9 +83,10 @@ Progress goes to stderr, one line per sample. The programs telegrasp-server and 
 taken from the folder of this executable.
 
 Exit status: 0 the run completed and memory was flat, 3 the run completed but memory grew by
---max-growth-pct or more, 1 a runtime failure (a program missing, the server did not start or
-died, no ServerStatus, /proc/PID/status unreadable), 2 a usage error, 130 stopped by SIGINT or
-SIGTERM (the samples so far are printed).
+--max-growth-pct or more, 4 memory was flat but fewer than --min-grasps grasps happened, 1 a
+runtime failure (a program missing, the server did not start or died, no ServerStatus,
+/proc/PID/status unreadable), 2 a usage error, 130 stopped by SIGINT or SIGTERM (the samples so
+far are printed).
 )";
 
 [[noreturn]] void usage_error(const std::string& what) { telegrasp::cli::usage_exit("telegrasp-soak", what); }
@@ -94,6 +98,7 @@ struct Options {
   std::string profile = "loopback", profiles_file, server_config, skill = "experienced", log_dir, json_path;
   int server_pid = 0;
   int bot_nice = 10;
+  long min_grasps = 0;
 };
 
 Options parse(int argc, char** argv) {
@@ -127,6 +132,8 @@ Options parse(int argc, char** argv) {
         usage_error("--skill expects perfect, experienced or inexperienced, got '" + o.skill + "'");
     } else if (a == "--log-dir")
       o.log_dir = value();
+    else if (a == "--min-grasps")
+      o.min_grasps = telegrasp::cli::parse_whole(a, value(), 0, 1L << 40, usage_error);
     else if (a == "--json")
       o.json_path = value();
     else
@@ -456,5 +463,10 @@ int main(int argc, char** argv) {
             << verdict["growth_last_pct"].get<double>() << " % (last against first after warm-up), "
             << verdict["growth_fit_pct"].get<double>() << " % (fitted line); " << grasps << " grasps, " << missed
             << " missed ticks\n";
-  return flat ? 0 : kExitGrowth;
+  if (!flat) return kExitGrowth;
+  if (grasps < opt.min_grasps) {
+    std::cerr << "telegrasp-soak: only " << grasps << " grasps, --min-grasps " << opt.min_grasps << "\n";
+    return kExitIdle;
+  }
+  return 0;
 }
