@@ -52,6 +52,10 @@ bool in_private_network() { return g_private; }
 const std::string& private_network_failure() { return g_failure; }
 
 std::string drop_loopback_packets(double p) {
+  // An earlier test of this process may have added a rule: start from none.
+  std::string flushed;
+  if (run("iptables -F INPUT", flushed) != 0) return "`iptables -F INPUT` failed: " + flushed;
+  if (p <= 0) return "";
   std::ostringstream cmd;
   cmd << "iptables -A INPUT -i lo -m statistic --mode random --probability " << p << " -j DROP";
   std::string out;

@@ -21,8 +21,9 @@ bool enter_private_network(std::string& why);
 bool in_private_network();
 const std::string& private_network_failure();
 
-/// Drops each packet arriving on `lo` with probability `p` (iptables -m statistic); "" on
-/// success, else the command and its output.
+/// Drops each packet arriving on `lo` with probability `p` (iptables -m statistic), replacing any
+/// rule an earlier test of this process added (p = 0: no loss); "" on success, else the command
+/// and its output.
 std::string drop_loopback_packets(double p);
 
 /// The JSON objects of a file of lines (telegrasp-echo's output; lines that are not JSON objects,
