@@ -24,15 +24,18 @@ using Clock = std::chrono::steady_clock;
 
 constexpr auto kGuard = 300s;  // against a hang only: a run takes 15-40 s
 constexpr int kObjects = 4, kTrials = 2;
-// Grasps still complete: at least 6 of the 8 trials held after the lift at any loss (a miss is
-// the operator's, as without loss; every trial held in the runs measured).
-constexpr int kMinHeld = 6;
-// Four objects in a row, apart, so that each hand has its own.
+// Grasps still complete: at least 7 of the 8 trials held after the lift at any loss (room for one
+// miss of the operator's, as without loss; every trial held in the six runs measured).
+constexpr int kMinHeld = 7;
+// Four objects in two rows, 33 cm and more apart. In one row 20 cm apart, the second trials of two
+// neighbours (soup can, mustard bottle) were not grasped in 6 attempts in 5 of 9 lossy runs (the
+// server never grasped: no event was lost), likely the two hands in each other's way; spread out,
+// every trial held in 6 of 6.
 const char* kScene = R"(
 objects { model: "005_tomato_soup_can" x: 0.45 y: -0.3 }
-objects { model: "006_mustard_bottle" x: 0.45 y: -0.1 }
-objects { model: "003_cracker_box" x: 0.45 y: 0.1 }
-objects { model: "013_apple" x: 0.45 y: 0.3 }
+objects { model: "006_mustard_bottle" x: 0.78 y: -0.3 }
+objects { model: "003_cracker_box" x: 0.45 y: 0.3 }
+objects { model: "013_apple" x: 0.78 y: 0.3 }
 )";
 
 std::string percent(double p) { return std::to_string(static_cast<int>(p * 100 + 0.5)); }
