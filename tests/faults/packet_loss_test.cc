@@ -28,7 +28,7 @@ constexpr int kObjects = 4, kTrials = 2;
 // miss of the operator's, as without loss; every trial held in the six runs measured).
 constexpr int kMinHeld = 7;
 // Four objects in two rows, 33 cm and more apart. In one row 20 cm apart, the second trials of two
-// neighbours (soup can, mustard bottle) were not grasped in 6 attempts in 5 of 9 lossy runs (the
+// neighbours (soup can, mustard bottle) were not grasped in 6 attempts in about half the lossy runs (the
 // server never grasped: no event was lost), likely the two hands in each other's way; spread out,
 // every trial held in 6 of 6.
 const char* kScene = R"(
