@@ -15,6 +15,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libzstd-dev
   libboost-dev chromium
+  iptables iproute2
 )
 # Node.js runs tests/js; a machine with its own node on PATH keeps it.
 command -v node >/dev/null || packages+=(nodejs npm)

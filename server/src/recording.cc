@@ -195,9 +195,7 @@ void RecordingWriter::close(bool end_record) {
 // Recorder
 
 Recorder::Recorder(const std::string& path, const ServerSettings& settings, const SceneAssets& assets, OutputSink& next)
-    : writer_(path, make_recording_header(settings, assets)),
-      next_(next),
-      last_flush_(std::chrono::steady_clock::now()) {}
+    : writer_(path, make_recording_header(settings, assets)), next_(next) {}
 
 void Recorder::write(const proto::Record& record) {
   writer_.write(record);
@@ -212,11 +210,8 @@ void Recorder::log_error_once() {
   }
 }
 
-void Recorder::flush_if_due() {
-  const auto now = std::chrono::steady_clock::now();
-  if (now - last_flush_ < std::chrono::seconds(1)) return;
+void Recorder::flush_now() {
   writer_.flush();
-  last_flush_ = now;
   log_error_once();
 }
 
@@ -242,7 +237,6 @@ void Recorder::command(const msg::SceneCommand& command, std::int64_t now_ns) {
 }
 
 void Recorder::tick(std::int64_t now_ns) {
-  flush_if_due();
   proto::Record r;
   r.mutable_tick()->set_now_ns(now_ns);
   write(r);
@@ -269,16 +263,18 @@ void Recorder::publish(const msg::ContactSet& m) {
 }
 void Recorder::publish(const msg::GraspEvent& m) {
   output(proto::OUTPUT_GRASP_EVENT, to_cdr(m));
+  flush_now();  // in the file before any subscriber can have it
   next_.publish(m);
 }
 void Recorder::publish(const msg::SceneState& m) {
   output(proto::OUTPUT_SCENE_STATE, to_cdr(m));
+  flush_now();  // the tick's last output: the whole tick is in the file before its scene goes out
   next_.publish(m);
 }
 void Recorder::publish(const msg::ServerStatus& m) {
   output(proto::OUTPUT_SERVER_STATUS, to_cdr(m));
+  flush_now();
   next_.publish(m);
-  flush_if_due();
 }
 void Recorder::hand_removed(const HandAddress& hand) {
   proto::Record r;

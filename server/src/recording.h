@@ -101,9 +101,12 @@ class RecordingWriter {
 /// Records a server run at the simulation thread's boundary: it is the ServerLoop's
 /// SceneCallObserver (or, driving a SceneServer by hand: inputs() before on_inputs with the same
 /// samples, command() before apply_command, tick() before tick), and the SceneServer's OutputSink
-/// (ServerStatus too): each output is recorded, then forwarded to `next`. Bytes reach the file at
-/// least about once a second (at a tick or status), so a killed server leaves a file readable up
-/// to then; the destructor closes it with its End record. A write error at run time is logged once
+/// (ServerStatus too): each output is recorded, then forwarded to `next`. Bytes reach the file (the
+/// operating system: they survive the server's SIGKILL, not a power cut) before each SceneState, a
+/// tick's last output, and before each GraspEvent and ServerStatus, is forwarded: a subscriber
+/// never has one of those the file lacks, and a killed server's file keeps every tick before the
+/// one it was killed in (telegrasp-replay reads it up to the cut). That is one write() per tick.
+/// The destructor closes the file with its End record. A write error at run time is logged once
 /// to stderr and ends the recording; the server goes on. Simulation thread only.
 class Recorder : public OutputSink, public SceneCallObserver {
  public:
@@ -132,13 +135,12 @@ class Recorder : public OutputSink, public SceneCallObserver {
  private:
   void output(proto::OutputType type, std::string cdr);
   void write(const proto::Record& record);
-  void flush_if_due();
+  void flush_now();
   void log_error_once();
 
   RecordingWriter writer_;
   OutputSink& next_;
   bool error_logged_ = false;
-  std::chrono::steady_clock::time_point last_flush_;
 };
 
 /// Where a recording is damaged: its first bad frame.

@@ -23,7 +23,10 @@ namespace {
 
 constexpr double kTrialLimit = 30.0;  // s of operator time before a trial is cut short
 constexpr double kSettleTime = 0.2;  // s at the start pose before the operator starts
-constexpr double kFinishLimit = 2.0;  // s to wait for the release (and grasp event) after a trial
+constexpr double kFinishLimit = 2.0;  // s to wait for the release after a trial
+// s to wait for a grasp event the server sent (the hand was seen holding): GraspEvent is reliable,
+// so under packet loss it comes late rather than never; the trial's record needs its metrics.
+constexpr double kEventWait = 10.0;
 constexpr double kGiveUpAfter = 10.0;  // s an object may be unavailable before it is given up
 constexpr double kRestingSpeed = 0.02;  // m/s: slower objects (server's velocity) may be resting ...
 constexpr double kStillTime = 0.3;  // s: ... once their pose has stayed this long ...
@@ -256,7 +259,10 @@ bool Bot::set_scene(const client::SceneState& scene) {
 void Bot::tick(std::int64_t tick, const client::SceneState& scene) {
   std::map<int, const client::ObjectState*> objects;
   for (const auto& o : scene.objects) objects[o.id] = &o;
-  for (const client::GraspEvent& e : client_.take_grasp_events()) on_event(e);
+  for (const client::GraspEvent& e : client_.take_grasp_events()) {
+    event_ids_.push_back(e.event_id);
+    on_event(e);
+  }
   others_.clear();
   own_.clear();
   for (client::HandSkeleton& s : client_.latest_hand_skeletons())
@@ -339,6 +345,9 @@ bool Bot::report_results() const {
                            (failed.empty() ? "every object held in every trial" : "not held every time: " + failed);
   std::cout << line << "\n" << std::flush;
   std::cerr << line << "\n";
+  const json events = grasp_event_ids_json();
+  std::cerr << "grasp events received: " << events["received"] << " (ids " << events["first"] << ".." << events["last"]
+            << "), " << events["missing"].size() << " missing, " << events["duplicates"].size() << " duplicated\n";
   if (opt_.json_path.empty()) return true;
   json grasps = json::array();
   for (const BotRecord& r : records_) {
@@ -350,13 +359,29 @@ bool Bot::report_results() const {
     grasps.push_back(std::move(g));
   }
   std::ofstream out(opt_.json_path);
-  out << json{{"grasps", grasps}, {"summary", s}, {"summaries", json::array({s})}}.dump(1) << "\n";
+  out << json{{"grasps", grasps}, {"summary", s}, {"summaries", json::array({s})}, {"grasp_events", events}}.dump(1)
+      << "\n";
   if (!out.flush()) {
     std::cerr << "telegrasp-bot: cannot write --json file " << opt_.json_path << "\n";
     return false;
   }
   std::cerr << "wrote " << opt_.json_path << "\n";
   return true;
+}
+
+nlohmann::json Bot::grasp_event_ids_json() const {
+  std::vector<std::uint64_t> ids = event_ids_;
+  std::sort(ids.begin(), ids.end());
+  json missing = json::array(), duplicates = json::array();
+  for (std::size_t i = 1; i < ids.size(); ++i) {
+    if (ids[i] == ids[i - 1] && (duplicates.empty() || duplicates.back() != ids[i])) duplicates.push_back(ids[i]);
+    for (std::uint64_t m = ids[i - 1] + 1; m < ids[i]; ++m) missing.push_back(m);
+  }
+  return {{"received", ids.size()},
+          {"first", ids.empty() ? json(nullptr) : json(ids.front())},
+          {"last", ids.empty() ? json(nullptr) : json(ids.back())},
+          {"missing", missing},
+          {"duplicates", duplicates}};
 }
 
 bool Bot::all_held() const {
@@ -558,7 +583,8 @@ void Bot::step(Hand& h, std::int64_t tick, const client::SceneState& scene,
     // Open hand, still; wait until the server has released the object and sent the grasp event.
     const bool released = !holds_target(h, o);
     const bool event_in = h.got_grasp_event || !h.seen_grasped;
-    if ((released && event_in) || (tick - h.stage_tick) * dt > kFinishLimit) finish_trial(h);
+    const double waited = (tick - h.stage_tick) * dt;
+    if (event_in ? released || waited > kFinishLimit : waited > kEventWait) finish_trial(h);
   }
 }
 

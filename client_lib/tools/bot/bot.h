@@ -10,6 +10,7 @@
 #include "telegrasp/sim/scripted_operator.h"
 
 #include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <cstdint>
@@ -147,6 +148,12 @@ class Bot {
   // Every object held after the lift in every one of its trials (and at least one trial done).
   bool all_held() const;
 
+  // The event_id of every GraspEvent received (every hand's, in arrival order).
+  const std::vector<std::uint64_t>& grasp_event_ids() const { return event_ids_; }
+  // {"received", "first", "last", "missing" (ids between first and last never received),
+  // "duplicates" (ids received more than once)}: GraspEvent is reliable, so both lists stay empty.
+  nlohmann::json grasp_event_ids_json() const;
+
  private:
   Hand* hand_of(const client::HandKey& key);
 
@@ -199,6 +206,7 @@ class Bot {
   std::vector<client::HandSkeleton> others_, own_;  // other clients' hands and ours, this tick
   double server_time_ = 0;  // of the newest scene state
   std::vector<BotRecord> records_;
+  std::vector<std::uint64_t> event_ids_;
   int total_ = 0, done_ = 0;
 };
 

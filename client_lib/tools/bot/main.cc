@@ -68,7 +68,9 @@ Options:
                       here is planned on the geometry the server publishes (ObjectGeometry)
   --json FILE         write every grasp record as telegrasp-eval does, plus "client_id",
                       "hand", "object_id" and "reason" ("mode" and "speed_scale" are null: they
-                      are the server's settings)
+                      are the server's settings), and "grasp_events": the event_ids of every
+                      GraspEvent received, any hand's ({"received", "first", "last", "missing",
+                      "duplicates"}; reliable events leave both lists empty)
   --domain N          DDS domain, 0..232 (default 0)
   --profile NAME      Fast DDS participant profile: loopback (default), lan, wan
   --profiles FILE     Fast DDS XML profiles (default: $TELEGRASP_PROFILES, else the shipped file)

@@ -1,0 +1,472 @@
+// telegrasp-soak: a long run of many hands grasping continuously against one server, watching the
+// server's memory (VmRSS), tick time and missed ticks for growth. Starts the server (or watches one
+// already running), runs telegrasp-bot processes (two hands each) and restarts each bot when it
+// ends, samples every --sample-s seconds and prints the samples and a verdict as JSON.
+#include "child_process.h"
+#include "cli.h"
+#include "telegrasp/client/client.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <unistd.h>
+
+namespace {
+
+namespace fs = std::filesystem;
+namespace client = telegrasp::client;
+using telegrasp::tools::ChildProcess;
+using json = nlohmann::ordered_json;
+using Clock = std::chrono::steady_clock;
+
+constexpr int kExitGrowth = 3;  // the run completed but memory was not flat
+constexpr int kExitIdle = 4;  // memory flat, but fewer grasps than --min-grasps
+
+constexpr const char* kUsage = R"(Usage: telegrasp-soak --hands N --minutes M [options]
+
+Soak test: N hands grasp continuously for M minutes against one telegrasp server while the
+server's resident memory (VmRSS from /proc/PID/status), tick time and missed ticks (from its
+ServerStatus) are sampled every --sample-s seconds. The hands are telegrasp-bot processes with
+two hands each (one right hand for an odd N), each grasping every object of the scene over and
+over (--trials 10000) and restarted with a new seed and client id when it ends (a bot gives an
+object up after 10 s without a chance at it, and may then finish). By default the soak starts
+its own telegrasp-server (the 30 stand-ins, or --server-config) and stops it at the end.
+
+At the end it prints one JSON object on stdout: the settings, every sample
+  {"t_s", "rss_kib", "tick_us_p50", "tick_us_max" (the worst 1 s status in the sample period),
+   "missed_ticks" (in the period), "missed_ticks_total", "server_hands", "server_clients",
+   "grasps", "releases" (events in the period), "bot_restarts" (in the period)}
+and a verdict: memory is flat when the RSS grew by less than --max-growth-pct over the samples
+after the warm-up, measured two ways (last sample against the first after warm-up, and a
+least-squares line through them over the same span); both must stay under the limit.
+
+Options:
+  --hands N           hands grasping at once, 1..1024 (required)
+  --minutes M         how long to run, > 0 (required; fractions allowed, e.g. 0.5)
+  --sample-s S        seconds between samples (default 10)
+  --warmup-s S        samples before this are not judged (default: 60, at most a third of the run)
+  --max-growth-pct P  the verdict's limit on RSS growth after warm-up (default 1)
+  --domain N          DDS domain, 0..232 (default 0)
+  --profile NAME      Fast DDS participant profile for the server, bots and the soak (default
+                      loopback)
+  --profiles FILE     Fast DDS XML profiles (default: $TELEGRASP_PROFILES, else the shipped file)
+  --server-pid PID    watch this already running server instead of starting one (it must be on
+                      --domain with --profile; its RSS is read from /proc/PID/status)
+  --server-config F   the started server's --config file (default: none, the 30 stand-ins)
+  --bot-nice N        run the bots at this nice value, 0..19 (default 10): the server, the
+                      program under test, gets the CPU first when the bots' planning saturates it
+  --skill NAME        the bots' skill: perfect | experienced | inexperienced (default experienced)
+  --log-dir DIR       where the server's and bots' logs go (default: a new folder in $TMPDIR,
+                      printed on stderr)
+  --min-grasps N      fail (exit 4) when fewer grasp events than N arrived over the run
+                      (default 0): the hands were not grasping
+  --json FILE         also write the JSON result to FILE
+  -h, --help          this text
+
+Progress goes to stderr, one line per sample. The programs telegrasp-server and telegrasp-bot are
+taken from the folder of this executable.
+
+Exit status: 0 the run completed and memory was flat, 3 the run completed but memory grew by
+--max-growth-pct or more, 4 memory was flat but fewer than --min-grasps grasps happened, 1 a
+runtime failure (a program missing, the server did not start or died, no ServerStatus,
+/proc/PID/status unreadable), 2 a usage error, 130 stopped by SIGINT or SIGTERM (the samples so
+far are printed).
+)";
+
+[[noreturn]] void usage_error(const std::string& what) { telegrasp::cli::usage_exit("telegrasp-soak", what); }
+
+struct Options {
+  int hands = 0;
+  double minutes = 0, sample_s = 10, warmup_s = -1, max_growth_pct = 1;
+  int domain = 0;
+  std::string profile = "loopback", profiles_file, server_config, skill = "experienced", log_dir, json_path;
+  int server_pid = 0;
+  int bot_nice = 10;
+  long min_grasps = 0;
+};
+
+Options parse(int argc, char** argv) {
+  Options o;
+  telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
+    if (a == "--hands")
+      o.hands = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 1024, usage_error));
+    else if (a == "--minutes")
+      o.minutes = telegrasp::cli::parse_number(a, value(), 1e-3, 7 * 24 * 60, usage_error);
+    else if (a == "--sample-s")
+      o.sample_s = telegrasp::cli::parse_number(a, value(), 1, 3600, usage_error);
+    else if (a == "--warmup-s")
+      o.warmup_s = telegrasp::cli::parse_number(a, value(), 0, 7 * 24 * 3600, usage_error);
+    else if (a == "--max-growth-pct")
+      o.max_growth_pct = telegrasp::cli::parse_number(a, value(), 0, 1000, usage_error);
+    else if (a == "--domain")
+      o.domain = telegrasp::cli::parse_domain(a, value(), usage_error);
+    else if (a == "--profile")
+      o.profile = telegrasp::cli::parse_profile(a, value(), usage_error);
+    else if (a == "--profiles")
+      o.profiles_file = value();
+    else if (a == "--server-pid")
+      o.server_pid = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 1L << 30, usage_error));
+    else if (a == "--bot-nice")
+      o.bot_nice = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 0, 19, usage_error));
+    else if (a == "--server-config")
+      o.server_config = value();
+    else if (a == "--skill") {
+      o.skill = value();
+      if (o.skill != "perfect" && o.skill != "experienced" && o.skill != "inexperienced")
+        usage_error("--skill expects perfect, experienced or inexperienced, got '" + o.skill + "'");
+    } else if (a == "--log-dir")
+      o.log_dir = value();
+    else if (a == "--min-grasps")
+      o.min_grasps = telegrasp::cli::parse_whole(a, value(), 0, 1L << 40, usage_error);
+    else if (a == "--json")
+      o.json_path = value();
+    else
+      return false;
+    return true;
+  });
+  if (o.hands == 0) usage_error("--hands N is required");
+  if (o.minutes == 0) usage_error("--minutes M is required");
+  const double run_s = 60 * o.minutes;
+  if (o.warmup_s < 0) o.warmup_s = std::min(60.0, run_s / 3);
+  if (o.warmup_s >= run_s) usage_error("--warmup-s must be shorter than the run (--minutes)");
+  if (o.sample_s > run_s) usage_error("--sample-s must not be longer than the run (--minutes)");
+  if (!o.server_config.empty() && o.server_pid)
+    usage_error("--server-config is for a started server; --server-pid watches a running one");
+  if (!o.server_config.empty() && !fs::is_regular_file(o.server_config))
+    usage_error("--server-config " + o.server_config + ": no such file");
+  return o;
+}
+
+std::atomic<bool> g_stop{false};
+extern "C" void on_signal(int) { g_stop = true; }
+
+std::string self_dir() {
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  return ec ? std::string(".") : exe.parent_path().string();
+}
+
+// VmRSS of `pid` in KiB, or nothing if the process is gone or the line is missing.
+std::optional<long> rss_kib(int pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind("VmRSS:", 0) == 0) return std::strtol(line.c_str() + 6, nullptr, 10);
+  return std::nullopt;
+}
+
+// What the ServerStatus and GraspEvent callbacks gather between two samples.
+struct Window {
+  std::mutex mu;
+  std::optional<client::ServerStatus> latest;
+  double tick_us_max = 0;
+  std::vector<double> tick_us_p50;
+  int grasps = 0, releases = 0;
+};
+
+// One bot slot: its process and how often it was (re)started.
+struct Slot {
+  ChildProcess bot;
+  bool both = true;
+  int starts = 0;
+};
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// Least-squares slope of y over x.
+double slope(const std::vector<double>& x, const std::vector<double>& y) {
+  const double n = static_cast<double>(x.size());
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) sx += x[i], sy += y[i], sxx += x[i] * x[i], sxy += x[i] * y[i];
+  const double d = n * sxx - sx * sx;
+  return d > 0 ? (n * sxy - sx * sy) / d : 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options opt = parse(argc, argv);
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+
+  const std::string bin = self_dir();
+  for (const char* tool : {"telegrasp-server", "telegrasp-bot"})
+    if ((tool != std::string("telegrasp-server") || !opt.server_pid) && access((bin + "/" + tool).c_str(), X_OK) != 0) {
+      std::cerr << "telegrasp-soak: " << bin << "/" << tool << ": not found or not executable\n";
+      return telegrasp::cli::kExitFailure;
+    }
+  std::string log_dir = opt.log_dir;
+  std::error_code ec;
+  if (log_dir.empty()) {
+    std::string pattern = (fs::temp_directory_path(ec) / "telegrasp_soak.XXXXXX").string();
+    if (!mkdtemp(pattern.data())) {
+      std::cerr << "telegrasp-soak: cannot make a log folder " << pattern << "\n";
+      return telegrasp::cli::kExitFailure;
+    }
+    log_dir = pattern;
+  } else if (fs::create_directories(log_dir, ec); ec) {
+    std::cerr << "telegrasp-soak: --log-dir " << log_dir << ": " << ec.message() << "\n";
+    return telegrasp::cli::kExitFailure;
+  }
+  std::cerr << "telegrasp-soak: logs in " << log_dir << "\n";
+
+  std::vector<std::string> dds = {"--domain", std::to_string(opt.domain), "--profile", opt.profile};
+  if (!opt.profiles_file.empty()) dds.insert(dds.end(), {"--profiles", opt.profiles_file});
+
+  // The server: started here (and stopped at the end), or one already running.
+  ChildProcess server;
+  int server_pid = opt.server_pid;
+  if (!server_pid) {
+    std::vector<std::string> argv = {bin + "/telegrasp-server"};
+    argv.insert(argv.end(), dds.begin(), dds.end());
+    if (!opt.server_config.empty()) argv.insert(argv.end(), {"--config", opt.server_config});
+    try {
+      server.start(argv, log_dir + "/server.log");
+    } catch (const std::exception& e) {
+      std::cerr << "telegrasp-soak: cannot start the server: " << e.what() << "\n";
+      return telegrasp::cli::kExitFailure;
+    }
+    server_pid = server.pid();
+  }
+  if (!rss_kib(server_pid)) {
+    std::cerr << "telegrasp-soak: cannot read /proc/" << server_pid << "/status (no such server process)\n";
+    return telegrasp::cli::kExitFailure;
+  }
+
+  // The soak's own subscriber: server status and grasp events only.
+  Window window;
+  std::unique_ptr<client::Client> c;
+  try {
+    client::ClientOptions copt;
+    copt.client_id = "soak-" + std::to_string(getpid());
+    copt.domain = opt.domain;
+    copt.profile = opt.profile;
+    copt.profiles_file = opt.profiles_file;
+    copt.topics = client::kServerStatuses | client::kGraspEvents;
+    c = std::make_unique<client::Client>(copt);
+  } catch (const std::exception& e) {
+    std::cerr << "telegrasp-soak: " << e.what() << "\n";
+    return telegrasp::cli::kExitFailure;
+  }
+  c->on_server_status([&](const client::ServerStatus& s) {
+    std::lock_guard lock(window.mu);
+    window.latest = s;
+    window.tick_us_max = std::max(window.tick_us_max, s.tick_us_max);
+    window.tick_us_p50.push_back(s.tick_us_p50);
+  });
+  c->on_grasp_event([&](const client::GraspEvent& e) {
+    std::lock_guard lock(window.mu);
+    (e.kind == client::GraspEvent::Kind::kGrasp ? window.grasps : window.releases)++;
+  });
+  const auto found_deadline = Clock::now() + std::chrono::seconds(60);
+  while (!g_stop && !c->latest_server_status()) {
+    if (Clock::now() > found_deadline || (!opt.server_pid && !server.running())) {
+      std::cerr << "telegrasp-soak: no ServerStatus from the server (pid " << server_pid << ") on domain " << opt.domain
+                << " with profile " << opt.profile << " within 60 s; see " << log_dir << "/server.log\n";
+      return telegrasp::cli::kExitFailure;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+
+  // Missed ticks are counted from here on (a starting server may miss some while it loads).
+  std::uint64_t missed_before = c->latest_server_status()->missed_ticks;
+
+  // The bots: two hands each; slot k's n-th start is client soak<pid>-k-n with seed 1000 n + k.
+  std::vector<Slot> slots((opt.hands + 1) / 2);
+  if (opt.hands % 2) slots.back().both = false;
+  auto start_bot = [&](std::size_t k) {
+    Slot& s = slots[k];
+    const std::string id = "soak" + std::to_string(getpid()) + "-" + std::to_string(k) + "-" + std::to_string(s.starts);
+    std::vector<std::string> argv = {"/usr/bin/nice",
+                                     "-n",
+                                     std::to_string(opt.bot_nice),
+                                     bin + "/telegrasp-bot",
+                                     "--client-id",
+                                     id,
+                                     "--hands",
+                                     s.both ? "both" : "right",
+                                     "--trials",
+                                     "10000",
+                                     "--skill",
+                                     opt.skill,
+                                     "--seed",
+                                     std::to_string(1000 * s.starts + k + 1),
+                                     "--timeout",
+                                     "60"};
+    argv.insert(argv.end(), dds.begin(), dds.end());
+    s.bot.start(argv, log_dir + "/bot" + std::to_string(k) + ".log");
+    ++s.starts;
+  };
+  try {
+    for (std::size_t k = 0; k < slots.size() && !g_stop; ++k) {
+      start_bot(k);
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));  // spread the discovery bursts
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "telegrasp-soak: cannot start a bot: " << e.what() << "\n";
+    return telegrasp::cli::kExitFailure;
+  }
+  std::cerr << "telegrasp-soak: " << opt.hands << " hands in " << slots.size() << " bots against server pid "
+            << server_pid << ", " << opt.minutes << " min, a sample every " << opt.sample_s << " s\n";
+
+  json samples = json::array();
+  std::vector<double> t_judged, rss_judged;
+  const auto t0 = Clock::now();
+  const auto end = t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(60 * opt.minutes));
+  auto next_sample = t0;
+  int restarts = 0, total_restarts = 0;
+  std::string failure;
+  while (!g_stop) {
+    // Restart every bot that ended (a bot that cannot run at all would spin: count and go on).
+    for (std::size_t k = 0; k < slots.size(); ++k)
+      if (!slots[k].bot.running()) {
+        try {
+          start_bot(k);
+        } catch (const std::exception& e) {
+          failure = std::string("cannot restart a bot: ") + e.what();
+        }
+        ++restarts, ++total_restarts;
+      }
+    if (!failure.empty()) break;
+    if (!opt.server_pid && !server.running()) {
+      failure = "the server ended (" + server.exit_description() + "); see " + log_dir + "/server.log";
+      break;
+    }
+    const auto now = Clock::now();
+    if (now >= next_sample + std::chrono::duration<double>(opt.sample_s) || now >= end) {
+      next_sample = now;
+      const double t = std::chrono::duration<double>(now - t0).count();
+      const std::optional<long> rss = rss_kib(server_pid);
+      if (!rss) {
+        failure = "cannot read /proc/" + std::to_string(server_pid) + "/status: the server is gone";
+        break;
+      }
+      json s;
+      {
+        std::lock_guard lock(window.mu);
+        const std::uint64_t missed_total = window.latest ? window.latest->missed_ticks : 0;
+        s = {{"t_s", std::round(t * 10) / 10},
+             {"rss_kib", *rss},
+             {"tick_us_p50", median(window.tick_us_p50)},
+             {"tick_us_max", window.tick_us_max},
+             {"missed_ticks", missed_total - missed_before},
+             {"missed_ticks_total", missed_total},
+             {"server_hands", window.latest ? window.latest->hands : 0},
+             {"server_clients", window.latest ? window.latest->clients : 0},
+             {"grasps", window.grasps},
+             {"releases", window.releases},
+             {"bot_restarts", restarts}};
+        missed_before = missed_total;
+        window.tick_us_max = 0;
+        window.tick_us_p50.clear();
+        window.grasps = window.releases = 0;
+      }
+      restarts = 0;
+      std::cerr << "telegrasp-soak: " << s.dump() << "\n";
+      if (t >= opt.warmup_s) t_judged.push_back(t), rss_judged.push_back(static_cast<double>(*rss));
+      samples.push_back(std::move(s));
+      if (now >= end) break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  const bool interrupted = g_stop;
+
+  // Stop the bots first (their hands leave), then the server we started.
+  for (Slot& s : slots) s.bot.signal(SIGTERM);
+  for (Slot& s : slots) s.bot.stop(std::chrono::seconds(10));
+  c.reset();
+  int server_status = 0;
+  if (!opt.server_pid) server_status = server.stop(std::chrono::seconds(10));
+
+  // The verdict over the samples after warm-up.
+  json verdict;
+  bool flat = false;
+  if (rss_judged.size() >= 2) {
+    const double base = rss_judged.front();
+    const double span = t_judged.back() - t_judged.front();
+    const double growth_last = 100 * (rss_judged.back() - base) / base;
+    const double growth_fit = 100 * slope(t_judged, rss_judged) * span / base;
+    flat = growth_last < opt.max_growth_pct && growth_fit < opt.max_growth_pct;
+    verdict = {{"flat_memory", flat},
+               {"judged_samples", rss_judged.size()},
+               {"judged_from_s", t_judged.front()},
+               {"rss_first_judged_kib", rss_judged.front()},
+               {"rss_last_kib", rss_judged.back()},
+               {"rss_max_kib", *std::max_element(rss_judged.begin(), rss_judged.end())},
+               {"growth_last_pct", growth_last},
+               {"growth_fit_pct", growth_fit},
+               {"max_growth_pct", opt.max_growth_pct}};
+  } else {
+    verdict = {{"flat_memory", nullptr},
+               {"why", "fewer than 2 samples after the warm-up: lengthen --minutes or shorten --warmup-s"}};
+  }
+  int grasps = 0;
+  std::uint64_t missed = 0;
+  for (const json& s : samples) grasps += s["grasps"].get<int>(), missed += s["missed_ticks"].get<std::uint64_t>();
+  verdict["grasps"] = grasps;
+  verdict["missed_ticks"] = missed;
+  verdict["bot_restarts"] = total_restarts;
+  json result = {{"hands", opt.hands},
+                 {"bots", slots.size()},
+                 {"minutes", opt.minutes},
+                 {"sample_s", opt.sample_s},
+                 {"warmup_s", opt.warmup_s},
+                 {"profile", opt.profile},
+                 {"bot_nice", opt.bot_nice},
+                 {"server_pid", server_pid},
+                 {"server_exit", opt.server_pid ? json(nullptr) : json(server_status)},
+                 {"log_dir", log_dir},
+                 {"samples", samples},
+                 {"verdict", verdict},
+                 {"completed", failure.empty() && !interrupted},
+                 {"failure", failure.empty() ? json(nullptr) : json(failure)}};
+  std::cout << result.dump(1) << "\n" << std::flush;
+  if (!opt.json_path.empty()) {
+    std::ofstream out(opt.json_path);
+    out << result.dump(1) << "\n";
+    if (!out.flush()) {
+      std::cerr << "telegrasp-soak: cannot write --json file " << opt.json_path << "\n";
+      return telegrasp::cli::kExitFailure;
+    }
+  }
+  if (!failure.empty()) {
+    std::cerr << "telegrasp-soak: " << failure << "\n";
+    return telegrasp::cli::kExitFailure;
+  }
+  if (interrupted) return 130;
+  if (verdict["flat_memory"].is_null()) {
+    std::cerr << "telegrasp-soak: no verdict: " << verdict["why"].get<std::string>() << "\n";
+    return telegrasp::cli::kExitFailure;
+  }
+  std::cerr << "telegrasp-soak: " << (flat ? "flat memory" : "memory grew") << ": RSS "
+            << verdict["growth_last_pct"].get<double>() << " % (last against first after warm-up), "
+            << verdict["growth_fit_pct"].get<double>() << " % (fitted line); " << grasps << " grasps, " << missed
+            << " missed ticks\n";
+  if (!flat) return kExitGrowth;
+  if (grasps < opt.min_grasps) {
+    std::cerr << "telegrasp-soak: only " << grasps << " grasps, --min-grasps " << opt.min_grasps << "\n";
+    return kExitIdle;
+  }
+  return 0;
+}
