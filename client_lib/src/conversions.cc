@@ -323,6 +323,7 @@ msg::SceneState to_msg(const client::SceneState& s) {
   m.tick(s.tick);
   m.time(s.time);
   m.objects(to_msgs<msg::ObjectState>(s.objects));
+  m.incarnation(s.incarnation);
   return m;
 }
 
@@ -331,6 +332,7 @@ client::SceneState from_msg(const msg::SceneState& m) {
   s.tick = m.tick();
   s.time = m.time();
   s.objects = from_msgs<client::ObjectState>(m.objects());
+  s.incarnation = m.incarnation();
   return s;
 }
 
@@ -408,6 +410,7 @@ msg::ServerStatus to_msg(const client::ServerStatus& s) {
   m.commands_accepted(s.commands_accepted);
   m.commands_rejected(s.commands_rejected);
   for (const std::string& model : s.models) m.models().emplace_back(model);
+  m.incarnation(s.incarnation);
   return m;
 }
 
@@ -430,6 +433,7 @@ client::ServerStatus from_msg(const msg::ServerStatus& m) {
   s.commands_rejected = m.commands_rejected();
   s.models.reserve(m.models().size());
   for (const auto& model : m.models()) s.models.push_back(model.to_string());
+  s.incarnation = m.incarnation();
   return s;
 }
 

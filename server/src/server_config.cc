@@ -64,6 +64,7 @@ void apply_config(const proto::ServerConfig& c, ServerSettings& s, const std::st
   if (has("max_hands")) s.max_hands = c.max_hands();
   if (has("lockstep")) s.lockstep = c.lockstep();
   if (has("record")) s.record_path = c.record();
+  if (has("snapshot")) s.snapshot_path = c.snapshot();
   validate_settings(s, origin);
 }
 
@@ -131,6 +132,7 @@ proto::ServerConfig to_proto(const ServerSettings& s) {
   c.set_max_hands(s.max_hands);
   c.set_lockstep(s.lockstep);
   c.set_record(s.record_path);
+  c.set_snapshot(s.snapshot_path);
   return c;
 }
 

@@ -68,6 +68,16 @@ class Client {
   void on_server_status(std::function<void(const ServerStatus&)> callback);
   /// Each model's geometry as it arrives; the caught-up snapshot is every model's newest one.
   void on_object_geometry(std::function<void(const std::shared_ptr<const ObjectGeometry>&)> callback);
+  /// A restarted server: called when a SceneState or ServerStatus of a new incarnation arrives
+  /// (never for the first server seen; nothing to catch up), before that sample is delivered. By
+  /// then the old run's state is dropped: the latest hand skeletons, grasp states and contact sets
+  /// it sent, and its scene state and status; its late samples are dropped too. Object ids, ticks
+  /// and server times of the old run are not comparable with the new one's. The client goes on
+  /// (its writers match the new server by themselves): nothing to reconnect.
+  void on_server_restart(std::function<void(const ServerRestart&)> callback);
+  /// The incarnation of the newest server run seen (0: none yet), and how many restarts were seen.
+  std::uint64_t server_incarnation() const;
+  std::uint64_t server_restarts() const;
 
   /// Polling: the newest sample of each output (per hand for per-hand outputs).
   std::optional<SceneState> latest_scene_state() const;
