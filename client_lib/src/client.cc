@@ -9,6 +9,7 @@
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <condition_variable>
 #include <exception>
@@ -69,11 +70,22 @@ struct Channel {
   std::function<void(const T&)> callback;
 };
 
-// The newest sample of a per-hand output, and which DDS instance is which hand (a disposed
-// instance arrives without its key).
+// The participant (GUID prefix) of a sample's writer: which server run sent it.
+using Source = std::array<std::uint8_t, 12>;
+
+Source source_of(const dds::SampleInfo& info) {
+  Source s{};
+  const std::uint8_t* guid = info.publication_handle.value;  // the writer's GUID: prefix, then entity id
+  std::copy_n(guid, s.size(), s.begin());
+  return s;
+}
+
+// The newest sample of a per-hand output, the participant that sent it, and which DDS instance is
+// which hand (a disposed instance arrives without its key).
 template <class T>
 struct PerHand {
   std::map<HandKey, T> latest;
+  std::map<HandKey, Source> source;
   std::map<dds::InstanceHandle_t, HandKey> hand_of_instance;
 };
 
@@ -94,14 +106,18 @@ struct Client::Impl {
   bool server_ready() const;
 
   // Called on DDS threads by the listeners, one per valid sample.
-  void received(const msg::HandSkeleton& m, const dds::InstanceHandle_t& instance);
-  void received(const msg::GraspState& m, const dds::InstanceHandle_t& instance);
-  void received(const msg::ContactSet& m, const dds::InstanceHandle_t& instance);
-  void received(const msg::GraspEvent& m, const dds::InstanceHandle_t& instance);
-  void received(const msg::SceneState& m, const dds::InstanceHandle_t& instance);
-  void received(const msg::ServerStatus& m, const dds::InstanceHandle_t& instance);
-  void received(const msg::ObjectGeometry& m, const dds::InstanceHandle_t& instance);
-  void received(const msg::ClientNotice& m, const dds::InstanceHandle_t& instance);
+  void received(const msg::HandSkeleton& m, const dds::SampleInfo& info);
+  void received(const msg::GraspState& m, const dds::SampleInfo& info);
+  void received(const msg::ContactSet& m, const dds::SampleInfo& info);
+  void received(const msg::GraspEvent& m, const dds::SampleInfo& info);
+  void received(const msg::SceneState& m, const dds::SampleInfo& info);
+  void received(const msg::ServerStatus& m, const dds::SampleInfo& info);
+  void received(const msg::ObjectGeometry& m, const dds::SampleInfo& info);
+  // A SceneState or ServerStatus of `incarnation` from `source` arrived: on a new incarnation, the
+  // old run's per-hand samples, scene and status are dropped and the restart callback runs. False
+  // if the sample is of an incarnation already replaced (late, from a server run that is gone): drop it.
+  bool noticed(std::uint64_t incarnation, const Source& source);
+  void received(const msg::ClientNotice& m, const dds::SampleInfo& info);
   // The (checked) geometry `m` describes, built from a cached one with the same content hash: the
   // very same object if nothing differs, else a new one with a copy of its mesh; null if none is cached.
   std::shared_ptr<const ObjectGeometry> cached_geometry(const msg::ObjectGeometry& m);
@@ -113,7 +129,7 @@ struct Client::Impl {
   void disposed(const Msg*, const dds::InstanceHandle_t&) {}  // unkeyed topics: nothing per instance
 
   template <class T>
-  void remember(PerHand<T>& store, const T& value, const dds::InstanceHandle_t& instance);
+  void remember(PerHand<T>& store, const T& value, const dds::SampleInfo& info);
   template <class T>
   void forget(PerHand<T>& store, const dds::InstanceHandle_t& instance);
   template <class T>
@@ -145,6 +161,10 @@ struct Client::Impl {
   std::map<std::string, std::shared_ptr<const ObjectGeometry>> geometries;  // newest per model
   std::multimap<std::uint64_t, std::weak_ptr<const ObjectGeometry>> geometry_by_hash;  // cache of those in use
   std::set<std::string> geometry_rejections_logged;  // model and reason
+  std::uint64_t incarnation = 0;  // of the newest server run seen; 0: none yet
+  std::uint64_t restarts = 0;
+  std::set<std::uint64_t> retired_incarnations;
+  std::map<Source, std::uint64_t> incarnation_of;  // per server participant seen
 
   // User callbacks, one channel per output.
   Channel<HandSkeleton> skeleton_channel;
@@ -155,6 +175,7 @@ struct Client::Impl {
   Channel<ServerStatus> server_status_channel;
   Channel<std::shared_ptr<const ObjectGeometry>> geometry_channel;
   Channel<Notice> notice_channel;
+  Channel<ServerRestart> restart_channel;
   std::vector<GraspEvent> unseen_events;  // arrived while no event callback was set; under its channel's mutex
   std::atomic<bool> callback_threw{false};
 
@@ -182,7 +203,7 @@ class Client::Impl::Listener final : public dds::DataReaderListener {
     dds::SampleInfo info;
     while (!impl_.closing && reader->take_next_sample(&sample, &info) == ReturnCode_t::RETCODE_OK) {
       if (info.valid_data)
-        impl_.received(sample, info.instance_handle);
+        impl_.received(sample, info);
       else if (info.instance_state == dds::NOT_ALIVE_DISPOSED_INSTANCE_STATE)
         impl_.disposed(static_cast<const Msg*>(nullptr), info.instance_handle);
     }
@@ -243,10 +264,53 @@ bool Client::Impl::server_ready() const {
 }
 
 template <class T>
-void Client::Impl::remember(PerHand<T>& store, const T& value, const dds::InstanceHandle_t& instance) {
+void Client::Impl::remember(PerHand<T>& store, const T& value, const dds::SampleInfo& info) {
   std::lock_guard lock(data_mutex);
-  store.hand_of_instance[instance] = value.hand;
+  store.hand_of_instance[info.instance_handle] = value.hand;
   store.latest[value.hand] = value;
+  store.source[value.hand] = source_of(info);
+}
+
+namespace {
+
+// Drops the per-hand samples not sent by `source`.
+template <class T>
+void keep_only(PerHand<T>& store, const Source& source) {
+  for (auto it = store.latest.begin(); it != store.latest.end();) {
+    auto s = store.source.find(it->first);
+    if (s != store.source.end() && s->second == source) {
+      ++it;
+      continue;
+    }
+    store.source.erase(it->first);
+    it = store.latest.erase(it);
+  }
+}
+
+}  // namespace
+
+bool Client::Impl::noticed(std::uint64_t new_incarnation, const Source& source) {
+  ServerRestart restart;
+  {
+    std::lock_guard lock(data_mutex);
+    if (retired_incarnations.count(new_incarnation)) return false;
+    incarnation_of[source] = new_incarnation;
+    if (new_incarnation == incarnation) return true;
+    restart = {incarnation, new_incarnation};
+    incarnation = new_incarnation;
+    if (restart.previous_incarnation == 0) return true;  // the first server seen
+    // A new server run: what the old one said about hands and objects no longer holds.
+    retired_incarnations.insert(restart.previous_incarnation);
+    ++restarts;
+    keep_only(skeletons, source);
+    keep_only(grasp_states, source);
+    keep_only(contact_sets, source);
+    if (scene && scene->incarnation != new_incarnation) scene.reset();
+    if (status && status->incarnation != new_incarnation) status.reset();
+  }
+  std::lock_guard delivery(restart_channel.mutex);
+  call(restart_channel, restart, "server restart");
+  return true;
 }
 
 template <class T>
@@ -282,32 +346,34 @@ void Client::Impl::set_callback(Channel<T>& channel, std::function<void(const T&
   for (const T& value : snapshot()) call(channel, value, what);
 }
 
-void Client::Impl::received(const msg::HandSkeleton& m, const dds::InstanceHandle_t& instance) {
+void Client::Impl::received(const msg::HandSkeleton& m, const dds::SampleInfo& info) {
   const HandSkeleton s = from_msg(m);
   std::lock_guard delivery(skeleton_channel.mutex);
-  remember(skeletons, s, instance);
+  remember(skeletons, s, info);
   call(skeleton_channel, s, "HandSkeleton");
 }
 
-void Client::Impl::received(const msg::GraspState& m, const dds::InstanceHandle_t& instance) {
+void Client::Impl::received(const msg::GraspState& m, const dds::SampleInfo& info) {
   const GraspState s = from_msg(m);
   std::lock_guard delivery(grasp_state_channel.mutex);
-  remember(grasp_states, s, instance);
+  remember(grasp_states, s, info);
   call(grasp_state_channel, s, "GraspState");
 }
 
-void Client::Impl::received(const msg::ContactSet& m, const dds::InstanceHandle_t& instance) {
+void Client::Impl::received(const msg::ContactSet& m, const dds::SampleInfo& info) {
   const ContactSet s = from_msg(m);
   std::lock_guard delivery(contact_set_channel.mutex);
-  remember(contact_sets, s, instance);
+  remember(contact_sets, s, info);
   call(contact_set_channel, s, "ContactSet");
 }
 
-void Client::Impl::received(const msg::GraspEvent& m, const dds::InstanceHandle_t&) {
-  const GraspEvent e = from_msg(m);
+void Client::Impl::received(const msg::GraspEvent& m, const dds::SampleInfo& info) {
+  GraspEvent e = from_msg(m);
   std::lock_guard delivery(grasp_event_channel.mutex);
   {
     std::lock_guard lock(data_mutex);
+    const auto known = incarnation_of.find(source_of(info));
+    e.server_incarnation = known != incarnation_of.end() ? known->second : incarnation;
     if (events.size() == kMaxQueuedGraspEvents) events.erase(events.begin());  // nobody polls: keep the newest
     events.push_back(e);
   }
@@ -319,7 +385,8 @@ void Client::Impl::received(const msg::GraspEvent& m, const dds::InstanceHandle_
   }
 }
 
-void Client::Impl::received(const msg::SceneState& m, const dds::InstanceHandle_t&) {
+void Client::Impl::received(const msg::SceneState& m, const dds::SampleInfo& info) {
+  if (!noticed(m.incarnation(), source_of(info))) return;
   const SceneState s = from_msg(m);
   std::lock_guard delivery(scene_state_channel.mutex);
   {
@@ -329,7 +396,8 @@ void Client::Impl::received(const msg::SceneState& m, const dds::InstanceHandle_
   call(scene_state_channel, s, "SceneState");
 }
 
-void Client::Impl::received(const msg::ServerStatus& m, const dds::InstanceHandle_t&) {
+void Client::Impl::received(const msg::ServerStatus& m, const dds::SampleInfo& info) {
+  if (!noticed(m.incarnation(), source_of(info))) return;
   const ServerStatus s = from_msg(m);
   std::lock_guard delivery(server_status_channel.mutex);
   {
@@ -368,7 +436,7 @@ std::shared_ptr<const ObjectGeometry> Client::Impl::cached_geometry(const msg::O
   return std::make_shared<const ObjectGeometry>(std::move(g));
 }
 
-void Client::Impl::received(const msg::ObjectGeometry& m, const dds::InstanceHandle_t&) {
+void Client::Impl::received(const msg::ObjectGeometry& m, const dds::SampleInfo&) {
   // Checked every time (the hash over ~200 KB costs well under a millisecond), so a sample that
   // claims a cached hash but carries other bytes is dropped, not mistaken for the cached mesh.
   if (const std::string why = client_lib::check_object_geometry(m); !why.empty()) {
@@ -395,7 +463,7 @@ void Client::Impl::received(const msg::ObjectGeometry& m, const dds::InstanceHan
   call(geometry_channel, g, "ObjectGeometry");
 }
 
-void Client::Impl::received(const msg::ClientNotice& m, const dds::InstanceHandle_t&) {
+void Client::Impl::received(const msg::ClientNotice& m, const dds::SampleInfo&) {
   if (m.client_id().to_string() != options.client_id) return;  // another client's
   const Notice n = from_msg(m);
   std::lock_guard delivery(notice_channel.mutex);
@@ -520,6 +588,21 @@ void Client::on_object_geometry(std::function<void(const std::shared_ptr<const O
         return all;
       },
       "ObjectGeometry");
+}
+
+void Client::on_server_restart(std::function<void(const ServerRestart&)> callback) {
+  impl_->set_callback(
+      impl_->restart_channel, std::move(callback), [] { return std::vector<ServerRestart>{}; }, "server restart");
+}
+
+std::uint64_t Client::server_incarnation() const {
+  std::lock_guard lock(impl_->data_mutex);
+  return impl_->incarnation;
+}
+
+std::uint64_t Client::server_restarts() const {
+  std::lock_guard lock(impl_->data_mutex);
+  return impl_->restarts;
 }
 
 std::shared_ptr<const ObjectGeometry> Client::object_geometry(const std::string& model) const {

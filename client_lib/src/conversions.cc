@@ -323,6 +323,7 @@ msg::SceneState to_msg(const client::SceneState& s) {
   m.tick(s.tick);
   m.time(s.time);
   m.objects(to_msgs<msg::ObjectState>(s.objects));
+  m.incarnation(s.incarnation);
   return m;
 }
 
@@ -331,6 +332,7 @@ client::SceneState from_msg(const msg::SceneState& m) {
   s.tick = m.tick();
   s.time = m.time();
   s.objects = from_msgs<client::ObjectState>(m.objects());
+  s.incarnation = m.incarnation();
   return s;
 }
 
@@ -415,6 +417,7 @@ msg::ServerStatus to_msg(const client::ServerStatus& s) {
     m.commands_rejected_by_reason().push_back(r);
   }
   m.notices_sent(s.notices_sent);
+  m.incarnation(s.incarnation);
   return m;
 }
 
@@ -440,6 +443,7 @@ client::ServerStatus from_msg(const msg::ServerStatus& m) {
   for (const msg::RejectCount& r : m.commands_rejected_by_reason())
     s.commands_rejected_by_reason[r.reason().to_string()] += r.count();
   s.notices_sent = m.notices_sent();
+  s.incarnation = m.incarnation();
   return s;
 }
 

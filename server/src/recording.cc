@@ -1,5 +1,7 @@
 #include "recording.h"
 
+#include "snapshot.h"
+
 #include "server_config.pb.h"
 
 #include <fastcdr/Cdr.h>
@@ -131,6 +133,8 @@ proto::RecordingHeader make_recording_header(const ServerSettings& settings, con
   for (const std::string& n : assets.model_source.standins) ms->add_standin_names(n);
   for (const auto& m : assets.models) ms->add_model_names(m->name);
   h.set_idl_sha256(TELEGRASP_IDL_SHA256);
+  h.set_incarnation(settings.incarnation);
+  if (settings.restored_objects) *h.mutable_restored_scene() = make_snapshot(*settings.restored_objects);
   return h;
 }
 

@@ -3,6 +3,7 @@
 #include "recorded_feed.h"
 #include "scene_server.h"
 #include "server_loop.h"
+#include "snapshot.h"
 #include "server_config.pb.h"
 #include "telegrasp/sim/mesh_loading.h"
 #include "telegrasp/sim/standin_objects.h"
@@ -163,8 +164,18 @@ ReplayResult replay_recording(const std::string& path, const ReplayOptions& opti
   RecordingReader reader(path);
   ReplayResult result;
   result.warnings = version_warnings(reader.header());
-  const ServerSettings settings = recorded_settings(reader.header(), path);
+  ServerSettings settings = recorded_settings(reader.header(), path);
   const SceneAssets assets = load_recorded_assets(reader.header(), path, options.objects_dir);
+  // The run's own incarnation and restored objects: its SceneStates compare byte for byte.
+  settings.incarnation = reader.header().incarnation();
+  if (reader.header().has_restored_scene()) {
+    try {
+      settings.restored_objects = placed_objects(reader.header().restored_scene(), assets.models,
+                                                 "recording " + path + ": header.restored_scene");
+    } catch (const SnapshotError& e) {
+      throw RecordingError(e.what());
+    }
+  }
   // A fresh mailbox: the scene only asks it to forget removed hands and for the status counts.
   InputMailbox mailbox({assets.left_rig->fingers().size(), assets.right_rig->fingers().size()}, settings.max_hands,
                        [](const std::string&) {});

@@ -54,7 +54,34 @@ SceneServer::SceneServer(const ServerSettings& settings, std::vector<sim::Object
   ws.two_hand_mode = settings.two_hand_mode;
   ws.table_half_extent = kTableHalfExtent;
   world_ = std::make_unique<sim::World>(ws);
-  spawn_initial_scene();
+  if (settings_.restored_objects)
+    spawn_restored_objects();
+  else
+    spawn_initial_scene();
+}
+
+void SceneServer::spawn_restored_objects() {
+  std::map<std::string, int> seen;  // per model: restored objects so far
+  for (const PlacedObject& o : *settings_.restored_objects) {
+    auto it = models_.find(o.model);
+    if (it == models_.end())
+      throw std::runtime_error("restored object '" + o.model + "': no such model (see --list-models)");
+    if (world_->objects().size() >= kMaxObjects)
+      throw std::runtime_error("restored scene: at most " + std::to_string(kMaxObjects) + " objects");
+    sim::ObjectModelPtr model = it->second;
+    // The k-th restored object of a model takes the friction of the k-th configured object of that
+    // model that has one (the snapshot keeps poses, not friction).
+    int k = seen[o.model]++;
+    for (const SceneObjectSpec& spec : settings_.objects) {
+      if (spec.model != o.model || !spec.friction) continue;
+      if (k-- > 0) continue;
+      auto own = std::make_shared<sim::ObjectModel>(*model);
+      own->friction = spec.friction;
+      model = std::move(own);
+      break;
+    }
+    spawn(model, o.X_WorldObject());
+  }
 }
 
 void SceneServer::spawn_initial_scene() {
@@ -224,6 +251,7 @@ msg::SceneState SceneServer::scene_state() const {
   msg::SceneState m;
   m.tick(world_->tick());
   m.time(world_->time());
+  m.incarnation(settings_.incarnation);
   for (sim::ObjectId id : world_->objects()) {
     msg::ObjectState o;
     o.id(id.value);
@@ -419,6 +447,7 @@ msg::ServerStatus SceneServer::status(const LoopStats& loop) const {
   m.commands_rejected(commands_rejected_ + refused_early);
   m.notices_sent(notices_ + mailbox_.notices());
   for (const auto& n : model_names_) m.models().push_back(n);
+  m.incarnation(settings_.incarnation);
   return m;
 }
 

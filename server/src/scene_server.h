@@ -30,7 +30,8 @@ struct LoopStats {
 
 class SceneServer {
  public:
-  /// Builds the scene (settings.objects or default_layout of every model). Throws
+  /// Builds the scene: settings.restored_objects at their poses if set, else settings.objects or
+  /// default_layout of every model. SceneState and ServerStatus carry settings.incarnation. Throws
   /// std::runtime_error naming a scene object whose model is unknown.
   SceneServer(const ServerSettings& settings, std::vector<sim::ObjectModelPtr> models,
               std::shared_ptr<const sim::HandRig> right_rig, std::shared_ptr<const sim::HandRig> left_rig,
@@ -81,6 +82,7 @@ class SceneServer {
     Eigen::Isometry3d X_WorldSpawn = Eigen::Isometry3d::Identity();  // where it goes back if it falls off the table
   };
   void spawn_initial_scene();
+  void spawn_restored_objects();  // settings_.restored_objects, at their poses
   sim::ObjectId spawn(const sim::ObjectModelPtr& model, const Eigen::Isometry3d& X_WorldObject,
                       const std::string& owner = "");
   /// The command's outcome: {"", ""} or {reason, detail}.

@@ -70,6 +70,7 @@ void apply_config(const proto::ServerConfig& c, ServerSettings& s, const std::st
   if (has("max_hands_per_participant")) s.max_hands_per_participant = c.max_hands_per_participant();
   if (has("max_input_rate_hz")) s.max_input_rate_hz = c.max_input_rate_hz();
   if (has("max_command_rate_hz")) s.max_command_rate_hz = c.max_command_rate_hz();
+  if (has("snapshot")) s.snapshot_path = c.snapshot();
   validate_settings(s, origin);
 }
 
@@ -153,6 +154,7 @@ proto::ServerConfig to_proto(const ServerSettings& s) {
   c.set_max_hands_per_participant(s.max_hands_per_participant);
   c.set_max_input_rate_hz(s.max_input_rate_hz);
   c.set_max_command_rate_hz(s.max_command_rate_hz);
+  c.set_snapshot(s.snapshot_path);
   return c;
 }
 

@@ -4,6 +4,7 @@
 #include "telegrasp/sim/hand_controller.h"
 #include "telegrasp/sim/world.h"
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -19,6 +20,20 @@ struct SceneObjectSpec {
   std::string model;
   double x = 0, y = 0, yaw = 0;
   std::optional<double> friction{};  ///< Coulomb mu of hand contacts on it (grasp quality); unset: the rig's.
+};
+
+/// An object placed at an exact pose (a restored snapshot's), kept as read so that a recording's
+/// replay rebuilds the very same pose.
+struct PlacedObject {
+  std::string model;
+  Eigen::Vector3d p_WorldObject{0, 0, 0};
+  Eigen::Quaterniond q_WorldObject{1, 0, 0, 0};  ///< Unit within a tolerance; normalized by X_WorldObject().
+  Eigen::Isometry3d X_WorldObject() const {
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.linear() = q_WorldObject.normalized().toRotationMatrix();
+    X.translation() = p_WorldObject;
+    return X;
+  }
 };
 
 /// Everything the server needs to start; defaults are the built-in demo scene on loopback.
@@ -55,6 +70,16 @@ struct ServerSettings {
   int max_hands_per_participant = 16;
   double max_input_rate_hz = 250;  ///< Per hand.
   double max_command_rate_hz = 20;  ///< Per client.
+  /// Write the objects' last published poses here about once a second and on a clean stop, and
+  /// start from them when the file exists (snapshot.h); "": none.
+  std::string snapshot_path;
+
+  // Facts of one run, not configuration (not in the configuration file; a recording's header keeps them).
+  /// SceneState/ServerStatus.incarnation: the server sets a random one at start (new_incarnation()).
+  std::uint64_t incarnation = 0;
+  /// The objects to start with, at these poses, instead of the configured scene (a restored
+  /// snapshot); unset: the configured scene. SCENE_RESET always goes back to the configured scene.
+  std::optional<std::vector<PlacedObject>> restored_objects;
 };
 
 /// Reads a protobuf text file onto `settings` (fields present in the file replace the defaults).

@@ -7,6 +7,7 @@
 #include "scene_setup.h"
 #include "server_config.h"
 #include "server_loop.h"
+#include "snapshot.h"
 
 #include "cli.h"
 #include "telegrasp/sim/mesh_loading.h"
@@ -62,8 +63,18 @@ Options (override the --config file):
                       hand silent for freeze_after_s is frozen and no longer waited for.
   --record FILE       write every accepted input and every output to FILE (a binary protobuf
                       stream, server/proto/recording.proto); telegrasp-replay re-runs it
+  --snapshot FILE     write the objects' last published poses to FILE about once a second and on
+                      a clean stop (protobuf text, server/proto/snapshot.proto; atomically: a
+                      temporary file in the same folder, fsync, rename), and, if FILE exists at
+                      start, bring the objects back at those poses instead of the configured
+                      scene (a SCENE_RESET still goes back to the configured scene). A FILE that
+                      exists but is damaged or names an unknown model stops the start (exit 1)
+                      with a message naming it: remove it to start from the configuration.
   --list-models       print the model names and exit
   -h, --help          this text
+
+Every run gets a random incarnation id, published in SceneState and ServerStatus: clients
+tell a restarted server from the one before (object ids, ticks and times start over).
 
 Stops cleanly on SIGINT or SIGTERM.
 Exit status: 0 stopped cleanly (or --list-models done), 1 a runtime failure (a configuration,
@@ -108,6 +119,8 @@ void apply_flags(int argc, char** argv, Flags& f, std::vector<std::string>& conf
       s.fill_standins = true;
     else if (a == "--record")
       s.record_path = value();
+    else if (a == "--snapshot")
+      s.snapshot_path = value();
     else if (a == "--mode") {
       const std::string m = value();
       const std::optional<sim::ClosingMode> mode = sim::parse_closing_mode(m);
@@ -201,7 +214,7 @@ class StopOnSignal {
 
 int main(int argc, char** argv) {
   const Flags flags = parse(argc, argv);
-  const ServerSettings& settings = flags.settings;
+  ServerSettings settings = flags.settings;
   SceneAssets assets;
   try {
     if (!settings.objects_dir.empty())
@@ -220,6 +233,24 @@ int main(int argc, char** argv) {
     return cli::kExitFailure;
   }
 
+  settings.incarnation = new_incarnation();
+  if (!settings.snapshot_path.empty()) {
+    try {
+      check_snapshot_writable(settings.snapshot_path);
+      if (const auto snapshot = read_snapshot(settings.snapshot_path)) {
+        settings.restored_objects = placed_objects(*snapshot, assets.models, "snapshot " + settings.snapshot_path);
+        std::cerr << "telegrasp-server: " << settings.restored_objects->size() << " objects back from snapshot "
+                  << settings.snapshot_path << " (tick " << snapshot->tick() << " of the run before)\n";
+      } else {
+        std::cerr << "telegrasp-server: no snapshot " << settings.snapshot_path
+                  << " yet: the configured scene; writing it from now on\n";
+      }
+    } catch (const SnapshotError& e) {
+      std::cerr << "telegrasp-server: " << e.what() << "\n";
+      return cli::kExitFailure;
+    }
+  }
+
   InputMailbox mailbox({assets.left_rig->fingers().size(), assets.right_rig->fingers().size()}, input_limits(settings));
   const sigset_t stop_signals = block_stop_signals();  // before the DDS threads start
   try {
@@ -229,7 +260,11 @@ int main(int argc, char** argv) {
     // Declared before the scene, so the scene goes first and the recorder then closes the file.
     std::optional<Recorder> recorder;
     if (!settings.record_path.empty()) recorder.emplace(settings.record_path, settings, assets, node);
-    OutputSink& sink = recorder ? static_cast<OutputSink&>(*recorder) : node;
+    OutputSink& recorded = recorder ? static_cast<OutputSink&>(*recorder) : node;
+    // Declared before the scene too: it writes the last poses once the scene has stopped.
+    std::optional<SnapshotWriter> snapshot;
+    if (!settings.snapshot_path.empty()) snapshot.emplace(settings.snapshot_path, recorded);
+    OutputSink& sink = snapshot ? static_cast<OutputSink&>(*snapshot) : recorded;
     SceneServer scene(settings, assets.models, assets.right_rig, assets.left_rig, mailbox, sink);
     LiveFeed feed(mailbox, [&node] { return node.take_commands(); });
     ServerLoop loop(loop_settings(settings), scene, feed, feed, sink, recorder ? &*recorder : nullptr);
@@ -239,7 +274,7 @@ int main(int argc, char** argv) {
               << (settings.lockstep     ? " in lockstep"
                   : settings.late_latch ? ", late-latched skeletons"
                                         : "")
-              << "; Ctrl-C to stop\n";
+              << ", incarnation " << std::hex << settings.incarnation << std::dec << "; Ctrl-C to stop\n";
     loop.run();
     std::cerr << "telegrasp-server: stopping after " << scene.world().tick() << " ticks, " << mailbox.accepted()
               << " inputs accepted, " << loop.missed_ticks() << " ticks missed\n";

@@ -560,3 +560,121 @@ TEST(ClientLoopbackTest, ObjectGeometriesAreCheckedAndCachedByHash) {
 
 }  // namespace
 }  // namespace telegrasp::client
+
+namespace telegrasp::client {
+namespace {
+
+// One server run as a raw participant: writers of the outputs the restart test uses.
+struct FakeServer {
+  explicit FakeServer(int domain) : participant(domain, "loopback") {}
+  idl::DdsParticipant participant;
+  dds::DataWriter* status = participant.writer<msg::ServerStatusPubSubType>(idl::kServerStatusTopic);
+  dds::DataWriter* grasp_state = participant.writer<msg::GraspStatePubSubType>(idl::kGraspStateTopic);
+  dds::DataWriter* event = participant.writer<msg::GraspEventPubSubType>(idl::kGraspEventTopic);
+  bool matched_all() const { return matched(status) && matched(grasp_state) && matched(event); }
+  void write_status(std::uint64_t incarnation, std::uint64_t tick) {
+    msg::ServerStatus s;
+    s.incarnation(incarnation);
+    s.tick(tick);
+    ASSERT_TRUE(status->write(&s));
+  }
+  void write_grasp_state(const std::string& client_id, int grasped) {
+    msg::GraspState g;
+    g.client_id(client_id);
+    g.hand_side(msg::HAND_RIGHT);
+    g.grasped_object(grasped);
+    ASSERT_TRUE(grasp_state->write(&g));
+  }
+  void write_event(std::uint64_t id) {
+    msg::GraspEvent e;
+    e.event_id(id);
+    e.object_pose().orientation().w(1);
+    ASSERT_TRUE(event->write(&e));
+  }
+};
+
+// A server that comes back with a new incarnation is noticed once (not the first one seen); what
+// the old run said about hands and its status is dropped, not what the new run sent before its
+// first status arrived; a late sample of the old run is dropped; grasp events carry the
+// incarnation of the run that sent them. The old run stays on the wire here (a hung server, or
+// one whose last samples are late), so nothing of it is disposed by its writers going away.
+TEST(ClientLoopbackTest, ANewIncarnationIsNoticedOnceAndTheOldRunsStateDropped) {
+  const DomainLease lease;
+  const int domain = lease.domain();
+  Client client(options("restarts", domain, kServerStatuses | kGraspStates | kGraspEvents));
+  std::mutex mutex;
+  std::vector<ServerRestart> restarts;
+  client.on_server_restart([&](const ServerRestart& r) {
+    std::lock_guard l(mutex);
+    restarts.push_back(r);
+  });
+  auto restart_count = [&] {
+    std::lock_guard l(mutex);
+    return restarts.size();
+  };
+  auto take_events = [&] {
+    std::vector<GraspEvent> events;
+    eventually([&] {
+      for (auto& e : client.take_grasp_events()) events.push_back(e);
+      return !events.empty();
+    });
+    return events;
+  };
+  const HandKey alice{"alice", HandSide::kRight}, bob{"bob", HandSide::kRight};
+
+  // The first run: a status, alice holding object 3, one event.
+  FakeServer a(domain);
+  ASSERT_TRUE(eventually([&] { return a.matched_all(); }));
+  a.write_status(11, 100);
+  a.write_grasp_state("alice", 3);
+  a.write_event(1);
+  ASSERT_TRUE(eventually([&] { return client.server_incarnation() == 11 && client.latest_grasp_state(alice); }));
+  std::vector<GraspEvent> events = take_events();
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0].server_incarnation, 11u);
+  EXPECT_EQ(restart_count(), 0u) << "the first server seen is no restart";
+
+  // The second run. Its grasp state may come before its first status: kept through the restart.
+  FakeServer b(domain);
+  ASSERT_TRUE(eventually([&] { return b.matched_all(); }));
+  b.write_grasp_state("bob", 5);
+  ASSERT_TRUE(eventually([&] { return client.latest_grasp_state(bob).has_value(); }));
+  EXPECT_TRUE(client.latest_grasp_state(alice)) << "no new incarnation is known yet";
+  b.write_status(22, 1);
+  ASSERT_TRUE(eventually([&] { return client.server_incarnation() == 22; }));
+  ASSERT_EQ(restart_count(), 1u);
+  {
+    std::lock_guard l(mutex);
+    EXPECT_EQ(restarts[0].previous_incarnation, 11u);
+    EXPECT_EQ(restarts[0].incarnation, 22u);
+  }
+  EXPECT_EQ(client.server_restarts(), 1u);
+  EXPECT_FALSE(client.latest_grasp_state(alice)) << "the old run's hands are dropped";
+  ASSERT_TRUE(client.latest_grasp_state(bob));
+  EXPECT_EQ(client.latest_grasp_state(bob)->grasped_object, 5);
+  ASSERT_TRUE(client.latest_server_status());
+  EXPECT_EQ(client.latest_server_status()->incarnation, 22u);
+
+  // A late status of the old run is dropped: the new run's next one, written after it, is the latest.
+  a.write_status(11, 101);
+  std::this_thread::sleep_for(200ms);
+  b.write_status(22, 2);
+  ASSERT_TRUE(eventually([&] { return client.latest_server_status()->tick == 2; }));
+  EXPECT_EQ(client.latest_server_status()->incarnation, 22u);
+  EXPECT_EQ(client.server_incarnation(), 22u);
+  EXPECT_EQ(restart_count(), 1u) << "a late sample of the old run is no restart";
+
+  // Events say which run they are of, whatever arrives when.
+  b.write_event(1);
+  events = take_events();
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0].server_incarnation, 22u);
+  a.write_event(2);
+  events = take_events();
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0].server_incarnation, 11u);
+  client.on_server_restart(nullptr);
+}
+
+}  // namespace
+}  // namespace telegrasp::client

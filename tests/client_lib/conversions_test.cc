@@ -370,6 +370,7 @@ TEST(ConversionsTest, SceneStateRoundTrip) {
   client::SceneState s;
   s.tick = 77;
   s.time = 0.77;
+  s.incarnation = 0xF00DFACE12345678ULL;
   for (int i = 0; i < 3; ++i) {
     client::ObjectState o;
     o.id = 10 + i;
@@ -391,6 +392,8 @@ TEST(ConversionsTest, SceneStateRoundTrip) {
   const client::SceneState r = from_msg(m);
   EXPECT_EQ(r.tick, s.tick);
   EXPECT_EQ(r.time, s.time);
+  EXPECT_EQ(m.incarnation(), s.incarnation);
+  EXPECT_EQ(r.incarnation, s.incarnation);
   expect_same_each(s.objects, r.objects);
 }
 
@@ -436,6 +439,7 @@ TEST(ConversionsTest, ServerStatusRoundTrip) {
   s.commands_accepted = 11;
   s.commands_rejected = 2;
   s.models = {"003_cracker_box", "005_tomato_soup_can", "box_5cm"};
+  s.incarnation = 0x8000000000000001ULL;
   const msg::ServerStatus m = to_msg(s);
   ASSERT_EQ(m.rejected().size(), 3u);
   EXPECT_EQ(m.rejected()[1].reason().to_string(), "stale_sequence");
@@ -456,6 +460,8 @@ TEST(ConversionsTest, ServerStatusRoundTrip) {
   EXPECT_EQ(r.commands_accepted, s.commands_accepted);
   EXPECT_EQ(r.commands_rejected, s.commands_rejected);
   EXPECT_EQ(r.models, s.models);
+  EXPECT_EQ(m.incarnation(), s.incarnation);
+  EXPECT_EQ(r.incarnation, s.incarnation);
 }
 
 // A tetrahedron (4 vertices, 4 triangles) with every field set and its true content hash.

@@ -250,9 +250,59 @@ bool Bot::set_scene(const client::SceneState& scene) {
   std::mt19937_64 rng(opt_.seed);
   std::shuffle(order_.begin(), order_.end(), rng);
   total_ = static_cast<int>(targets_.size()) * opt_.trials;
+  incarnation_ = scene.incarnation;
   for (Target& t : targets_)
     if (!t.model) give_up(t, "no model named '" + t.name + "' (pass the server's --objects DIR)");
   return !targets_.empty();
+}
+
+void Bot::server_restarted(const client::SceneState& scene) {
+  int interrupted = 0;
+  for (Hand& h : hands_) {
+    if (h.stage == Stage::kIdle || !h.target) continue;
+    if (h.planning.valid()) h.planning.wait();
+    BotRecord r;
+    r.record.object = h.target->name;
+    r.record.trial = h.trial;
+    r.record.attempts = h.op ? std::min(h.attempts_before + h.op->attempts(), kAttemptBudget) : 0;
+    r.object_id = h.target->id;
+    r.target = static_cast<int>(h.target - targets_.data());
+    r.hand = h.key.side;
+    r.reason = "server restarted";
+    r.interrupted = true;
+    --h.target->started;  // run again
+    h.target = nullptr;
+    h.op.reset();
+    h.stage = Stage::kIdle;
+    h.input = {};
+    h.input.X_WorldPalm = h.X_WorldStart;
+    add_record(std::move(r));
+    ++interrupted;
+  }
+  // The same objects in the new run: by name, in scene order.
+  std::map<std::string, std::vector<int>> ids;
+  for (const client::ObjectState& o : scene.objects) ids[o.name].push_back(o.id);
+  std::map<std::string, std::size_t> taken;
+  int missing = 0;
+  for (Target& t : targets_) {
+    const std::vector<int>& same = ids[t.name];
+    std::size_t& k = taken[t.name];
+    t.id = k < same.size() ? same[k] : -1;
+    missing += k++ >= same.size();
+    t.X_WorldObject_anchor.reset();
+    t.unavailable_since.reset();
+  }
+  std::cerr << "telegrasp-bot: the server restarted (incarnation " << hex64(incarnation_) << " -> "
+            << hex64(scene.incarnation) << "): " << interrupted << " trial(s) in progress interrupted, recorded as such"
+            << " and run again; " << targets_.size() - missing << " of " << targets_.size()
+            << " objects found in the new scene\n";
+  incarnation_ = scene.incarnation;
+}
+
+int Bot::interrupted() const {
+  int n = 0;
+  for (const BotRecord& r : records_) n += r.interrupted;
+  return n;
 }
 
 // One tick of every hand: reads the newest server outputs, steps each hand, publishes.
@@ -319,7 +369,7 @@ bool Bot::report_results() const {
   for (const Target& t : targets_) {
     report::ObjectRows row{t.label, {}};
     for (const BotRecord& r : records_)
-      if (r.object_id == t.id) row.records.push_back(&r.record);
+      if (r.target == static_cast<int>(&t - targets_.data()) && !r.interrupted) row.records.push_back(&r.record);
     all.insert(all.end(), row.records.begin(), row.records.end());
     rows.push_back(std::move(row));
   }
@@ -328,6 +378,7 @@ bool Bot::report_results() const {
   s["skill"] = opt_.skill;
   s["client_id"] = opt_.client_id;
   s["hands"] = hands;
+  s["interrupted"] = interrupted();
   std::cout << "summary: " << s.dump() << "\n";
   // The held line: the total, then each object not held in every trial.
   int held = 0;
@@ -348,6 +399,8 @@ bool Bot::report_results() const {
   const json events = grasp_event_ids_json();
   std::cerr << "grasp events received: " << events["received"] << " (ids " << events["first"] << ".." << events["last"]
             << "), " << events["missing"].size() << " missing, " << events["duplicates"].size() << " duplicated\n";
+  if (interrupted() > 0)
+    std::cerr << "(" << interrupted() << " trial(s) interrupted by a server restart, run again: not counted above)\n";
   if (opt_.json_path.empty()) return true;
   json grasps = json::array();
   for (const BotRecord& r : records_) {
@@ -356,6 +409,7 @@ bool Bot::report_results() const {
     g["hand"] = side_name(r.hand);
     g["object_id"] = r.object_id;
     g["reason"] = r.reason.empty() ? json(nullptr) : json(r.reason);
+    g["interrupted"] = r.interrupted;
     grasps.push_back(std::move(g));
   }
   std::ofstream out(opt_.json_path);
@@ -387,7 +441,7 @@ nlohmann::json Bot::grasp_event_ids_json() const {
 bool Bot::all_held() const {
   if (records_.empty()) return false;
   for (const BotRecord& r : records_)
-    if (!r.record.held_after_lift) return false;
+    if (!r.interrupted && !r.record.held_after_lift) return false;
   return true;
 }
 
@@ -406,6 +460,7 @@ bool Bot::targeted(const Target& t) const {
 void Bot::on_event(const client::GraspEvent& e) {
   Hand* h = hand_of(e.hand);
   if (!h || e.kind != client::GraspEvent::Kind::kGrasp) return;
+  if (e.server_incarnation != incarnation_) return;  // of a server run that is gone: its ids mean nothing now
   if (!h->target || e.object_id != h->target->id || h->stage == Stage::kIdle || h->stage == Stage::kSettle) {
     std::cerr << "telegrasp-bot: " << side_name(h->key.side) << " hand grasped " << e.object_name << " (id "
               << e.object_id << "), not its target\n";
@@ -441,6 +496,7 @@ void Bot::give_up(Target& t, const std::string& why) {
     r.record.object = t.name;
     r.record.trial = t.started;
     r.object_id = t.id;
+    r.target = static_cast<int>(&t - targets_.data());
     r.hand = hands_.front().key.side;
     r.reason = why;
     add_record(std::move(r));
@@ -448,8 +504,14 @@ void Bot::give_up(Target& t, const std::string& why) {
 }
 
 void Bot::add_record(BotRecord r) {
-  ++done_;
   const report::Record& rec = r.record;
+  if (r.interrupted) {
+    std::cerr << "[interrupted] " << side_name(r.hand) << " " << rec.object << " trial " << rec.trial << ": "
+              << r.reason << "\n";
+    records_.push_back(std::move(r));
+    return;
+  }
+  ++done_;
   std::cerr << "[" << done_ << "/" << total_ << "] " << side_name(r.hand) << " " << rec.object << " trial " << rec.trial
             << (rec.held_after_lift ? " held" : " NOT held");
   if (rec.grasped)
@@ -676,6 +738,7 @@ void Bot::finish_trial(Hand& h) {
   r.record.attempts = std::min(h.attempts_before + h.op->attempts(), kAttemptBudget);
   r.record.held_after_lift = h.op->held_after_lift() && h.z_max - h.z0 > 0.8 * sim::ScriptedOperator::kLiftHeight;
   r.object_id = h.target->id;
+  r.target = static_cast<int>(h.target - targets_.data());
   r.hand = h.key.side;
   r.reason = h.note;
   if (r.reason.empty() && !r.record.held_after_lift) {

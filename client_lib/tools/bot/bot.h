@@ -79,6 +79,10 @@ struct BotRecord {
   int object_id = -1;
   client::HandSide hand = client::HandSide::kRight;
   std::string reason;  // why it was not held after lift, when known
+  int target = -1;  // index in the work list (object ids change when the server restarts)
+  // A trial the server's restart cut short ("reason" says so): never a grasp, not counted in the
+  // table or the held line, and run again.
+  bool interrupted = false;
 };
 
 enum class Stage { kIdle, kSettle, kRun, kFinish };
@@ -126,6 +130,16 @@ class Bot {
 
   // Takes the scene's objects as the work list; false if the scene is empty.
   bool set_scene(const client::SceneState& scene);
+
+  // The incarnation of the server run the bot works with (SceneState::incarnation).
+  std::uint64_t incarnation() const { return incarnation_; }
+  // The server restarted (a new incarnation; `scene` is its first SceneState): every trial in
+  // progress ends, recorded as interrupted and run again later; the work list's objects are
+  // found again in the new scene by name (the k-th object of a name is the k-th again); grasp
+  // events of the old run are ignored from now on.
+  void server_restarted(const client::SceneState& scene);
+  // Trials the restarts interrupted.
+  int interrupted() const;
 
   // One tick of every hand: reads the newest server outputs, steps each hand, publishes.
   void tick(std::int64_t tick, const client::SceneState& scene);
@@ -205,6 +219,7 @@ class Bot {
   std::vector<std::size_t> order_;
   std::vector<client::HandSkeleton> others_, own_;  // other clients' hands and ours, this tick
   double server_time_ = 0;  // of the newest scene state
+  std::uint64_t incarnation_ = 0;
   std::vector<BotRecord> records_;
   std::vector<std::uint64_t> event_ids_;
   int total_ = 0, done_ = 0;

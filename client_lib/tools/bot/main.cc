@@ -53,7 +53,10 @@ over 2 cm (or 0.25 rad) since its plan is planned again. A missed squeeze is tri
 misses the bot plans again and tries up to 3 more times (6 attempts a trial at most, the JSON
 "attempts" says how many). An object is started only once it rests (under 0.02 m/s, within 2 mm
 and 0.02 rad of one pose for 0.3 s). Every object in the scene (as the bot first sees it) is
-grasped --trials times; each grasp is recorded from the server's GraspEvent. A hand leaves an
+grasped --trials times; each grasp is recorded from the server's GraspEvent. A server that
+restarts (a new incarnation in its SceneState) is followed without restarting the bot: the
+trials in progress end, recorded with "interrupted": true and "reason": "server restarted"
+(never as a grasp, not counted in the table), and are run again on the new server's scene. A hand leaves an
 object to another client's hand that got there first; an object unavailable for 10 s is given
 up (recorded as not grasped, with the reason). Progress goes to stderr (one line per trial),
 then the per-object table of telegrasp-eval goes to stdout.
@@ -67,10 +70,12 @@ Options:
   --objects DIR       meshes of the server's models (default: none); an object with no mesh
                       here is planned on the geometry the server publishes (ObjectGeometry)
   --json FILE         write every grasp record as telegrasp-eval does, plus "client_id",
-                      "hand", "object_id" and "reason" ("mode" and "speed_scale" are null: they
-                      are the server's settings), and "grasp_events": the event_ids of every
-                      GraspEvent received, any hand's ({"received", "first", "last", "missing",
-                      "duplicates"}; reliable events leave both lists empty)
+                      "hand", "object_id", "reason" and "interrupted" (true: cut short by a
+                      server restart, run again; "mode" and "speed_scale" are null: they are the
+                      server's settings); the summary adds "interrupted" (their count), and
+                      "grasp_events": the event_ids of every GraspEvent received, any hand's
+                      ({"received", "first", "last", "missing", "duplicates"}; reliable events
+                      leave both lists empty)
   --domain N          DDS domain, 0..232 (default 0)
   --profile NAME      Fast DDS participant profile: loopback (default), lan, wan
   --profiles FILE     Fast DDS XML profiles (default: $TELEGRASP_PROFILES, else the shipped file)
@@ -251,10 +256,13 @@ int main(int argc, char** argv) {
       status = kExitRefused;
       break;
     }
-    if (auto s = c->latest_scene_state(); s && s->tick != last_scene_tick) {
+    if (auto s = c->latest_scene_state(); s && (s->tick != last_scene_tick || s->incarnation != bot.incarnation())) {
       scene = std::move(s);
       last_scene_tick = scene->tick;
       last_scene_change = Clock::now();
+      // A restarted server (the client library noticed its new incarnation): the trials in progress
+      // are interrupted, the bot goes on with the new run's scene.
+      if (scene->incarnation != bot.incarnation()) bot.server_restarted(*scene);
     }
     const auto silent = Clock::now() - last_scene_change;
     if (silent > std::chrono::duration<double>(opt.timeout_s)) {

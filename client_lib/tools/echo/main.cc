@@ -67,6 +67,9 @@ X_WorldObject is the object's pose in the world frame.
   pose            {"p_m":[x,y,z],"q_wxyz":[w,x,y,z]}: position in metres, unit quaternion
   hand            {"client_id":"...","side":"left"|"right"}
   every topic     "tick", "time_s" (server time), but ObjectGeometry
+  SceneState and ServerStatus also "incarnation": the server run (16 hex digits, new after
+                  every restart of the server; ticks, times and object ids of different runs
+                  are not comparable)
   HandSkeleton    "hand", "rig", "input_sequence", "input_client_time_ns", "late_latched",
                   "frozen", "X_WorldPalm" (pose: the resolved pose, that grasps and is
                   shown), "X_WorldPhalanx" (poses, rig order), "joint_angles_rad",
@@ -124,8 +127,23 @@ Json to_json(const tc::HandSkeleton& s) { return with_topic("HandSkeleton", form
 Json to_json(const tc::GraspState& s) { return with_topic("GraspState", form::grasp_state<Json>(s)); }
 Json to_json(const tc::ContactSet& s) { return with_topic("ContactSet", form::contact_set<Json>(s)); }
 Json to_json(const tc::GraspEvent& e) { return with_topic("GraspEvent", form::grasp_event<Json>(e)); }
-Json to_json(const tc::SceneState& s) { return with_topic("SceneState", form::scene_state<Json>(s)); }
-Json to_json(const tc::ServerStatus& s) { return with_topic("ServerStatus", form::server_status<Json>(s)); }
+// The server run, as 16 hex digits (a JSON number would lose digits past 2^53).
+std::string incarnation_hex(std::uint64_t incarnation) {
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(incarnation));
+  return text;
+}
+
+Json to_json(const tc::SceneState& s) {
+  Json j = with_topic("SceneState", form::scene_state<Json>(s));
+  j["incarnation"] = incarnation_hex(s.incarnation);
+  return j;
+}
+Json to_json(const tc::ServerStatus& s) {
+  Json j = with_topic("ServerStatus", form::server_status<Json>(s));
+  j["incarnation"] = incarnation_hex(s.incarnation);
+  return j;
+}
 Json to_json(const tc::ObjectGeometry& g) { return with_topic("ObjectGeometry", form::object_geometry<Json>(g)); }
 
 // ---------------------------------------------------------------------------------------------

@@ -72,6 +72,16 @@ class Client {
   /// The server refused an input or command of this client (the error callback); the caught-up
   /// snapshot is the newest notice, if any.
   void on_notice(std::function<void(const Notice&)> callback);
+  /// A restarted server: called when a SceneState or ServerStatus of a new incarnation arrives
+  /// (never for the first server seen; nothing to catch up), before that sample is delivered. By
+  /// then the old run's state is dropped: the latest hand skeletons, grasp states and contact sets
+  /// it sent, and its scene state and status; its late samples are dropped too. Object ids, ticks
+  /// and server times of the old run are not comparable with the new one's. The client goes on
+  /// (its writers match the new server by themselves): nothing to reconnect.
+  void on_server_restart(std::function<void(const ServerRestart&)> callback);
+  /// The incarnation of the newest server run seen (0: none yet), and how many restarts were seen.
+  std::uint64_t server_incarnation() const;
+  std::uint64_t server_restarts() const;
 
   /// Polling: the newest sample of each output (per hand for per-hand outputs).
   std::optional<SceneState> latest_scene_state() const;

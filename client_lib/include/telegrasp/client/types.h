@@ -125,6 +125,9 @@ struct GraspEvent {
   bool force_closure = false;  ///< Grasp events: epsilon > 0.
   Eigen::Vector3d v_WorldObject{0, 0, 0};  ///< Release events: velocity handed to physics.
   Eigen::Vector3d w_WorldObject{0, 0, 0};
+  /// Not on the wire: the incarnation of the server run that sent it, as the client library knows
+  /// it (Client::server_incarnation() of its sender; 0 if none was known yet).
+  std::uint64_t server_incarnation = 0;
 };
 
 struct ObjectState {
@@ -142,6 +145,9 @@ struct SceneState {
   std::uint64_t tick = 0;
   double time = 0;
   std::vector<ObjectState> objects;
+  /// The server run that published it (random, nonzero, new after each restart): object ids, ticks
+  /// and times of different incarnations are not comparable.
+  std::uint64_t incarnation = 0;
 };
 
 struct SceneCommand {
@@ -165,6 +171,7 @@ struct ServerStatus {
   std::map<std::string, std::uint64_t> rejected;  ///< Per reason, since the server started.
   std::uint64_t commands_accepted = 0, commands_rejected = 0;
   std::vector<std::string> models;  ///< Model names a spawn command accepts.
+  std::uint64_t incarnation = 0;  ///< The server run, as in SceneState::incarnation.
   std::map<std::string, std::uint64_t> commands_rejected_by_reason;  ///< Per reason, since the server started.
   std::uint64_t notices_sent = 0;  ///< Refusals told to their clients (Notice), since the server started.
 };
@@ -179,6 +186,12 @@ struct Notice {
   std::uint64_t command_id = 0;  ///< kCommandRejected: the refused command's id (send_command's return).
   std::uint64_t count = 0;  ///< This client's refusals for this reason, since the server started.
   double time = 0;  ///< Scene time of a command the scene refused; 0 otherwise.
+};
+
+/// A restarted server, noticed by its new incarnation (Client::on_server_restart).
+struct ServerRestart {
+  std::uint64_t previous_incarnation = 0;
+  std::uint64_t incarnation = 0;
 };
 
 /// One model's shape and mass as the server publishes it (ObjectGeometry), so a client needs no
