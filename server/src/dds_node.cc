@@ -1,15 +1,19 @@
 #include "dds_node.h"
 
+#include "identity.h"
+
 #include "telegrasp/idl/dds_participant.h"
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
 
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 
 #include <chrono>
 #include <cstring>
 #include <iostream>
 #include <mutex>
+#include <optional>
 #include <utility>
 
 namespace telegrasp::server {
@@ -23,22 +27,54 @@ std::int64_t steady_now_ns() {
       .count();
 }
 
-// Controller states go straight to the mailbox, with the writing participant's GUID prefix.
+ParticipantKey key_of(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix) {
+  ParticipantKey key;
+  std::memcpy(key.data(), prefix.value, key.size());
+  return key;
+}
+
+// With DDS Security: the certificate subject of every remote participant, as it is discovered
+// (after authentication; before its endpoints match, so before any of its samples).
+class IdentityListener : public dds::DomainParticipantListener {
+ public:
+  void on_participant_discovery(dds::DomainParticipant*, eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
+    using Status = eprosima::fastrtps::rtps::ParticipantDiscoveryInfo;
+    const ParticipantKey key = key_of(info.info.m_guid.guidPrefix);
+    if (info.status == Status::DISCOVERED_PARTICIPANT || info.status == Status::CHANGED_QOS_PARTICIPANT)
+      identities.participant_discovered(key, certificate_subject(info.info));
+    else
+      identities.participant_left(key);
+  }
+  ClientIdentities identities;
+};
+
+// Controller states go straight to the mailbox, with the writing participant's GUID prefix or,
+// with DDS Security, its identity's owner key.
 class ControllerStateListener : public dds::DataReaderListener {
  public:
-  explicit ControllerStateListener(InputMailbox& mailbox) : mailbox_(mailbox) {}
+  ControllerStateListener(InputMailbox& mailbox, ClientIdentities& identities)
+      : mailbox_(mailbox), identities_(identities) {}
   void on_data_available(dds::DataReader* reader) override {
     dds::SampleInfo info;
     while (reader->take_next_sample(&sample_, &info) == ReturnCode_t::RETCODE_OK) {
       if (!info.valid_data) continue;  // instance state changes, not samples
-      ParticipantKey writer;
-      std::memcpy(writer.data(), info.sample_identity.writer_guid().guidPrefix.value, writer.size());
+      ParticipantKey writer = key_of(info.sample_identity.writer_guid().guidPrefix);
+      if (secure) {
+        const std::optional<ParticipantKey> owner = identities_.admit(writer, sample_.client_id().to_string());
+        if (!owner) {
+          mailbox_.refuse(RejectReason::kClientIdOwnedByAnotherParticipant, sample_.client_id().to_string());
+          continue;
+        }
+        writer = *owner;
+      }
       mailbox_.offer(sample_, writer, steady_now_ns());
     }
   }
+  bool secure = false;  // set before the reader exists
 
  private:
   InputMailbox& mailbox_;
+  ClientIdentities& identities_;
   msg::ControllerState sample_;  // reused: one listener thread per reader
 };
 
@@ -69,8 +105,13 @@ class SceneCommandListener : public dds::DataReaderListener {
 // Members in destruction order: the participant (and its readers) goes before the listeners.
 struct DdsNode::Impl {
   Impl(int domain, const std::string& profile, const std::string& profiles_file, InputMailbox& mailbox)
-      : input_listener(mailbox), command_listener(mailbox), participant(domain, profile, profiles_file) {}
+      : input_listener(mailbox, identity_listener.identities),
+        command_listener(mailbox),
+        participant(domain, profile, profiles_file, &identity_listener) {
+    input_listener.secure = participant.secure();
+  }
 
+  IdentityListener identity_listener;
   ControllerStateListener input_listener;
   SceneCommandListener command_listener;
   idl::DdsParticipant participant;

@@ -18,6 +18,11 @@ bool InputMailbox::reject(RejectReason reason, const std::string& client_id) {
   return false;
 }
 
+bool InputMailbox::refuse(RejectReason reason, const std::string& client_id) {
+  std::lock_guard lock(mutex_);
+  return reject(reason, client_id);
+}
+
 bool InputMailbox::offer(const msg::ControllerState& state, const ParticipantKey& writer, std::int64_t received_ns) {
   std::lock_guard lock(mutex_);
   const std::string client_id = state.client_id().to_string();

@@ -40,6 +40,9 @@ class InputMailbox {
 
   /// Validates and stores `state` from participant `writer`; false if it was dropped.
   bool offer(const msg::ControllerState& state, const ParticipantKey& writer, std::int64_t received_ns);
+  /// Counts and logs (as offer() does) a sample of `client_id` dropped before it was offered, e.g.
+  /// because another authenticated identity owns the client id (identity.h). Returns false.
+  bool refuse(RejectReason reason, const std::string& client_id);
 
   /// Blocks until a sample is pending, wake() is called, or `deadline` passes. True if woken (a
   /// sample or wake()) before the deadline, false if the deadline came first.
