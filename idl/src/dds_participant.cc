@@ -34,10 +34,11 @@ DdsParticipant::DdsParticipant(int domain, const std::string& profile, const std
   if (participant_ == nullptr)
     throw std::runtime_error("cannot join DDS domain " + std::to_string(domain) + " with participant profile '" +
                              profile_ + "' of " + profiles_file_ +
-                             (secure_ ? " (DDS Security refused identity '" + security.identity + "' of " +
-                                            security.dir + ": an expired certificate or one of another CA, a key "
-                                            "that does not match, or an unsigned governance or permissions file?)"
-                                      : ""));
+                             (secure_
+                                  ? " (DDS Security refused identity '" + security.identity + "' of " + security.dir +
+                                        ": an expired certificate or one of another CA, a key "
+                                        "that does not match, or an unsigned governance or permissions file?)"
+                                  : ""));
   publisher_ = participant_->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
   subscriber_ = participant_->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
   if (publisher_ == nullptr || subscriber_ == nullptr) {

@@ -35,9 +35,10 @@ bool apply_security(eprosima::fastdds::dds::DomainParticipantQos& qos, const std
                     const SecurityFiles& files) {
   if (!uses_security(qos)) {
     if (!files.dir.empty())
-      throw std::runtime_error("a security folder is given (" + files.dir + ", TELEGRASP_SECURITY_DIR or --security) "
-                               "but participant profile '" + profile +
-                               "' has no DDS Security: use --profile secure, or unset it");
+      throw std::runtime_error("a security folder is given (" + files.dir +
+                               ", TELEGRASP_SECURITY_DIR or --security) "
+                               "but participant profile '" +
+                               profile + "' has no DDS Security: use --profile secure, or unset it");
     return false;
   }
   if (files.dir.empty())

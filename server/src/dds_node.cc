@@ -37,7 +37,8 @@ ParticipantKey key_of(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix) {
 // (after authentication; before its endpoints match, so before any of its samples).
 class IdentityListener : public dds::DomainParticipantListener {
  public:
-  void on_participant_discovery(dds::DomainParticipant*, eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
+  void on_participant_discovery(dds::DomainParticipant*,
+                                eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
     using Status = eprosima::fastrtps::rtps::ParticipantDiscoveryInfo;
     const ParticipantKey key = key_of(info.info.m_guid.guidPrefix);
     if (info.status == Status::DISCOVERED_PARTICIPANT || info.status == Status::CHANGED_QOS_PARTICIPANT)

@@ -34,8 +34,7 @@ void ClientIdentities::participant_left(const ParticipantKey& participant) {
   subjects_.erase(participant);
 }
 
-std::optional<ParticipantKey> ClientIdentities::admit(const ParticipantKey& participant,
-                                                      const std::string& client_id) {
+std::optional<ParticipantKey> ClientIdentities::admit(const ParticipantKey& participant, const std::string& client_id) {
   std::lock_guard lock(mutex_);
   const auto subject = subjects_.find(participant);
   if (subject == subjects_.end() || subject->second.empty()) return std::nullopt;
