@@ -13,7 +13,7 @@ packages=(
   libprotobuf-dev protobuf-compiler nlohmann-json3-dev
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
   libgtest-dev libgmock-dev libbenchmark-dev
-  libzstd-dev
+  libzstd-dev openssl
   libboost-dev chromium
 )
 # Node.js runs tests/js; a machine with its own node on PATH keeps it.
