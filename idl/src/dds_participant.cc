@@ -29,8 +29,12 @@ DdsParticipant::DdsParticipant(int domain, const std::string& profile, const std
     throw std::runtime_error("no participant profile '" + profile_ + "' in " + profiles_file_);
   const SecurityFiles security = security_from_environment();
   secure_ = apply_security(qos, profile_, security);
-  // Only discovery reaches the listener: every reader has its own.
-  participant_ = factory->create_participant(domain, qos, listener, dds::StatusMask::none());
+  // Without security, the profile alone; with it, the profile's QoS plus the identity's files.
+  // No status reaches `listener` (discovery always does): a participant listener with
+  // data_on_readers would take the samples from the readers' own listeners.
+  participant_ = secure_
+                     ? factory->create_participant(domain, qos, listener, dds::StatusMask::none())
+                     : factory->create_participant_with_profile(domain, profile_, listener, dds::StatusMask::none());
   if (participant_ == nullptr)
     throw std::runtime_error("cannot join DDS domain " + std::to_string(domain) + " with participant profile '" +
                              profile_ + "' of " + profiles_file_ +
@@ -81,10 +85,12 @@ dds::DataWriter* DdsParticipant::make_writer(const std::string& name, TypeFactor
   const std::string profile = (qos_of.empty() ? name : qos_of) + kWriterSuffix;
   dds::DataWriterQos qos;
   dds::DataWriter* w = nullptr;
-  if (publisher_->get_datawriter_qos_from_profile(profile, qos) == ReturnCode_t::RETCODE_OK) {
+  if (!secure_) {
+    w = publisher_->create_datawriter_with_profile(topic(name, type), profile);
+  } else if (publisher_->get_datawriter_qos_from_profile(profile, qos) == ReturnCode_t::RETCODE_OK) {
     // Data-sharing hands readers the writer's buffer, which DDS Security has not encoded for them
     // (Fast DDS 2.9 then fails to decode every sample): off with security.
-    if (secure_) qos.data_sharing().off();
+    qos.data_sharing().off();
     w = publisher_->create_datawriter(topic(name, type), qos);
   }
   if (w == nullptr)
@@ -98,8 +104,10 @@ dds::DataReader* DdsParticipant::make_reader(const std::string& name, TypeFactor
   const std::string profile = (qos_of.empty() ? name : qos_of) + kReaderSuffix;
   dds::DataReaderQos qos;
   dds::DataReader* r = nullptr;
-  if (subscriber_->get_datareader_qos_from_profile(profile, qos) == ReturnCode_t::RETCODE_OK) {
-    if (secure_) qos.data_sharing().off();  // as for writers
+  if (!secure_) {
+    r = subscriber_->create_datareader_with_profile(topic(name, type), profile, listener);
+  } else if (subscriber_->get_datareader_qos_from_profile(profile, qos) == ReturnCode_t::RETCODE_OK) {
+    qos.data_sharing().off();  // as for writers
     r = subscriber_->create_datareader(topic(name, type), qos, listener);
   }
   if (r == nullptr)
