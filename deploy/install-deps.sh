@@ -13,7 +13,7 @@ packages=(
   libprotobuf-dev protobuf-compiler nlohmann-json3-dev
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
   libgtest-dev libgmock-dev libbenchmark-dev
-  libzstd-dev
+  libzstd-dev openssl
   libboost-dev chromium
   iptables iproute2
 )

@@ -220,7 +220,13 @@ Client::Impl::Impl(ClientOptions options_in) : options(std::move(options_in)) {
   try {
     participant.emplace(options.domain, options.profile, options.profiles_file);
     controller_writer = participant->writer<msg::ControllerStatePubSubType>(idl::kControllerStateTopic);
-    command_writer = participant->writer<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic);
+    try {
+      command_writer = participant->writer<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic);
+    } catch (const std::runtime_error&) {
+      // With DDS Security, only identities with the operator role may write SceneCommand: the
+      // others drive hands and watch, and send_command() says why it cannot.
+      if (!participant->secure()) throw;
+    }
     // Readers last: their listeners may run as soon as they exist.
     if (options.topics & kHandSkeletons) reader<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic);
     if (options.topics & kGraspStates) reader<msg::GraspStatePubSubType>(idl::kGraspStateTopic);
@@ -254,6 +260,7 @@ void Client::Impl::close() {
 bool Client::Impl::server_ready() const {
   // Both writers: a command sent right after wait_for_server must not go to an unmatched reader.
   for (dds::DataWriter* w : {controller_writer, command_writer}) {
+    if (w == nullptr) continue;  // no operator role: no commands to send
     dds::PublicationMatchedStatus matched;
     if (w->get_publication_matched_status(matched) != ReturnCode_t::RETCODE_OK || matched.current_count <= 0)
       return false;
@@ -506,6 +513,10 @@ std::uint64_t Client::send_command(const SceneCommand& command) {
   std::lock_guard lock(impl_->publish_mutex);
   const std::uint64_t command_id = impl_->last_command_id + 1;
   msg::SceneCommand m = to_msg(command, impl_->options.client_id, command_id);
+  if (impl_->command_writer == nullptr)
+    throw std::runtime_error("client " + impl_->options.client_id +
+                             " may not send scene commands: its DDS Security permissions do not allow writing "
+                             "telegrasp/SceneCommand (an operator identity may)");
   if (!impl_->command_writer->write(&m))
     throw std::runtime_error("cannot write SceneCommand " + std::to_string(command_id) + " of client " +
                              impl_->options.client_id);

@@ -1,10 +1,13 @@
 #include "telegrasp/idl/dds_participant.h"
 
 #include "telegrasp/idl/profiles.h"
+#include "telegrasp/idl/security.h"
 #include "telegrasp/idl/topics.h"
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
+#include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
@@ -16,13 +19,30 @@ namespace telegrasp::idl {
 
 namespace dds = eprosima::fastdds::dds;
 
-DdsParticipant::DdsParticipant(int domain, const std::string& profile, const std::string& profiles_file)
+DdsParticipant::DdsParticipant(int domain, const std::string& profile, const std::string& profiles_file,
+                               dds::DomainParticipantListener* listener)
     : profiles_file_(profiles_file.empty() ? default_profiles_file() : profiles_file), profile_(profile) {
   load_profiles(profiles_file_, profile_);
-  participant_ = dds::DomainParticipantFactory::get_instance()->create_participant_with_profile(domain, profile_);
+  dds::DomainParticipantFactory* factory = dds::DomainParticipantFactory::get_instance();
+  dds::DomainParticipantQos qos;
+  if (factory->get_participant_qos_from_profile(profile_, qos) != ReturnCode_t::RETCODE_OK)
+    throw std::runtime_error("no participant profile '" + profile_ + "' in " + profiles_file_);
+  const SecurityFiles security = security_from_environment();
+  secure_ = apply_security(qos, profile_, security);
+  // Without security, the profile alone; with it, the profile's QoS plus the identity's files.
+  // No status reaches `listener` (discovery always does): a participant listener with
+  // data_on_readers would take the samples from the readers' own listeners.
+  participant_ = secure_
+                     ? factory->create_participant(domain, qos, listener, dds::StatusMask::none())
+                     : factory->create_participant_with_profile(domain, profile_, listener, dds::StatusMask::none());
   if (participant_ == nullptr)
     throw std::runtime_error("cannot join DDS domain " + std::to_string(domain) + " with participant profile '" +
-                             profile_ + "' of " + profiles_file_);
+                             profile_ + "' of " + profiles_file_ +
+                             (secure_
+                                  ? " (DDS Security refused identity '" + security.identity + "' of " + security.dir +
+                                        ": an expired certificate or one of another CA, a key "
+                                        "that does not match, or an unsigned governance or permissions file?)"
+                                  : ""));
   publisher_ = participant_->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
   subscriber_ = participant_->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
   if (publisher_ == nullptr || subscriber_ == nullptr) {
@@ -63,7 +83,16 @@ dds::Topic* DdsParticipant::topic(const std::string& name, TypeFactory type) {
 
 dds::DataWriter* DdsParticipant::make_writer(const std::string& name, TypeFactory type, const std::string& qos_of) {
   const std::string profile = (qos_of.empty() ? name : qos_of) + kWriterSuffix;
-  dds::DataWriter* w = publisher_->create_datawriter_with_profile(topic(name, type), profile);
+  dds::DataWriterQos qos;
+  dds::DataWriter* w = nullptr;
+  if (!secure_) {
+    w = publisher_->create_datawriter_with_profile(topic(name, type), profile);
+  } else if (publisher_->get_datawriter_qos_from_profile(profile, qos) == ReturnCode_t::RETCODE_OK) {
+    // Data-sharing hands readers the writer's buffer, which DDS Security has not encoded for them
+    // (Fast DDS 2.9 then fails to decode every sample): off with security.
+    qos.data_sharing().off();
+    w = publisher_->create_datawriter(topic(name, type), qos);
+  }
   if (w == nullptr)
     throw std::runtime_error("cannot create the DDS writer of topic " + name + ": is profile '" + profile + "' in " +
                              profiles_file_ + "?");
@@ -73,7 +102,14 @@ dds::DataWriter* DdsParticipant::make_writer(const std::string& name, TypeFactor
 dds::DataReader* DdsParticipant::make_reader(const std::string& name, TypeFactory type,
                                              dds::DataReaderListener* listener, const std::string& qos_of) {
   const std::string profile = (qos_of.empty() ? name : qos_of) + kReaderSuffix;
-  dds::DataReader* r = subscriber_->create_datareader_with_profile(topic(name, type), profile, listener);
+  dds::DataReaderQos qos;
+  dds::DataReader* r = nullptr;
+  if (!secure_) {
+    r = subscriber_->create_datareader_with_profile(topic(name, type), profile, listener);
+  } else if (subscriber_->get_datareader_qos_from_profile(profile, qos) == ReturnCode_t::RETCODE_OK) {
+    qos.data_sharing().off();  // as for writers
+    r = subscriber_->create_datareader(topic(name, type), qos, listener);
+  }
   if (r == nullptr)
     throw std::runtime_error("cannot create the DDS reader of topic " + name + ": is profile '" + profile + "' in " +
                              profiles_file_ + "?");

@@ -1,13 +1,13 @@
 #include "dds_node.h"
 
+#include "identity.h"
+
 #include "telegrasp/idl/dds_participant.h"
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
 
-#include <fastdds/dds/subscriber/SampleInfo.hpp>
-
-#include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -15,6 +15,7 @@
 #include <deque>
 #include <iostream>
 #include <mutex>
+#include <optional>
 #include <utility>
 
 namespace telegrasp::server {
@@ -34,50 +35,77 @@ ParticipantKey key_of(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix) {
   return key;
 }
 
-// A participant that leaves (or whose lease runs out) frees the client ids it owned.
+// Every remote participant as it is discovered (after authentication with DDS Security, before
+// its endpoints match, so before any of its samples): its certificate subject under security; when
+// it leaves (or its lease runs out), the client ids it owned are free again.
 class ParticipantListener : public dds::DomainParticipantListener {
  public:
   explicit ParticipantListener(InputMailbox& mailbox) : mailbox_(mailbox) {}
   void on_participant_discovery(dds::DomainParticipant*,
                                 eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
-    using Status = eprosima::fastrtps::rtps::ParticipantDiscoveryInfo::DISCOVERY_STATUS;
-    if (info.status == Status::REMOVED_PARTICIPANT || info.status == Status::DROPPED_PARTICIPANT)
-      mailbox_.forget_participant(key_of(info.info.m_guid.guidPrefix));
+    using Status = eprosima::fastrtps::rtps::ParticipantDiscoveryInfo;
+    const ParticipantKey key = key_of(info.info.m_guid.guidPrefix);
+    if (info.status == Status::DISCOVERED_PARTICIPANT || info.status == Status::CHANGED_QOS_PARTICIPANT) {
+      identities.participant_discovered(key, certificate_subject(info.info));
+    } else {
+      identities.participant_left(key);
+      if (info.status == Status::REMOVED_PARTICIPANT || info.status == Status::DROPPED_PARTICIPANT)
+        mailbox_.forget_participant(key);
+    }
   }
+  /// Whom a sample of `client_id` from `writer` counts as: the writer's participant, or with DDS
+  /// Security the identity owning the id (none: another identity owns it).
+  std::optional<ParticipantKey> sender(const ParticipantKey& writer, const std::string& client_id) {
+    if (!secure) return writer;
+    return identities.admit(writer, client_id);
+  }
+  ClientIdentities identities;
+  bool secure = false;  // set before any reader exists
 
  private:
   InputMailbox& mailbox_;
 };
 
-// Controller states go straight to the mailbox, with the writing participant's GUID prefix.
+// Controller states go straight to the mailbox, with their sender (ParticipantListener::sender).
 class ControllerStateListener : public dds::DataReaderListener {
  public:
-  explicit ControllerStateListener(InputMailbox& mailbox) : mailbox_(mailbox) {}
+  ControllerStateListener(InputMailbox& mailbox, ParticipantListener& participants)
+      : mailbox_(mailbox), participants_(participants) {}
   void on_data_available(dds::DataReader* reader) override {
     dds::SampleInfo info;
     while (reader->take_next_sample(&sample_, &info) == ReturnCode_t::RETCODE_OK) {
       if (!info.valid_data) continue;  // instance state changes, not samples
-      mailbox_.offer(sample_, key_of(info.sample_identity.writer_guid().guidPrefix), steady_now_ns());
+      const std::string client_id = sample_.client_id().to_string();
+      const std::optional<ParticipantKey> sender =
+          participants_.sender(key_of(info.sample_identity.writer_guid().guidPrefix), client_id);
+      if (!sender) {
+        mailbox_.refuse(RejectReason::kClientIdOwnedByAnotherParticipant, client_id);
+        continue;
+      }
+      mailbox_.offer(sample_, *sender, steady_now_ns());
     }
   }
 
  private:
   InputMailbox& mailbox_;
+  ParticipantListener& participants_;
   msg::ControllerState sample_;  // reused: one listener thread per reader
 };
 
 // Commands are admitted (owner of the client id, rate) before they are queued for the scene.
 class SceneCommandListener : public dds::DataReaderListener {
  public:
-  explicit SceneCommandListener(InputMailbox& mailbox) : mailbox_(mailbox) {}
+  SceneCommandListener(InputMailbox& mailbox, ParticipantListener& participants)
+      : mailbox_(mailbox), participants_(participants) {}
   void on_data_available(dds::DataReader* reader) override {
     msg::SceneCommand c;
     dds::SampleInfo info;
     bool any = false;
     while (reader->take_next_sample(&c, &info) == ReturnCode_t::RETCODE_OK) {
       if (!info.valid_data) continue;
-      if (!mailbox_.admit_command(c, key_of(info.sample_identity.writer_guid().guidPrefix), steady_now_ns()).empty())
-        continue;
+      const std::optional<ParticipantKey> sender =
+          participants_.sender(key_of(info.sample_identity.writer_guid().guidPrefix), c.client_id().to_string());
+      if (!mailbox_.admit_command(c, sender, steady_now_ns()).empty()) continue;
       std::lock_guard lock(mutex);
       queue.push_back(c);
       any = true;
@@ -89,6 +117,7 @@ class SceneCommandListener : public dds::DataReaderListener {
 
  private:
   InputMailbox& mailbox_;
+  ParticipantListener& participants_;
 };
 
 }  // namespace
@@ -96,14 +125,16 @@ class SceneCommandListener : public dds::DataReaderListener {
 // Members in destruction order: the participant (and its readers) goes before the listeners.
 struct DdsNode::Impl {
   Impl(int domain, const std::string& profile, const std::string& profiles_file, InputMailbox& mailbox)
-      : input_listener(mailbox),
-        command_listener(mailbox),
-        participant_listener(mailbox),
-        participant(domain, profile, profiles_file) {}
+      : participant_listener(mailbox),
+        input_listener(mailbox, participant_listener),
+        command_listener(mailbox, participant_listener),
+        participant(domain, profile, profiles_file, &participant_listener) {
+    participant_listener.secure = participant.secure();
+  }
 
+  ParticipantListener participant_listener;
   ControllerStateListener input_listener;
   SceneCommandListener command_listener;
-  ParticipantListener participant_listener;
   idl::DdsParticipant participant;
   dds::DataWriter *skeleton = nullptr, *grasp_state = nullptr, *contacts = nullptr, *events = nullptr, *scene = nullptr,
                   *status = nullptr, *geometry = nullptr, *notices = nullptr;
@@ -123,7 +154,6 @@ DdsNode::DdsNode(int domain, const std::string& profile, const std::string& prof
   d.status = p.writer<msg::ServerStatusPubSubType>(idl::kServerStatusTopic);
   d.geometry = p.writer<msg::ObjectGeometryPubSubType>(idl::kObjectGeometryTopic);
   d.notices = p.writer<msg::ClientNoticePubSubType>(idl::kClientNoticeTopic);
-  p.get()->set_listener(&d.participant_listener, dds::StatusMask::none());  // discovery callbacks only
   p.reader<msg::ControllerStatePubSubType>(idl::kControllerStateTopic, &d.input_listener);
   p.reader<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic, &d.command_listener);
 }

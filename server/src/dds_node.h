@@ -15,6 +15,9 @@ namespace telegrasp::server {
 class DdsNode final : public OutputSink {
  public:
   /// Joins `domain` with the participant profile `profile` of `profiles_file` ("" = default).
+  /// With a DDS Security profile (`secure`), every client id is bound to the certificate subject
+  /// that first drove it (identity.h): another identity's samples for it are refused and counted
+  /// as client_id_owned_by_another_participant.
   /// Throws std::runtime_error naming the profile, topic or entity that could not be created.
   DdsNode(int domain, const std::string& profile, const std::string& profiles_file, InputMailbox& mailbox);
   ~DdsNode() override;

@@ -1,9 +1,19 @@
 #include "input_mailbox.h"
 
 #include <algorithm>
+#include <chrono>
 #include <iostream>
 
 namespace telegrasp::server {
+
+namespace {
+
+std::int64_t steady_now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+}  // namespace
 
 RateLimiter::RateLimiter(double rate_hz) : rate_(rate_hz), burst_(std::max(10.0, rate_hz / 10)), tokens_(burst_) {}
 
@@ -95,6 +105,11 @@ bool InputMailbox::reject(RejectReason reason, const std::string& client_id, std
   return false;
 }
 
+bool InputMailbox::refuse(RejectReason reason, const std::string& client_id) {
+  std::lock_guard lock(mutex_);
+  return reject(reason, client_id, steady_now_ns());
+}
+
 bool InputMailbox::owned_by_other(const std::string& client_id, const ParticipantKey& writer) {
   auto client = clients_.find(client_id);
   if (client == clients_.end()) {
@@ -138,7 +153,7 @@ bool InputMailbox::offer(const msg::ControllerState& state, const ParticipantKey
   return true;
 }
 
-std::string InputMailbox::admit_command(const msg::SceneCommand& command, const ParticipantKey& writer,
+std::string InputMailbox::admit_command(const msg::SceneCommand& command, const std::optional<ParticipantKey>& writer,
                                         std::int64_t now_ns) {
   std::lock_guard lock(mutex_);
   const std::string client_id = command.client_id().to_string();
@@ -146,7 +161,7 @@ std::string InputMailbox::admit_command(const msg::SceneCommand& command, const 
   if (client_id.empty()) {
     reason = "empty_client_id";
     detail = "a scene command needs the sender's client id";
-  } else if (owned_by_other(client_id, writer)) {
+  } else if (!writer || owned_by_other(client_id, *writer)) {
     reason = "client_id_owned_by_another_participant";
     detail = "another participant uses this client id";
   } else if (!clients_.at(client_id).commands.take(now_ns)) {

@@ -11,6 +11,7 @@
 #include <functional>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -85,11 +86,16 @@ class InputMailbox {
 
   /// Validates and stores `state` from participant `writer`; false if it was dropped.
   bool offer(const msg::ControllerState& state, const ParticipantKey& writer, std::int64_t received_ns);
+  /// Counts and logs (as offer() does) a sample of `client_id` dropped before it was offered, e.g.
+  /// because another authenticated identity owns the client id (identity.h). Returns false.
+  bool refuse(RejectReason reason, const std::string& client_id);
 
   /// Checks a scene command from participant `writer` at steady time `now_ns` before it is queued:
   /// "" if admitted, else the reason (a key of ServerStatus.commands_rejected_by_reason), counted,
   /// logged once per client and reason, and told to the client.
-  std::string admit_command(const msg::SceneCommand& command, const ParticipantKey& writer, std::int64_t now_ns);
+  /// `writer` unset: with DDS Security, another identity owns the command's client id.
+  std::string admit_command(const msg::SceneCommand& command, const std::optional<ParticipantKey>& writer,
+                            std::int64_t now_ns);
   /// The participant left the domain: the client ids it owned are free and its hands' histories
   /// forgotten (the scene removes the hands themselves when they fall silent).
   void forget_participant(const ParticipantKey& writer);

@@ -36,8 +36,13 @@ HandSkeleton, GraspState, ContactSet, GraspEvent, SceneState and ServerStatus.
 Options (override the --config file):
   --config FILE       server configuration, protobuf text (schema: server/proto/server_config.proto)
   --domain N          DDS domain, 0..232 (default 0)
-  --profile NAME      Fast DDS participant profile: loopback (default), lan, wan
+  --profile NAME      Fast DDS participant profile: loopback (default), lan, wan, secure (loopback
+                      with DDS Security: see --security, --identity and the README)
   --profiles FILE     Fast DDS XML profiles (default: deploy/fastdds/telegrasp_profiles.xml)
+  --security DIR      with --profile secure: the folder deploy/security/make-certs.sh made
+                      (default $TELEGRASP_SECURITY_DIR)
+  --identity NAME     with --profile secure: this server's identity in it (default
+                      $TELEGRASP_IDENTITY, else server)
   --objects DIR       models = every mesh in DIR (default: the 30 built-in stand-ins)
   --fill-standins     with --objects: also the built-in stand-in of each protocol object with no
                       mesh in DIR
@@ -88,7 +93,17 @@ struct Flags {
   ServerSettings settings;
   bool list_models = false;
   bool objects_flag = false;  // --objects given (else objects_dir, if any, is the config file's)
+  std::string security_dir, identity;  // --security, --identity ("": the environment's)
 };
+
+// --security and --identity are passed to DdsParticipant (security.h) as the environment it reads;
+// a secure server with no identity named is "server", as make-certs.sh names it.
+void export_security_flags(const Flags& f) {
+  if (!f.security_dir.empty()) setenv("TELEGRASP_SECURITY_DIR", f.security_dir.c_str(), 1);
+  if (!f.identity.empty()) setenv("TELEGRASP_IDENTITY", f.identity.c_str(), 1);
+  const char* identity = std::getenv("TELEGRASP_IDENTITY");
+  if (identity == nullptr || *identity == '\0') setenv("TELEGRASP_IDENTITY", "server", 1);
+}
 
 // Applies the flags onto `f` (after any --config file: flags override it whatever their order);
 // collects the --config files into `configs`.
@@ -103,6 +118,10 @@ void apply_flags(int argc, char** argv, Flags& f, std::vector<std::string>& conf
       s.profile = cli::parse_profile(a, value(), usage_error);
     else if (a == "--profiles")
       s.profiles_file = value();
+    else if (a == "--security")
+      f.security_dir = value();
+    else if (a == "--identity")
+      f.identity = value();
     else if (a == "--objects")
       s.objects_dir = value(), f.objects_flag = true;
     else if (a == "--empty-scene")
@@ -214,6 +233,7 @@ class StopOnSignal {
 
 int main(int argc, char** argv) {
   const Flags flags = parse(argc, argv);
+  export_security_flags(flags);
   ServerSettings settings = flags.settings;
   SceneAssets assets;
   try {

@@ -48,6 +48,12 @@ Fast DDS intraprocess delivery is off in this process (several participants in o
 deadlock Fast DDS 2.9.1's liveliness protocol, eProsima/Fast-DDS#3115), so its participants talk
 through the transport as separate processes would. The run stops with an error if another
 telegrasp-server already answers on --domain; a watchdog kills the children if anything hangs.
+With --secure DIR the raw round trip runs a second time, right after the first, with the `secure`
+participant profile (DDS Security: PKI-DH, access control, AES-GCM) on the topics it encrypts:
+pings on telegrasp/ControllerState as identity "bench", echoed on telegrasp/HandSkeleton (same
+ControllerState samples: access control checks topic names, not types) as identity "server";
+DIR is made by `deploy/security/make-certs.sh DIR bench`. The table then adds its row and the
+difference: the cost of security against --profile (loopback by default).
 The first --warmup seconds of each phase are excluded. A table goes to stdout, progress to stderr.
 
 Options:
@@ -60,6 +66,8 @@ Options:
   --json FILE         also write the results as JSON
   --profile NAME      Fast DDS participant profile for everyone (default loopback)
   --profiles FILE     Fast DDS XML profiles file (default: the telegrasp one)
+  --secure DIR        also measure the raw round trip with the secure profile, identities from DIR
+                      (made by deploy/security/make-certs.sh DIR bench)
   --domain D          DDS domain of this run, 0..232 (default: a free one, leased as the
                       tests lease theirs: tests/common/test_domain.h)
   --server PATH       telegrasp-server executable (default: the one next to this program)
@@ -79,6 +87,7 @@ struct Options : CommonOptions {
   double seconds = 10;
   double warmup = 1;
   bool spread = true;
+  std::string secure_dir;  // --secure: also the raw round trip with the secure profile
 };
 
 constexpr const char* kTool = "telegrasp-bench-latency";
@@ -95,7 +104,12 @@ Options parse(int argc, char** argv) {
       o.seconds = cli::parse_number(f, value(), 0.1, 86400, usage_error);
     else if (f == "--warmup")
       o.warmup = cli::parse_number(f, value(), 0, 3600, usage_error);
-    else if (f == "--phase") {
+    else if (f == "--secure") {
+      o.secure_dir = value();
+      if (!std::filesystem::is_directory(o.secure_dir))
+        usage_error("--secure expects the folder deploy/security/make-certs.sh made, got '" + o.secure_dir +
+                    "' (not a folder)");
+    } else if (f == "--phase") {
       const std::string p = value();
       if (p == "spread")
         o.spread = true;
@@ -128,10 +142,11 @@ class EchoListener : public dds::DataReaderListener {
   msg::ControllerState sample_;
 };
 
-// The echo role's command line: `self_exe() --echo-role --domain D --profile P [--profiles F]`.
+// The echo role's command line: `self_exe() --echo-role --domain D --profile P [--profiles F]
+// [--ping-topic T --pong-topic T]`.
 int echo_main(int argc, char** argv) {
   int domain = 120;
-  std::string profile = "loopback", profiles_file;
+  std::string profile = "loopback", profiles_file, ping_topic = "bench/Ping", pong_topic = "bench/Pong";
   cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& f, const auto& value) {
     if (f == "--echo-role") return true;
     if (f == "--domain")
@@ -140,6 +155,10 @@ int echo_main(int argc, char** argv) {
       profile = cli::parse_profile(f, value(), usage_error);
     else if (f == "--profiles")
       profiles_file = value();
+    else if (f == "--ping-topic")
+      ping_topic = value();
+    else if (f == "--pong-topic")
+      pong_topic = value();
     else
       return false;
     return true;
@@ -148,8 +167,8 @@ int echo_main(int argc, char** argv) {
   load_profiles(profiles_file, profile);
   EchoListener listener;
   idl::DdsParticipant p(domain, profile, profiles_file);
-  listener.pong = p.writer<msg::ControllerStatePubSubType>("bench/Pong", idl::kHandSkeletonTopic);
-  p.reader<msg::ControllerStatePubSubType>("bench/Ping", &listener, idl::kControllerStateTopic);
+  listener.pong = p.writer<msg::ControllerStatePubSubType>(pong_topic, idl::kHandSkeletonTopic);
+  p.reader<msg::ControllerStatePubSubType>(ping_topic, &listener, idl::kControllerStateTopic);
   std::cerr << "telegrasp-bench-latency echo: domain " << domain << ", profile " << profile << "\n";
   while (sleep_unless_stopped(0.2)) {}
   return 0;
@@ -418,10 +437,13 @@ struct Bench {
         samples_per_stream(static_cast<std::size_t>(std::ceil((opt.warmup + opt.seconds) * opt.sample_hz)) + 4),
         raw_table(streams, samples_per_stream),
         e2e_table(streams, samples_per_stream),
+        secure_table(streams, samples_per_stream),
         raw(raw_table, streams),
         e2e_any(e2e_table, streams),
         e2e_tick(e2e_table, streams),
+        secure_raw(secure_table, streams),
         pong_listener(raw, opt.clients),
+        secure_pong_listener(secure_raw, opt.clients),
         skeleton_listener(e2e_any, e2e_tick, opt.clients) {}
 
   // The measured window of a phase that starts publishing at t0: after the warm-up, for --seconds.
@@ -444,20 +466,22 @@ struct Bench {
   }
 
   void start_server(const std::string& tmp);
-  PhaseResult raw_phase(const std::string& echo_log);
+  /// The raw round trip with --profile on bench/Ping and bench/Pong, or (`secure`) with the secure
+  /// profile on telegrasp/ControllerState and telegrasp/HandSkeleton.
+  PhaseResult raw_phase(const std::string& echo_log, bool secure = false);
   void e2e_phase(PhaseResult& e2e_result, PhaseResult& tick_result, nlohmann::ordered_json& server_json);
 
   const Options& o;
   const int streams;
   const std::size_t samples_per_stream;
-  SendTable raw_table, e2e_table;
-  Resolver raw, e2e_any, e2e_tick;
+  SendTable raw_table, e2e_table, secure_table;
+  Resolver raw, e2e_any, e2e_tick, secure_raw;
   StatusCollector status;
-  PongListener pong_listener;
+  PongListener pong_listener, secure_pong_listener;
   SkeletonListener skeleton_listener;
-  ChildProcess server, echo;
+  ChildProcess server, echo, secure_echo;
   ServerOptions so;
-  std::optional<idl::DdsParticipant> main_participant;
+  std::optional<idl::DdsParticipant> main_participant, secure_participant;
 };
 
 void Bench::start_server(const std::string& tmp) {
@@ -472,22 +496,48 @@ void Bench::start_server(const std::string& tmp) {
 }
 
 // (a) Raw round trip through the echo process.
-PhaseResult Bench::raw_phase(const std::string& echo_log) {
-  const std::vector<std::string> echo_argv{self_exe(),  "--echo-role", "--domain",   std::to_string(o.domain),
-                                           "--profile", o.profile,     "--profiles", o.profiles_file};
+PhaseResult Bench::raw_phase(const std::string& echo_log, bool secure) {
+  const std::string profile = secure ? "secure" : o.profile;
+  const std::string ping_topic = secure ? idl::kControllerStateTopic : "bench/Ping";
+  const std::string pong_topic = secure ? idl::kHandSkeletonTopic : "bench/Pong";
+  ChildProcess& echo = secure ? secure_echo : this->echo;
+  Resolver& raw = secure ? secure_raw : this->raw;
+  SendTable& raw_table = secure ? secure_table : this->raw_table;
+  const std::vector<std::string> echo_argv{self_exe(),     "--echo-role", "--domain",     std::to_string(o.domain),
+                                           "--profile",    profile,       "--profiles",   o.profiles_file,
+                                           "--ping-topic", ping_topic,    "--pong-topic", pong_topic};
+  // With security the echo is identity "server" and this process "bench"; DdsParticipant and the
+  // echo (at its start) read them from the environment, which then goes back to none for the
+  // loopback participants made later.
+  if (secure) {
+    setenv("TELEGRASP_SECURITY_DIR", o.secure_dir.c_str(), 1);
+    setenv("TELEGRASP_IDENTITY", "server", 1);
+  }
   echo.start(echo_argv, echo_log);
-  dds::DataWriter* ping =
-      main_participant->writer<msg::ControllerStatePubSubType>("bench/Ping", idl::kControllerStateTopic);
-  dds::DataReader* pong =
-      main_participant->reader<msg::ControllerStatePubSubType>("bench/Pong", &pong_listener, idl::kHandSkeletonTopic);
+  if (secure) {
+    setenv("TELEGRASP_IDENTITY", "bench", 1);
+    try {
+      secure_participant.emplace(o.domain, profile, o.profiles_file);
+    } catch (...) {
+      unsetenv("TELEGRASP_SECURITY_DIR");
+      unsetenv("TELEGRASP_IDENTITY");
+      throw;
+    }
+    unsetenv("TELEGRASP_SECURITY_DIR");
+    unsetenv("TELEGRASP_IDENTITY");
+  }
+  idl::DdsParticipant& pinger = secure ? *secure_participant : *main_participant;
+  dds::DataWriter* ping = pinger.writer<msg::ControllerStatePubSubType>(ping_topic, idl::kControllerStateTopic);
+  dds::DataReader* pong = pinger.reader<msg::ControllerStatePubSubType>(
+      pong_topic, secure ? &secure_pong_listener : &pong_listener, idl::kHandSkeletonTopic);
   if (!wait_until([&] { return (matched_readers(ping) > 0 && matched_writers(pong) > 0) || !echo.running(); }, 15) ||
       !echo.running())
     throw std::runtime_error("the echo process (" + join_command(echo_argv) +
                              ") did not match bench/Ping and bench/Pong within 15 s" +
                              (echo.running() ? std::string() : " (it exited: " + echo.exit_description() + ")") +
                              "\n  log " + echo_log + ":\n" + echo.log_tail());
-  std::cerr << "telegrasp-bench-latency: raw round trip: " << streams << " streams at " << o.sample_hz << " Hz for "
-            << o.warmup << " + " << o.seconds << " s\n";
+  std::cerr << "telegrasp-bench-latency: raw round trip (" << profile << "): " << streams << " streams at "
+            << o.sample_hz << " Hz for " << o.warmup << " + " << o.seconds << " s\n";
   const auto t0 = Clock::now() + std::chrono::milliseconds(100);
   const auto [from, until] = window(t0);
   raw.set_window(from, until);
@@ -509,6 +559,9 @@ PhaseResult Bench::raw_phase(const std::string& echo_log) {
                 {"other_processes_cpu_pct", pct(busy_us - self_us - server_us - echo_us)}};
   echo.stop();
   std::cerr << "telegrasp-bench-latency: echo stopped: " << echo.exit_description() << "\n";
+  // Gone before the next phase: left in the process, the secure participant kept the loopback
+  // observer from receiving any skeleton (measured).
+  if (secure) secure_participant.reset();
   return result;
 }
 
@@ -558,6 +611,7 @@ void Bench::e2e_phase(PhaseResult& e2e_result, PhaseResult& tick_result, nlohman
 // The results of both phases, for the table and the JSON.
 struct Results {
   PhaseResult raw, e2e, tick;
+  std::optional<PhaseResult> secure;  // --secure: the raw round trip with the secure profile
   nlohmann::ordered_json server;
   std::string server_command, server_exit, loadavg;
 };
@@ -571,11 +625,17 @@ void print_results(const Options& o, const Results& r) {
             << "max" << std::setw(9) << "mean"
             << "\n";
   print_row("raw round trip (echo)", r.raw.latency, r.raw.lost);
+  if (r.secure) print_row("raw round trip, secure", r.secure->latency, r.secure->lost);
   print_row("e2e, first skeleton", r.e2e.latency, r.e2e.lost);
   print_row("e2e, first tick skeleton", r.tick.latency, r.tick.lost);
   std::cout << "e2e samples reflected exactly " << r.e2e.exact << ", superseded " << r.e2e.superseded << "\n";
   std::cout << "server over the e2e phase: " << r.server.dump() << "\n";
   std::cout << "CPU over the raw phase (% of one core): " << r.raw.cpu.dump() << "\n";
+  if (r.secure)
+    std::cout << std::setprecision(0) << "DDS Security cost on the raw round trip: p50 +"
+              << r.secure->latency.p50 - r.raw.latency.p50 << " us, p99 +" << r.secure->latency.p99 - r.raw.latency.p99
+              << " us (secure against " << o.profile << "); CPU over the secure raw phase: " << r.secure->cpu.dump()
+              << "\n";
   std::cout << "publisher lateness (us) raw p99 " << std::setprecision(0) << r.raw.lateness.p99 << " max "
             << r.raw.lateness.max << ", e2e p99 " << r.e2e.lateness.p99 << " max " << r.e2e.lateness.max
             << "; bench process CPU raw " << std::setprecision(1) << r.raw.bench_cpu_pct << "%, e2e "
@@ -593,6 +653,11 @@ void write_json(const Options& o, const Results& r) {
   j["tick_hz"] = o.tick_hz > 0 ? nlohmann::ordered_json(o.tick_hz) : nlohmann::ordered_json();
   j["e2e_us"] = to_json(r.e2e.latency);
   j["raw_rtt_us"] = to_json(r.raw.latency);
+  if (r.secure) {
+    j["raw_rtt_secure_us"] = to_json(r.secure->latency);
+    j["raw_secure_lost"] = r.secure->lost;
+    j["raw_secure_phase_cpu"] = r.secure->cpu;
+  }
   j["e2e_tick_us"] = to_json(r.tick.latency);
   j["seconds"] = o.seconds;
   j["warmup_s"] = o.warmup;
@@ -635,6 +700,10 @@ int run(const Options& o) {
   bench.start_server(tmp);
   r.raw = bench.raw_phase(echo_log);
   if (stop_requested()) throw std::runtime_error("interrupted");
+  if (!o.secure_dir.empty()) {
+    r.secure = bench.raw_phase(echo_log, true);
+    if (stop_requested()) throw std::runtime_error("interrupted");
+  }
   bench.e2e_phase(r.e2e, r.tick, r.server);
   if (stop_requested()) throw std::runtime_error("interrupted");
   bench.server.stop();

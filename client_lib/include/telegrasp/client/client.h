@@ -31,7 +31,9 @@ enum Topics : unsigned {
 struct ClientOptions {
   std::string client_id;  ///< Names this client's hands; 1..64 characters.
   int domain = 0;  ///< DDS domain, 0..232.
-  std::string profile = "loopback";  ///< Participant profile: loopback, lan, wan.
+  /// Participant profile: loopback, lan, wan, or secure (DDS Security: the identity comes from
+  /// $TELEGRASP_SECURITY_DIR and $TELEGRASP_IDENTITY).
+  std::string profile = "loopback";
   std::string profiles_file;  ///< "": $TELEGRASP_PROFILES, else the shipped file.
   unsigned topics = kAllTopics;  ///< Outputs to subscribe to.
 };
@@ -54,7 +56,8 @@ class Client {
   /// unchanged; throws std::invalid_argument only for what the wire cannot carry (> 5 curls).
   std::uint64_t publish(const ControllerSample& sample);
   /// Sends a scene command (reliable); returns its command id (1, 2, 3 ...). Throws
-  /// std::invalid_argument for a model name longer than 128 characters.
+  /// std::invalid_argument for a model name longer than 128 characters, std::runtime_error when
+  /// the secure profile's permissions give this identity no operator role.
   std::uint64_t send_command(const SceneCommand& command);
 
   /// Callbacks, one per output; setting one replaces the previous (no longer running when the

@@ -13,6 +13,7 @@
 
 namespace eprosima::fastdds::dds {
 class DomainParticipant;
+class DomainParticipantListener;
 class Publisher;
 class Subscriber;
 class Topic;
@@ -28,8 +29,12 @@ namespace telegrasp::idl {
 class DdsParticipant {
  public:
   /// Loads `profiles_file` ("" = default_profiles_file()) and joins `domain` with the participant
-  /// profile `profile`. Throws std::runtime_error naming the file or profile that failed.
-  DdsParticipant(int domain, const std::string& profile, const std::string& profiles_file = "");
+  /// profile `profile`. A profile with DDS Security (`secure`) gets its identity's files from
+  /// security_from_environment() (security.h). `listener` (may be null; must outlive this object)
+  /// hears of remote participants from the start, before any sample of theirs arrives. Throws
+  /// std::runtime_error naming the file, variable or profile that failed.
+  DdsParticipant(int domain, const std::string& profile, const std::string& profiles_file = "",
+                 eprosima::fastdds::dds::DomainParticipantListener* listener = nullptr);
   /// Detaches the readers' listeners, deletes every contained entity, then the participant.
   /// Listeners given to reader() must outlive this object.
   ~DdsParticipant();
@@ -58,6 +63,8 @@ class DdsParticipant {
   eprosima::fastdds::dds::DomainParticipant* get() const { return participant_; }
   /// The profiles file in use (resolved: never empty).
   const std::string& profiles_file() const { return profiles_file_; }
+  /// Whether the participant runs with DDS Security (authenticated, access controlled).
+  bool secure() const { return secure_; }
 
  private:
   using TypeFactory = eprosima::fastdds::dds::TopicDataType* (*)();
@@ -76,6 +83,7 @@ class DdsParticipant {
 
   std::string profiles_file_;
   std::string profile_;
+  bool secure_ = false;
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
   eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
   eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
