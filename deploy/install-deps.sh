@@ -15,6 +15,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libzstd-dev
   libboost-dev chromium
+  clang libclang-rt-14-dev llvm  # sanitizer and fuzzer builds (deploy/run-sanitizers.sh, run-fuzz.sh)
 )
 # Node.js runs tests/js; a machine with its own node on PATH keeps it.
 command -v node >/dev/null || packages+=(nodejs npm)
