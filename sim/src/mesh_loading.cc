@@ -266,6 +266,10 @@ void collect_node(const aiScene& scene, const aiNode& node, const aiMatrix4x4& p
     for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
       const aiFace& face = mesh.mFaces[f];
       if (face.mNumIndices != 3) continue;
+      // ValidateDataStructure refuses such files; an index past the mesh would point into another.
+      if (face.mIndices[0] >= mesh.mNumVertices || face.mIndices[1] >= mesh.mNumVertices ||
+          face.mIndices[2] >= mesh.mNumVertices)
+        continue;
       out.triangles.push_back({static_cast<std::uint32_t>(base + face.mIndices[0]),
                                static_cast<std::uint32_t>(base + face.mIndices[1]),
                                static_cast<std::uint32_t>(base + face.mIndices[2])});
@@ -368,7 +372,9 @@ TriangleMesh load_mesh_file(const std::string& path, const MeshLoadLimits& limit
   // coincident vertex the file contains. Points and lines are skipped in collect_node.
   // Keep coordinates as written (the simulation is +Z up): no Collada Z-up to Y-up rotation.
   importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
-  const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate);
+  // ValidateDataStructure runs first: a face index past its mesh's vertices (a hostile PLY) made
+  // Triangulate read out of bounds and crash; validation refuses the file instead.
+  const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure | aiProcess_Triangulate);
   if (scene == nullptr) {
     throw MeshLoadError(describe(path) + "assimp could not read it: " + importer.GetErrorString());
   }

@@ -385,6 +385,19 @@ TEST(LoadMeshFile, PlyWithUnreadableCountIsRefused) {
   expect_load_error(dir.write("no_end.ply", "ply\nformat ascii 1.0\nelement vertex 3\n"), "no end_header");
 }
 
+TEST(LoadMeshFile, PlyFaceIndexPastTheVerticesIsRefused) {
+  // Found by telegrasp-fuzz-mesh: a binary PLY face naming vertex 100000 of 4 made assimp's
+  // Triangulate step read out of bounds (SEGV). Now refused with the file named.
+  TempDir dir;
+  std::string contents = binary_tetrahedron_ply();
+  const std::int32_t bad = 100000;
+  contents.replace(contents.size() - 4, 4, reinterpret_cast<const char*>(&bad), 4);  // last face's last index
+  expect_load_error(dir.write("bad_index.ply", contents));
+  // The same as a quad, which Triangulate splits.
+  std::string quad = ply_header("ascii", 4, 1) + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 100000\n";
+  expect_load_error(dir.write("bad_quad.ply", quad));
+}
+
 TEST(LoadMeshFile, TriangleCapAppliesToEveryFormat) {
   // The tetrahedron has 4 triangles: a cap of 3 refuses it in every format, naming the limit;
   // a cap of 4 accepts it.
