@@ -265,14 +265,21 @@ void collect_node(const aiScene& scene, const aiNode& node, const aiMatrix4x4& p
     }
     for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
       const aiFace& face = mesh.mFaces[f];
-      if (face.mNumIndices != 3) continue;
-      // ValidateDataStructure refuses such files; an index past the mesh would point into another.
-      if (face.mIndices[0] >= mesh.mNumVertices || face.mIndices[1] >= mesh.mNumVertices ||
-          face.mIndices[2] >= mesh.mNumVertices)
-        continue;
-      out.triangles.push_back({static_cast<std::uint32_t>(base + face.mIndices[0]),
-                               static_cast<std::uint32_t>(base + face.mIndices[1]),
-                               static_cast<std::uint32_t>(base + face.mIndices[2])});
+      // Points and lines are not surfaces. ValidateDataStructure refuses an index past the mesh
+      // (it would point into another); skipped here too.
+      bool in_range = face.mNumIndices >= 3;
+      for (unsigned k = 0; k < face.mNumIndices && in_range; ++k) in_range = face.mIndices[k] < mesh.mNumVertices;
+      if (!in_range) continue;
+      // A polygon as a fan from its first corner (exact for the convex faces exporters write).
+      for (unsigned k = 1; k + 1 < face.mNumIndices; ++k) {
+        if (out.triangles.size() >= max_triangles) {
+          throw MeshLoadError(describe(path) + "holds more than " + std::to_string(max_triangles) +
+                              " triangles, over the limit of " + std::to_string(max_triangles) + " triangles");
+        }
+        out.triangles.push_back({static_cast<std::uint32_t>(base + face.mIndices[0]),
+                                 static_cast<std::uint32_t>(base + face.mIndices[k]),
+                                 static_cast<std::uint32_t>(base + face.mIndices[k + 1])});
+      }
     }
   }
   for (unsigned c = 0; c < node.mNumChildren; ++c) {
@@ -372,9 +379,10 @@ TriangleMesh load_mesh_file(const std::string& path, const MeshLoadLimits& limit
   // coincident vertex the file contains. Points and lines are skipped in collect_node.
   // Keep coordinates as written (the simulation is +Z up): no Collada Z-up to Y-up rotation.
   importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
-  // ValidateDataStructure runs first: a face index past its mesh's vertices (a hostile PLY) made
-  // Triangulate read out of bounds and crash; validation refuses the file instead.
-  const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure | aiProcess_Triangulate);
+  // Only ValidateDataStructure: a face index past its mesh's vertices (a hostile PLY) made
+  // assimp's Triangulate read out of bounds (SEGV), another PLY made it abort; validation
+  // refuses such files and collect_node triangulates.
+  const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
   if (scene == nullptr) {
     throw MeshLoadError(describe(path) + "assimp could not read it: " + importer.GetErrorString());
   }
