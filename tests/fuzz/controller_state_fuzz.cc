@@ -6,6 +6,7 @@
 #include "input_mailbox.h"
 #include "recording.h"
 #include "scene_server.h"
+#include "telegrasp/idl/safe_type.h"
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/sim/standin_objects.h"
 
@@ -61,7 +62,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     fuzz::silence_cerr();
     return new Server();
   }();
-  static msg::ControllerStatePubSubType type;
+  static idl::SafeType<msg::ControllerStatePubSubType> type;  // as DdsParticipant registers it
 
   // The recording's decoder (replay reads recorded samples with it).
   msg::ControllerState from_recording;

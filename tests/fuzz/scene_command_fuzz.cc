@@ -5,6 +5,7 @@
 #include "input_mailbox.h"
 #include "recording.h"
 #include "scene_server.h"
+#include "telegrasp/idl/safe_type.h"
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/sim/standin_objects.h"
 
@@ -54,7 +55,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     fuzz::silence_cerr();  // one line per rejected command
     return new Server();
   }();
-  static msg::SceneCommandPubSubType type;
+  static idl::SafeType<msg::SceneCommandPubSubType> type;  // as DdsParticipant registers it
 
   msg::SceneCommand from_recording;  // replay decodes recorded commands with from_cdr
   (void)server::from_cdr(std::string(reinterpret_cast<const char*>(data), size), from_recording);
