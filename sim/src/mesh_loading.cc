@@ -141,8 +141,14 @@ constexpr std::size_t kMaxPlyHeaderBytes = 64 * 1024;
 /// Throws MeshLoadError naming the element and its count. A file that is not a PLY is left alone.
 void check_ply_header(const std::string& path, std::uint64_t file_size, const MeshLoadLimits& limits) {
   const std::string head = read_prefix(path, kMaxPlyHeaderBytes);
-  if (head.size() < 4 || head.compare(0, 3, "ply") != 0 || !std::isspace(static_cast<unsigned char>(head[3]))) {
-    return;
+  std::string extension = std::filesystem::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (extension != ".ply" && head.compare(0, 3, "ply") != 0) return;  // not read as a PLY
+  // assimp takes any file starting "ply" as one, and its header parser looped forever on a
+  // ".ply" starting "plymat" (found by telegrasp-fuzz-mesh): the first line must be "ply".
+  if (head.size() < 4 || head.compare(0, 3, "ply") != 0 || (head[3] != '\n' && head[3] != '\r')) {
+    throw MeshLoadError(describe(path) + "not a PLY file: its first line must be 'ply'");
   }
   struct Element {
     std::string name;

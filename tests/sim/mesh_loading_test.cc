@@ -383,6 +383,9 @@ TEST(LoadMeshFile, PlyWithUnreadableCountIsRefused) {
   negative.replace(negative.find("vertex 4"), 8, "vertex -4");
   expect_load_error(dir.write("negative.ply", negative), "count '-4', not a non-negative integer");
   expect_load_error(dir.write("no_end.ply", "ply\nformat ascii 1.0\nelement vertex 3\n"), "no end_header");
+  // assimp's header parser looped forever on a .ply whose first line was "plymat ..." (fuzzer).
+  expect_load_error(dir.write("plymat.ply", "plymat binary_little_endian 1.0\nformat ascii 1.0\nend_header\n"),
+                    "first line must be 'ply'");
 }
 
 TEST(LoadMeshFile, PlyFaceIndexPastTheVerticesIsRefused) {
