@@ -17,6 +17,8 @@ packages=(
   libboost-dev chromium
   iptables iproute2
 )
+# The sanitizer and fuzzer builds (deploy/run-sanitizers.sh, run-fuzz.sh) ask for clang.
+[ "${TELEGRASP_DEPS_SANITIZERS:-0}" = 1 ] && packages+=(clang libclang-rt-14-dev llvm)
 # Node.js runs tests/js; a machine with its own node on PATH keeps it.
 command -v node >/dev/null || packages+=(nodejs npm)
 

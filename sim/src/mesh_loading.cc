@@ -8,10 +8,15 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <assimp/Importer.hpp>
+#include <cctype>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <limits>
+#include <sstream>
+#include <string_view>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -100,11 +105,164 @@ struct TriangleHash {
 
 std::string describe(const std::string& path) { return "mesh file '" + path + "': "; }
 
-/// Appends the triangles of `node` and its children, in scene coordinates.
-void collect_node(const aiScene& scene, const aiNode& node, const aiMatrix4x4& parent_transform, TriangleMesh& out) {
+constexpr std::uint64_t kU64Max = std::numeric_limits<std::uint64_t>::max();
+
+std::uint64_t saturating_mul(std::uint64_t a, std::uint64_t b) {
+  if (a != 0 && b > kU64Max / a) return kU64Max;
+  return a * b;
+}
+
+std::uint64_t saturating_add(std::uint64_t a, std::uint64_t b) { return b > kU64Max - a ? kU64Max : a + b; }
+
+/// Up to `max_bytes` from the start of the file.
+std::string read_prefix(const std::string& path, std::size_t max_bytes) {
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes(max_bytes, '\0');
+  in.read(bytes.data(), static_cast<std::streamsize>(max_bytes));
+  bytes.resize(static_cast<std::size_t>(std::max<std::streamsize>(in.gcount(), 0)));
+  return bytes;
+}
+
+/// Bytes one binary PLY scalar of `type` takes (1 for a type assimp does not know either).
+std::uint64_t ply_scalar_bytes(std::string_view type) {
+  if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
+  if (type == "int" || type == "uint" || type == "float" || type == "int32" || type == "uint32" || type == "float32")
+    return 4;
+  if (type == "double" || type == "float64") return 8;
+  return 1;  // char, uchar, int8, uint8, unknown
+}
+
+/// The longest PLY header read; real ones are a few hundred bytes.
+constexpr std::size_t kMaxPlyHeaderBytes = 64 * 1024;
+
+/// A PLY file's header: every element's declared count must fit in the bytes after the header
+/// (each element needs at least one byte per binary scalar, two per ascii value: a digit and a
+/// separator), faces are capped at limits.max_triangles and vertices at three per triangle.
+/// Throws MeshLoadError naming the element and its count. A file that is not a PLY is left alone.
+void check_ply_header(const std::string& path, std::uint64_t file_size, const MeshLoadLimits& limits) {
+  const std::string head = read_prefix(path, kMaxPlyHeaderBytes);
+  std::string extension = std::filesystem::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (extension != ".ply" && head.compare(0, 3, "ply") != 0) return;  // not read as a PLY
+  // assimp takes any file starting "ply" as one, and its header parser looped forever on a
+  // ".ply" starting "plymat" (found by telegrasp-fuzz-mesh): the first line must be "ply".
+  if (head.size() < 4 || head.compare(0, 3, "ply") != 0 || (head[3] != '\n' && head[3] != '\r')) {
+    throw MeshLoadError(describe(path) + "not a PLY file: its first line must be 'ply'");
+  }
+  struct Element {
+    std::string name;
+    std::uint64_t count = 0;
+    std::uint64_t binary_bytes = 0, ascii_bytes = 0;  // at least, per element
+    int line = 0;
+  };
+  std::vector<Element> elements;
+  bool ascii = true, header_ended = false;
+  std::size_t pos = 0, body_start = head.size();
+  int line_number = 0;
+  while (pos < head.size()) {
+    std::size_t end = head.find('\n', pos);
+    if (end == std::string::npos) end = head.size();
+    std::istringstream line(head.substr(pos, end - pos));
+    pos = end + 1;
+    ++line_number;
+    std::string keyword;
+    line >> keyword;
+    if (keyword == "end_header") {
+      header_ended = true;
+      body_start = std::min(pos, head.size());
+      break;
+    }
+    if (keyword == "format") {
+      std::string format;
+      line >> format;
+      ascii = format == "ascii";
+    } else if (keyword == "element") {
+      Element e;
+      std::string count;
+      line >> e.name >> count;
+      e.line = line_number;
+      const auto [rest, error] = std::from_chars(count.data(), count.data() + count.size(), e.count);
+      if (count.empty() || error != std::errc() || rest != count.data() + count.size()) {
+        throw MeshLoadError(describe(path) + "PLY header line " + std::to_string(line_number) + ": element '" + e.name +
+                            "' has count '" + count + "', not a non-negative integer");
+      }
+      elements.push_back(e);
+    } else if (keyword == "property" && !elements.empty()) {
+      std::string type;
+      line >> type;
+      // A list costs at least its length (an empty list); a scalar its size.
+      if (type == "list") line >> type;
+      elements.back().binary_bytes += ply_scalar_bytes(type);
+      elements.back().ascii_bytes += 2;
+    }
+  }
+  if (!header_ended) {
+    throw MeshLoadError(describe(path) + "PLY header has no end_header line in its first " +
+                        std::to_string(kMaxPlyHeaderBytes) + " bytes");
+  }
+  const std::uint64_t body_bytes = file_size > body_start ? file_size - body_start : 0;
+  std::uint64_t needed = 0;
+  for (const Element& e : elements) {
+    const std::string declares = "the PLY header declares " + std::to_string(e.count) + " " + e.name + " elements";
+    if (e.name == "face" && e.count > limits.max_triangles) {
+      throw MeshLoadError(describe(path) + declares + ", more than the limit of " +
+                          std::to_string(limits.max_triangles) + " triangles");
+    }
+    if (e.name == "vertex" && e.count > saturating_mul(3, limits.max_triangles)) {
+      throw MeshLoadError(describe(path) + declares + ", more than the limit of " +
+                          std::to_string(saturating_mul(3, limits.max_triangles)) +
+                          " (three per triangle of the limit of " + std::to_string(limits.max_triangles) +
+                          " triangles)");
+    }
+    // An element with no property still takes a line (ascii) or is refused (binary, 1 byte).
+    const std::uint64_t per_element = std::max<std::uint64_t>(ascii ? e.ascii_bytes : e.binary_bytes, 1);
+    const std::uint64_t element_bytes = saturating_mul(e.count, per_element);
+    needed = saturating_add(needed, element_bytes);
+    // Ascii: the last value of the file needs no separator after it.
+    if (needed > saturating_add(body_bytes, ascii ? 1 : 0)) {
+      throw MeshLoadError(describe(path) + declares + " (line " + std::to_string(e.line) + "), which need at least " +
+                          std::to_string(element_bytes) + " bytes, but the file has " + std::to_string(body_bytes) +
+                          " bytes after its header in all");
+    }
+  }
+}
+
+/// A binary STL's facet count (at byte 80) against the file's size (50 bytes a facet after an
+/// 84-byte header) and limits.max_triangles. Ascii STL (starting "solid", of a size that is not
+/// exactly a binary one's) and other files are left alone.
+void check_stl_header(const std::string& path, std::uint64_t file_size, const MeshLoadLimits& limits) {
+  std::string extension = std::filesystem::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (extension != ".stl" || file_size < 84) return;
+  const std::string head = read_prefix(path, 84);
+  if (head.size() < 84) return;
+  std::uint64_t facets = 0;
+  for (int i = 3; i >= 0; --i) facets = (facets << 8) | static_cast<unsigned char>(head[80 + i]);
+  const std::uint64_t binary_size = 84 + 50 * facets;
+  if (head.compare(0, 5, "solid") == 0 && binary_size != file_size) return;  // ascii
+  if (facets > limits.max_triangles) {
+    throw MeshLoadError(describe(path) + "the binary STL declares " + std::to_string(facets) +
+                        " facets, more than the limit of " + std::to_string(limits.max_triangles) + " triangles");
+  }
+  if (binary_size > file_size) {
+    throw MeshLoadError(describe(path) + "the binary STL declares " + std::to_string(facets) + " facets, which need " +
+                        std::to_string(binary_size) + " bytes, but the file has " + std::to_string(file_size));
+  }
+}
+
+/// Appends the triangles of `node` and its children, in scene coordinates. Throws MeshLoadError
+/// naming `path` once the faces (a mesh counts once per node that places it) pass `max_triangles`.
+void collect_node(const aiScene& scene, const aiNode& node, const aiMatrix4x4& parent_transform,
+                  std::uint64_t max_triangles, const std::string& path, TriangleMesh& out) {
   const aiMatrix4x4 transform = parent_transform * node.mTransformation;
   for (unsigned m = 0; m < node.mNumMeshes; ++m) {
     const aiMesh& mesh = *scene.mMeshes[node.mMeshes[m]];
+    if (out.triangles.size() + mesh.mNumFaces > max_triangles) {
+      throw MeshLoadError(describe(path) + "holds at least " + std::to_string(out.triangles.size() + mesh.mNumFaces) +
+                          " faces, over the limit of " + std::to_string(max_triangles) + " triangles");
+    }
     // Keep only triangles (points and lines are not surfaces); remember which vertices are used.
     const std::size_t base = out.vertices.size();
     for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
@@ -113,14 +271,25 @@ void collect_node(const aiScene& scene, const aiNode& node, const aiMatrix4x4& p
     }
     for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
       const aiFace& face = mesh.mFaces[f];
-      if (face.mNumIndices != 3) continue;
-      out.triangles.push_back({static_cast<std::uint32_t>(base + face.mIndices[0]),
-                               static_cast<std::uint32_t>(base + face.mIndices[1]),
-                               static_cast<std::uint32_t>(base + face.mIndices[2])});
+      // Points and lines are not surfaces. ValidateDataStructure refuses an index past the mesh
+      // (it would point into another); skipped here too.
+      bool in_range = face.mNumIndices >= 3;
+      for (unsigned k = 0; k < face.mNumIndices && in_range; ++k) in_range = face.mIndices[k] < mesh.mNumVertices;
+      if (!in_range) continue;
+      // A polygon as a fan from its first corner (exact for the convex faces exporters write).
+      for (unsigned k = 1; k + 1 < face.mNumIndices; ++k) {
+        if (out.triangles.size() >= max_triangles) {
+          throw MeshLoadError(describe(path) + "holds more than " + std::to_string(max_triangles) +
+                              " triangles, over the limit of " + std::to_string(max_triangles) + " triangles");
+        }
+        out.triangles.push_back({static_cast<std::uint32_t>(base + face.mIndices[0]),
+                                 static_cast<std::uint32_t>(base + face.mIndices[k]),
+                                 static_cast<std::uint32_t>(base + face.mIndices[k + 1])});
+      }
     }
   }
   for (unsigned c = 0; c < node.mNumChildren; ++c) {
-    collect_node(scene, *node.mChildren[c], transform, out);
+    collect_node(scene, *node.mChildren[c], transform, max_triangles, path, out);
   }
 }
 
@@ -200,23 +369,32 @@ TriangleMesh clean_mesh(const TriangleMesh& mesh, double weld_tolerance, MeshCle
   return out;
 }
 
-TriangleMesh load_mesh_file(const std::string& path) {
+TriangleMesh load_mesh_file(const std::string& path, const MeshLoadLimits& limits) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw MeshLoadError(describe(path) + "file not found");
   if (!std::filesystem::is_regular_file(path, ec)) {
     throw MeshLoadError(describe(path) + "not a regular file");
   }
+  const std::uint64_t file_size = std::filesystem::file_size(path, ec);
+  if (ec) throw MeshLoadError(describe(path) + "cannot read its size: " + ec.message());
+  // Declared counts first: assimp reserves what a header declares before reading the data.
+  check_ply_header(path, file_size, limits);
+  check_stl_header(path, file_size, limits);
   Assimp::Importer importer;
   // No JoinIdenticalVertices: clean_mesh does all welding, so its report counts every
   // coincident vertex the file contains. Points and lines are skipped in collect_node.
   // Keep coordinates as written (the simulation is +Z up): no Collada Z-up to Y-up rotation.
   importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
-  const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate);
+  // Only ValidateDataStructure: a face index past its mesh's vertices (a hostile PLY) made
+  // assimp's Triangulate read out of bounds (SEGV), another PLY made it abort; validation
+  // refuses such files and collect_node triangulates.
+  const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
   if (scene == nullptr) {
     throw MeshLoadError(describe(path) + "assimp could not read it: " + importer.GetErrorString());
   }
   TriangleMesh raw;
-  if (scene->mRootNode != nullptr) collect_node(*scene, *scene->mRootNode, aiMatrix4x4(), raw);
+  if (scene->mRootNode != nullptr)
+    collect_node(*scene, *scene->mRootNode, aiMatrix4x4(), limits.max_triangles, path, raw);
   if (raw.triangles.empty()) throw MeshLoadError(describe(path) + "contains no triangle mesh");
   std::vector<bool> referenced(raw.vertices.size(), false);
   for (const auto& triangle : raw.triangles) {

@@ -71,12 +71,13 @@ ObjectModelPtr make_object_model_in_model_frame(const std::string& name, Triangl
   return model;
 }
 
-ObjectModelPtr load_object_model(const std::string& path, double mass_kg) {
+ObjectModelPtr load_object_model(const std::string& path, double mass_kg, const MeshLoadLimits& limits) {
   const std::string stem = std::filesystem::path(path).stem().string();
-  return make_object_model(stem, load_mesh_file(path), mass_kg, path);
+  return make_object_model(stem, load_mesh_file(path, limits), mass_kg, path);
 }
 
-std::vector<ObjectModelPtr> load_object_dir(const std::string& dir, const MassLookup& mass_kg_of) {
+std::vector<ObjectModelPtr> load_object_dir(const std::string& dir, const MassLookup& mass_kg_of,
+                                            const MeshLoadLimits& limits) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw MeshLoadError(dir + ": not a folder");
@@ -88,7 +89,7 @@ std::vector<ObjectModelPtr> load_object_dir(const std::string& dir, const MassLo
   std::vector<ObjectModelPtr> models;
   for (const auto& f : files) {
     const double mass_kg = mass_kg_of ? mass_kg_of(std::filesystem::path(f).stem().string()) : 0.0;
-    models.push_back(load_object_model(f, mass_kg));
+    models.push_back(load_object_model(f, mass_kg, limits));
   }
   return models;
 }

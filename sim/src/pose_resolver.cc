@@ -242,7 +242,10 @@ Eigen::Isometry3d PoseResolver::resolve(const Eigen::Isometry3d& X_WorldResolved
   for (std::size_t v = 0; v < volumes.size(); ++v) {
     const double rate = dp.norm() + turn.angle() * reach_[v];
     max_rate = std::max(max_rate, rate);
-    n = std::max(n, static_cast<int>(std::ceil(rate / (0.9 * volumes[v].radius))));
+    // A jump too far to sub-step (or a non-finite rate: palm poses ~1e308 apart overflow) takes
+    // the most sub-steps; converting it to int was undefined (found by telegrasp-fuzz-controller-state).
+    const double steps = std::ceil(rate / (0.9 * volumes[v].radius));
+    n = std::max(n, steps < kMaxSubSteps ? static_cast<int>(steps) : kMaxSubSteps);
   }
   n = std::min(n, kMaxSubSteps);
   const Eigen::Matrix3d R_step = Eigen::AngleAxisd(turn.angle() / n, turn.axis()).toRotationMatrix();

@@ -547,12 +547,12 @@ double protocol_mass_kg(const std::string& stem) {
 
 }  // namespace
 
-ObjectModelPtr load_protocol_object_model(const std::string& path) {
-  return load_object_model(path, protocol_mass_kg(std::filesystem::path(path).stem().string()));
+ObjectModelPtr load_protocol_object_model(const std::string& path, const MeshLoadLimits& limits) {
+  return load_object_model(path, protocol_mass_kg(std::filesystem::path(path).stem().string()), limits);
 }
 
-std::vector<ObjectModelPtr> load_protocol_object_dir(const std::string& dir) {
-  return load_object_dir(dir, protocol_mass_kg);
+std::vector<ObjectModelPtr> load_protocol_object_dir(const std::string& dir, const MeshLoadLimits& limits) {
+  return load_object_dir(dir, protocol_mass_kg, limits);
 }
 
 }  // namespace telegrasp::sim

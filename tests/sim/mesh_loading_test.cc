@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <random>
 #include <string>
@@ -311,6 +312,144 @@ TEST(LoadMeshFile, GarbageWithMeshExtensionNamesPath) {
 TEST(LoadMeshFile, NonFiniteCoordinateNamesPath) {
   TempDir dir;
   expect_load_error(dir.write("nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n"), "non-finite");
+}
+
+/// A PLY header declaring `vertices` vertices (x, y, z float) and `faces` faces (uchar count,
+/// int indices), in `format`, followed by `body`.
+std::string ply_header(const std::string& format, std::uint64_t vertices, std::uint64_t faces) {
+  return "ply\nformat " + format + " 1.0\nelement vertex " + std::to_string(vertices) +
+         "\nproperty float x\nproperty float y\nproperty float z\nelement face " + std::to_string(faces) +
+         "\nproperty list uchar int vertex_indices\nend_header\n";
+}
+
+/// A closed tetrahedron (4 vertices, 4 outward faces) in binary little-endian PLY.
+std::string binary_tetrahedron_ply() {
+  std::string out = ply_header("binary_little_endian", 4, 4);
+  const float corners[4][3] = {{0, 0, 0}, {0.1f, 0, 0}, {0, 0.1f, 0}, {0, 0, 0.1f}};
+  out.append(reinterpret_cast<const char*>(corners), sizeof(corners));
+  const std::int32_t faces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  for (const auto& f : faces) {
+    out.push_back(3);
+    out.append(reinterpret_cast<const char*>(f), sizeof(f));
+  }
+  return out;
+}
+
+// The file of the issue: 1.1 KB whose header declares 2e9 vertices and 2e9 faces. assimp reserved
+// what it declared (9.45 GB before it failed); the header check refuses it before assimp reads it.
+TEST(LoadMeshFile, PlyDeclaringMoreElementsThanItsSizeIsRefused) {
+  TempDir dir;
+  for (const std::string format : {"binary_little_endian", "binary_big_endian", "ascii"}) {
+    std::string contents = ply_header(format, 2'000'000'000, 2'000'000'000);
+    contents.resize(1100, '\x01');
+    const std::string path = dir.write("huge_" + format + ".ply", contents);
+    // Even with no triangle cap, the vertices cannot fit in the 1,000-odd bytes after the header.
+    try {
+      (void)load_mesh_file(path, MeshLoadLimits{.max_triangles = std::numeric_limits<std::uint64_t>::max()});
+      ADD_FAILURE() << "no MeshLoadError for " << format;
+    } catch (const MeshLoadError& error) {
+      const std::string message = error.what();
+      EXPECT_NE(message.find(path), std::string::npos) << message;
+      EXPECT_NE(message.find("2000000000 vertex"), std::string::npos) << message;
+      EXPECT_NE(message.find("bytes after its header"), std::string::npos) << message;
+    }
+    // With the default cap it is refused for its count already.
+    expect_load_error(path, "2000000000 vertex elements, more than the limit");
+  }
+}
+
+TEST(LoadMeshFile, PlyFacesBeyondTheFileAreRefused) {
+  // The vertices fit, the 1000 declared faces (at least 1 byte each in binary) do not.
+  TempDir dir;
+  std::string contents = binary_tetrahedron_ply();
+  contents.replace(contents.find("element face 4"), 14, "element face 1000");
+  expect_load_error(dir.write("faces.ply", contents), "1000 face elements (line 7), which need at least 1000 bytes");
+  // Ascii: 2 bytes per value at least ("0 "), the file's last value needing no separator.
+  expect_load_error(dir.write("ascii.ply", ply_header("ascii", 2, 0) + "0 0 0\n0 0"), "2 vertex elements");
+}
+
+TEST(LoadMeshFile, PlyAtTheSizeBoundStillLoads) {
+  // The check is a lower bound: the exact binary tetrahedron and a tight ascii one both load.
+  TempDir dir;
+  EXPECT_EQ(load_mesh_file(dir.write("tetra.ply", binary_tetrahedron_ply())).triangles.size(), 4u);
+  const std::string ascii =
+      ply_header("ascii", 4, 4) + "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3";  // no final newline
+  EXPECT_EQ(load_mesh_file(dir.write("tetra_ascii.ply", ascii)).triangles.size(), 4u);
+}
+
+TEST(LoadMeshFile, PlyWithUnreadableCountIsRefused) {
+  TempDir dir;
+  std::string negative = ply_header("ascii", 4, 4);
+  negative.replace(negative.find("vertex 4"), 8, "vertex -4");
+  expect_load_error(dir.write("negative.ply", negative), "count '-4', not a non-negative integer");
+  expect_load_error(dir.write("no_end.ply", "ply\nformat ascii 1.0\nelement vertex 3\n"), "no end_header");
+  // assimp's header parser looped forever on a .ply whose first line was "plymat ..." (fuzzer).
+  expect_load_error(dir.write("plymat.ply", "plymat binary_little_endian 1.0\nformat ascii 1.0\nend_header\n"),
+                    "first line must be 'ply'");
+}
+
+TEST(LoadMeshFile, PlyFaceIndexPastTheVerticesIsRefused) {
+  // Found by telegrasp-fuzz-mesh: a binary PLY face naming vertex 100000 of 4 made assimp's
+  // Triangulate step read out of bounds (SEGV). Now refused with the file named.
+  TempDir dir;
+  std::string contents = binary_tetrahedron_ply();
+  const std::int32_t bad = 100000;
+  contents.replace(contents.size() - 4, 4, reinterpret_cast<const char*>(&bad), 4);  // last face's last index
+  expect_load_error(dir.write("bad_index.ply", contents));
+  // The same as a quad, which Triangulate splits.
+  std::string quad = ply_header("ascii", 4, 1) + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 100000\n";
+  expect_load_error(dir.write("bad_quad.ply", quad));
+}
+
+TEST(LoadMeshFile, TriangleCapAppliesToEveryFormat) {
+  // The tetrahedron has 4 triangles: a cap of 3 refuses it in every format, naming the limit;
+  // a cap of 4 accepts it.
+  TempDir dir;
+  const std::string ply = dir.write("tetra.ply", binary_tetrahedron_ply());
+  const std::string obj =
+      dir.write("tetra.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  std::string stl(80, ' ');
+  const std::uint32_t facets = 4;
+  stl.append(reinterpret_cast<const char*>(&facets), 4);
+  const float corners[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (const auto& f : {std::array{0, 2, 1}, std::array{0, 1, 3}, std::array{0, 3, 2}, std::array{1, 2, 3}}) {
+    stl.append(12, '\0');  // normal
+    for (int c : f) stl.append(reinterpret_cast<const char*>(corners[c]), 12);
+    stl.append(2, '\0');  // attribute bytes
+  }
+  const std::string binary_stl = dir.write("tetra.stl", stl);
+  for (const std::string& path : {ply, obj, binary_stl}) {
+    SCOPED_TRACE(path);
+    EXPECT_EQ(load_mesh_file(path, MeshLoadLimits{.max_triangles = 4}).triangles.size(), 4u);
+    try {
+      (void)load_mesh_file(path, MeshLoadLimits{.max_triangles = 3});
+      ADD_FAILURE() << "no MeshLoadError under a cap of 3";
+    } catch (const MeshLoadError& error) {
+      const std::string message = error.what();
+      EXPECT_NE(message.find(path), std::string::npos) << message;
+      EXPECT_NE(message.find("limit of 3 triangles"), std::string::npos) << message;
+    }
+  }
+  // A binary STL declaring more facets than its bytes hold is refused before assimp reads it.
+  stl.replace(80, 4, std::string("\xff\xff\x00\x00", 4));
+  expect_load_error(dir.write("short.stl", stl), "65535 facets, which need 3276834 bytes");
+}
+
+TEST(LoadMeshFile, DefaultTriangleCapRefusesOneFaceMore) {
+  // 4 vertices and kDefaultMaxMeshTriangles + 1 declared faces: refused for the count under the
+  // default limits; with the cap one higher the header gets past it and fails on the file's size.
+  TempDir dir;
+  std::string contents = binary_tetrahedron_ply();
+  const std::string faces = std::to_string(kDefaultMaxMeshTriangles + 1);
+  contents.replace(contents.find("element face 4"), 14, "element face " + faces);
+  const std::string path = dir.write("many_faces.ply", contents);
+  expect_load_error(path, faces + " face elements, more than the limit of " + std::to_string(kDefaultMaxMeshTriangles));
+  try {
+    (void)load_mesh_file(path, MeshLoadLimits{.max_triangles = kDefaultMaxMeshTriangles + 1});
+    ADD_FAILURE() << "no MeshLoadError";
+  } catch (const MeshLoadError& error) {
+    EXPECT_NE(std::string(error.what()).find("bytes after its header"), std::string::npos) << error.what();
+  }
 }
 
 TEST(IsMeshFile, AsksAssimp) {

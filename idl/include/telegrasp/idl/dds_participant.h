@@ -2,6 +2,8 @@
 // subscriber, topics, writers, readers), all made from the XML profiles by name.
 #pragma once
 
+#include "telegrasp/idl/safe_type.h"
+
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
@@ -70,7 +72,7 @@ class DdsParticipant {
   using TypeFactory = eprosima::fastdds::dds::TopicDataType* (*)();
   template <class PubSubType>
   static eprosima::fastdds::dds::TopicDataType* new_type() {
-    return new PubSubType();
+    return new SafeType<PubSubType>();  // a malformed sample is dropped, never thrown
   }
 
   eprosima::fastdds::dds::Topic* topic(const std::string& name, TypeFactory type);

@@ -3,6 +3,7 @@
 
 #include "telegrasp/sim/mass_properties.h"
 #include "telegrasp/sim/mesh_distance.h"
+#include "telegrasp/sim/mesh_loading.h"
 #include "telegrasp/sim/triangle_mesh.h"
 
 #include <functional>
@@ -50,15 +51,16 @@ ObjectModelPtr make_object_model_in_model_frame(
     const Eigen::Vector3d& p_OriginalCenterOfMass = Eigen::Vector3d::Zero());
 
 /// Loads a mesh file as an object named after the file stem, of mass `mass_kg` (<= 0: volume x
-/// 500 kg/m^3, as make_object_model). Throws MeshLoadError naming the file.
-ObjectModelPtr load_object_model(const std::string& path, double mass_kg);
+/// 500 kg/m^3, as make_object_model), read within `limits`. Throws MeshLoadError naming the file.
+ObjectModelPtr load_object_model(const std::string& path, double mass_kg, const MeshLoadLimits& limits = {});
 
 /// The mass in kg of the object a file stem names (<= 0: unknown, taken from its volume).
 using MassLookup = std::function<double(const std::string& stem)>;
 
 /// Every mesh file in `dir` (sorted by name), each of the mass `mass_kg_of` gives its stem (null:
 /// all from their volumes); throws MeshLoadError if `dir` is not a folder, holds no mesh file, or
-/// a file fails to load.
-std::vector<ObjectModelPtr> load_object_dir(const std::string& dir, const MassLookup& mass_kg_of);
+/// a file fails to load (each read within `limits`).
+std::vector<ObjectModelPtr> load_object_dir(const std::string& dir, const MassLookup& mass_kg_of,
+                                            const MeshLoadLimits& limits = {});
 
 }  // namespace telegrasp::sim

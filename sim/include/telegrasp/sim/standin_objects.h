@@ -40,9 +40,9 @@ TriangleMesh make_standin_mesh(const ProtocolObject& object);
 ObjectModelPtr make_standin_model(const ProtocolObject& object);
 
 /// load_object_model, a protocol object (named by the file stem) getting its real mass.
-ObjectModelPtr load_protocol_object_model(const std::string& path);
+ObjectModelPtr load_protocol_object_model(const std::string& path, const MeshLoadLimits& limits = {});
 
 /// load_object_dir, the protocol objects among the files getting their real masses.
-std::vector<ObjectModelPtr> load_protocol_object_dir(const std::string& dir);
+std::vector<ObjectModelPtr> load_protocol_object_dir(const std::string& dir, const MeshLoadLimits& limits = {});
 
 }  // namespace telegrasp::sim
