@@ -37,6 +37,10 @@ bool validate_controller_state(const msg::ControllerState& s, const std::array<s
   for (double c : s.curls())
     if (!std::isfinite(c)) return reject(RejectReason::kNonFinite);
   if (!finite_unit_pose(s.palm())) return reject(RejectReason::kQuaternionNotUnit);
+  const msg::Vec3& p = s.palm().position();
+  if (std::abs(p.x()) > kMaxPalmCoordinate || std::abs(p.y()) > kMaxPalmCoordinate ||
+      std::abs(p.z()) > kMaxPalmCoordinate)
+    return reject(RejectReason::kPositionOutOfRange);
   if (s.trigger() < 0 || s.trigger() > 1) return reject(RejectReason::kTriggerOutOfRange);
   if (!s.curls().empty() && s.curls().size() != fingers[s.hand_side()]) return reject(RejectReason::kCurlsWrongCount);
   for (double c : s.curls())

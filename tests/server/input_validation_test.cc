@@ -69,6 +69,13 @@ TEST(InputValidationTest, RejectsEachBadField) {
   EXPECT_EQ(reason_of(s), RejectReason::kQuaternionNotUnit);
 
   s = valid_state();
+  s.palm().position().z(-100.5);  // kMaxPalmCoordinate = 100 m
+  EXPECT_EQ(reason_of(s), RejectReason::kPositionOutOfRange);
+  s.palm().position().z(99.5);
+  RejectReason r{};
+  EXPECT_TRUE(validate_controller_state(s, kFiveFingers, r)) << "99.5 m is still a valid palm";
+
+  s = valid_state();
   s.trigger(-0.01);
   EXPECT_EQ(reason_of(s), RejectReason::kTriggerOutOfRange);
   s.trigger(1.01);
@@ -95,6 +102,8 @@ TEST(InputValidationTest, ReasonsHaveStableNames) {
   EXPECT_EQ(name(RejectReason::kNonFinite), "non_finite");
   EXPECT_EQ(name(RejectReason::kClientIdOwnedByAnotherParticipant), "client_id_owned_by_another_participant");
   EXPECT_EQ(name(RejectReason::kTooManyHands), "too_many_hands");
+  EXPECT_EQ(name(RejectReason::kRateLimited), "rate_limited");
+  EXPECT_EQ(name(RejectReason::kPositionOutOfRange), "position_out_of_range");
 }
 
 }  // namespace
