@@ -52,7 +52,7 @@ out="$(cd "$out" && pwd)"
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 
-topics_out=(HandSkeleton GraspState ContactSet GraspEvent SceneState ServerStatus ObjectGeometry)
+topics_out=(HandSkeleton GraspState ContactSet GraspEvent SceneState ServerStatus ObjectGeometry ClientNotice)
 # Topics whose samples are people's motion (or follow it): encrypted; the rest signed.
 encrypted=(ControllerState HandSkeleton GraspState ContactSet GraspEvent SceneState)
 

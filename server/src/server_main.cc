@@ -36,7 +36,7 @@ HandSkeleton, GraspState, ContactSet, GraspEvent, SceneState and ServerStatus.
 Options (override the --config file):
   --config FILE       server configuration, protobuf text (schema: server/proto/server_config.proto)
   --domain N          DDS domain, 0..232 (default 0)
-  --profile NAME      Fast DDS participant profile: loopback (default), lan, wan, secure (loopback
+  --profile NAME      Fast DDS participant profile: loopback (default), udp, lan, wan, secure (loopback
                       with DDS Security: see --security, --identity and the README)
   --profiles FILE     Fast DDS XML profiles (default: deploy/fastdds/telegrasp_profiles.xml)
   --security DIR      with --profile secure: the folder deploy/security/make-certs.sh made

@@ -183,6 +183,7 @@ TEST(SnapshotTest, SceneServerStartsFromRestoredObjectsAndPublishesItsIncarnatio
   ServerSettings settings;
   settings.objects = {{"005_tomato_soup_can", 0.4, 0.0, 0.0}};
   settings.incarnation = 0x1234;
+  settings.operators = {"op"};
   const auto snapshot = make_snapshot(two_objects());
   settings.restored_objects = placed_objects(snapshot, standins(), "test");
   InputMailbox mailbox{{5, 5}, 4, [](const std::string&) {}};
@@ -199,6 +200,7 @@ TEST(SnapshotTest, SceneServerStartsFromRestoredObjectsAndPublishesItsIncarnatio
 
   msg::SceneCommand reset;
   reset.kind(msg::SCENE_RESET);
+  reset.client_id("op");  // settings.operators
   EXPECT_EQ(scene.apply_command(reset), "");
   ASSERT_EQ(scene.world().objects().size(), 1u);
   EXPECT_EQ(scene.world().object_model(scene.world().objects()[0]).name, "005_tomato_soup_can");

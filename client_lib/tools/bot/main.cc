@@ -77,7 +77,7 @@ Options:
                       ({"received", "first", "last", "missing", "duplicates"}; reliable events
                       leave both lists empty)
   --domain N          DDS domain, 0..232 (default 0)
-  --profile NAME      Fast DDS participant profile: loopback (default), lan, wan
+  --profile NAME      Fast DDS participant profile: loopback (default), udp, lan, wan, secure
   --profiles FILE     Fast DDS XML profiles (default: $TELEGRASP_PROFILES, else the shipped file)
   --timeout S         give up when no server is found (or it goes silent) for S seconds
                       (default 20)

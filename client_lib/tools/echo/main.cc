@@ -55,7 +55,7 @@ Options:
                    SceneState,ServerStatus,ObjectGeometry (default: all; ObjectGeometry prints
                    a summary of each model's mesh, not the mesh)
   --domain N       DDS domain, 0..232 (default 0)
-  --profile NAME   participant profile: loopback, lan, wan (default loopback)
+  --profile NAME   participant profile: loopback, udp, lan, wan, secure (default loopback)
   --profiles FILE  Fast DDS XML profiles (default $TELEGRASP_PROFILES, else the shipped file)
   --count N        exit after N lines
   --seconds S      exit after S seconds

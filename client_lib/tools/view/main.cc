@@ -52,7 +52,7 @@ Options:
   --rate HZ          messages per second at most, 1..240 (default 30): the newest state is sent,
                      what came between is skipped
   --domain N         DDS domain, 0..232 (default 0)
-  --profile NAME     Fast DDS participant profile: loopback (default), lan, wan
+  --profile NAME     Fast DDS participant profile: loopback (default), udp, lan, wan, secure
   --profiles FILE    Fast DDS XML profiles (default: $TELEGRASP_PROFILES, else the shipped file)
   --web DIR          the page's files and schemas (default: share/telegrasp/view of this
                      installation or build)

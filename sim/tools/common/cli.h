@@ -70,7 +70,7 @@ using Fail = void (*)(const std::string& what);
 
 /// The Fast DDS participant profile name given to `flag`: any name but the empty one.
 [[nodiscard]] inline std::string parse_profile(const std::string& flag, const std::string& v, Fail fail) {
-  if (v.empty()) fail(flag + " expects a participant profile name (loopback, lan, wan, secure), got ''");
+  if (v.empty()) fail(flag + " expects a participant profile name (loopback, udp, lan, wan, secure), got ''");
   return v;
 }
 

@@ -54,7 +54,7 @@ TEST(CliTest, ReadsFiniteNumbersInRangeAndNamesTheMistake) {
   for (const char* bad : {"", "nan", "inf", "1e400", "3s"})
     EXPECT_NE(refusal([&] { (void)parse_number("--x", bad, -1e9, 1e9, refuse); }), "") << "'" << bad << "'";
   EXPECT_EQ(refusal([] { (void)parse_profile("--profile", "", refuse); }),
-            "--profile expects a participant profile name (loopback, lan, wan), got ''");
+            "--profile expects a participant profile name (loopback, udp, lan, wan, secure), got ''");
 }
 
 // argv as the option loop gets it: a program name, then the arguments.
