@@ -15,7 +15,9 @@ std::int64_t steady_now_ns() {
 
 }  // namespace
 
-RateLimiter::RateLimiter(double rate_hz) : rate_(rate_hz), burst_(std::max(10.0, rate_hz / 10)), tokens_(burst_) {}
+// Bursts of one second's worth: a client (or a server just started, or starved of CPU) whose
+// samples queued up and arrive at once is not punished; a flood still gets `rate` a second.
+RateLimiter::RateLimiter(double rate_hz) : rate_(rate_hz), burst_(std::max(10.0, rate_hz)), tokens_(burst_) {}
 
 bool RateLimiter::take(std::int64_t now_ns) {
   if (rate_ <= 0) return true;  // unlimited

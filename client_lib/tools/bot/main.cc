@@ -33,7 +33,7 @@ using telegrasp::bot::kStaleScene;
 using Options = telegrasp::bot::Options;
 
 constexpr int kExitNotHeld = 3;  // every trial done, some not held
-constexpr int kExitRefused = 4;  // the server refused this bot's inputs or commands (ClientNotice)
+constexpr int kExitRefused = 4;  // the server refused this bot's hands or a command (ClientNotice)
 
 // Input refusals after which no grasp can happen: the bot stops at once.
 bool fatal_refusal(const client::Notice& n) {
@@ -90,9 +90,9 @@ Exit status: 0 every trial done and every object held after the lift in every tr
 failure (the --objects folder or a mesh in it missing or unreadable, the --json file not
 writable, DDS could not start, no server found or it went silent), 2 a usage error (a bad or
 missing option or value), 3 every trial done but some object not held in every trial (or the
-scene had no object: nothing grasped), 4 the server refused this bot's inputs or commands (its
-ClientNotice is printed; a refusal that keeps its hands out, e.g. the client id taken or no hand
-slot left, stops the bot at once), 130 stopped by SIGINT or SIGTERM (the table shows the trials
+scene had no object: nothing grasped), 4 the server refused this bot's hands (the client id
+taken or no hand slot left: the bot stops at once) or one of its commands; every ClientNotice is
+printed, and other dropped inputs (e.g. rate_limited) do not change the status, 130 stopped by SIGINT or SIGTERM (the table shows the trials
 done).
 )";
 
@@ -221,6 +221,9 @@ int main(int argc, char** argv) {
     std::cerr << "telegrasp-bot " << opt.client_id << ": the server refused our "
               << (n.kind == client::Notice::Kind::kInputRejected ? "controller states" : "scene command") << ": "
               << n.reason << (n.detail.empty() ? "" : " (" + n.detail + ")") << "\n";
+    // A dropped input now and then (rate_limited after a stall, a stale sample) costs nothing: only
+    // refusals that keep the hands out or refuse a command decide the exit status.
+    if (n.kind == client::Notice::Kind::kInputRejected && !fatal_refusal(n)) return;
     std::lock_guard lock(refusal_mutex);
     if (!refusal || fatal_refusal(n)) refusal = n;
   });
