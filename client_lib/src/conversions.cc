@@ -388,6 +388,22 @@ client::SceneCommand from_msg(const msg::SceneCommand& m) {
   return c;
 }
 
+namespace {
+
+// Counts per reason as ServerStatus carries them (rejected, commands_rejected_by_reason).
+std::vector<msg::RejectCount> reject_counts(const std::map<std::string, std::uint64_t>& by_reason) {
+  std::vector<msg::RejectCount> out;
+  for (const auto& [reason, count] : by_reason) {
+    msg::RejectCount r;
+    r.reason(reason);
+    r.count(count);
+    out.push_back(r);
+  }
+  return out;
+}
+
+}  // namespace
+
 msg::ServerStatus to_msg(const client::ServerStatus& s) {
   msg::ServerStatus m;
   m.tick(s.tick);
@@ -401,21 +417,11 @@ msg::ServerStatus to_msg(const client::ServerStatus& s) {
   m.missed_ticks(s.missed_ticks);
   m.inputs_accepted(s.inputs_accepted);
   m.inputs_rejected(s.inputs_rejected);
-  for (const auto& [reason, count] : s.rejected) {
-    msg::RejectCount r;
-    r.reason(reason);
-    r.count(count);
-    m.rejected().push_back(r);
-  }
+  m.rejected(reject_counts(s.rejected));
   m.commands_accepted(s.commands_accepted);
   m.commands_rejected(s.commands_rejected);
   for (const std::string& model : s.models) m.models().emplace_back(model);
-  for (const auto& [reason, count] : s.commands_rejected_by_reason) {
-    msg::RejectCount r;
-    r.reason(reason);
-    r.count(count);
-    m.commands_rejected_by_reason().push_back(r);
-  }
+  m.commands_rejected_by_reason(reject_counts(s.commands_rejected_by_reason));
   m.notices_sent(s.notices_sent);
   m.incarnation(s.incarnation);
   return m;
