@@ -26,8 +26,9 @@ jobs="$(nproc)"
 launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 supp="$root/tests/sanitizers"
-# Tests of targets not built here (view, MCAP, install) are listed by ctest but not run.
-not_here='_NOT_BUILT$|^server\.replay_mcap\.|^client_lib\.installed_package_consumer$|^client_lib\.view\.|^mcap\.|^install\.'
+# Tests of targets not built here (view, MCAP, install, DDS Security, faults, multihost: their
+# programs) are listed by ctest but not run.
+not_here='_NOT_BUILT$|^security\.|^faults\.|^multihost\.|^server\.replay_mcap\.|^client_lib\.installed_package_consumer$|^client_lib\.view\.|^mcap\.|^install\.'
 
 step() { echo "run-sanitizers: $* ($(date +%T))" >&2; }
 configure_and_build() {
@@ -48,7 +49,10 @@ if [ "$run_asan" = 1 ]; then
   configure_and_build build-asan address telegrasp-tests-sim telegrasp-tests-server telegrasp-tests-idl \
     telegrasp-tests-client telegrasp-tests-common telegrasp-tests-tools telegrasp-tests-integration
   step "unit and integration tests under ASan+UBSan"
-  ASAN_OPTIONS="halt_on_error=1:abort_on_error=1:detect_leaks=1:detect_stack_use_after_return=1:strict_string_checks=1:check_initialization_order=1" \
+  # new_delete_type_mismatch=0: libfastrtps 2.9.1 itself (uninstrumented) deletes its
+  # StatisticsReaderImpl (64 bytes) through a base of 56 bytes whenever a reader is deleted
+  # (RTPSReader::~RTPSReader): a report in Fast DDS's code on every DDS test, not in ours.
+  ASAN_OPTIONS="halt_on_error=1:abort_on_error=1:detect_leaks=1:detect_stack_use_after_return=1:strict_string_checks=1:check_initialization_order=1:new_delete_type_mismatch=0" \
   UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1" \
   LSAN_OPTIONS="suppressions=$supp/lsan.supp:print_suppressions=0" \
     ctest --test-dir build-asan --output-on-failure -j"$jobs" -E "$not_here" || status=1
