@@ -12,6 +12,8 @@
 #                      namespaces, so two runs never collide and the machine's network is untouched)
 #   --keep-logs DIR    write every program's log and result there and keep them (default: a
 #                      temporary folder, removed after a run that passed, kept after a failure)
+#   --loss PCT         drop PCT % of the packets arriving at every host, at random (iptables
+#                      statistic match in each host's namespace; default 0, 0..50)
 #   --clean-stale      first remove namespaces left by runs of this script that are gone (killed
 #                      with SIGKILL: their trap never ran)
 #   -h, --help         this text
@@ -58,6 +60,7 @@ bin=""
 subnet=10.203.0
 keep_logs=""
 clean_stale=""
+loss=0
 
 usage_error() { echo "$me: $*" >&2; echo "$me: see --help" >&2; exit 2; }
 need_value() { [ "$2" -ge 2 ] || usage_error "$1 needs a value"; }
@@ -73,6 +76,7 @@ while [ $# -gt 0 ]; do
     --bin) need_value "$1" $#; bin="$2"; shift 2 ;;
     --subnet) need_value "$1" $#; subnet="$2"; shift 2 ;;
     --keep-logs) need_value "$1" $#; keep_logs="$2"; shift 2 ;;
+    --loss) need_value "$1" $#; int_in "$1" "$2" 0 50; loss="$2"; shift 2 ;;
     --clean-stale) clean_stale=1; shift ;;
     -h | --help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
     *) usage_error "unknown option '$1'" ;;
@@ -102,9 +106,9 @@ for tool in telegrasp-server telegrasp-bot telegrasp-echo; do
 done
 bin="$(cd "$bin" && pwd)"
 for tool in telegrasp-server telegrasp-bot telegrasp-echo; do
+  help="$("$bin/$tool" --help 2>&1 || true)"
   for flag in --scene --discovery-server; do
-    "$bin/$tool" --help 2>&1 | grep -q -- "$flag" ||
-      { echo "$me: $bin/$tool has no $flag option (it predates issue 14: rebuild)" >&2; exit 1; }
+    grep -q -- "$flag" <<<"$help" || { echo "$me: $bin/$tool has no $flag option (it predates issue 14: rebuild)" >&2; exit 1; }
   done
 done
 
@@ -184,9 +188,16 @@ make_host() {  # make_host NAME LAST_OCTET
   ip -n "$ns" link set lo up
   ip -n "$ns" addr add "$subnet.$2/24" dev eth0
   ip -n "$ns" link set eth0 up
+  if [ "$loss" != 0 ]; then
+    ip netns exec "$ns" iptables -A INPUT -i eth0 -m statistic --mode random \
+      --probability "$(awk -v p="$loss" 'BEGIN { printf "%.2f", p / 100 }')" -j DROP
+  fi
   addr[$1]="$subnet.$2"
 }
-say "run $prefix: $scenes scene(s), $bots bot(s) each, $trials trial(s) per object; programs from $bin; logs in $work"
+say "run $prefix: $scenes scene(s), $bots bot(s) each, $trials trial(s) per object, loss $loss %; programs from $bin; logs in $work"
+if [ "$loss" != 0 ]; then
+  command -v iptables >/dev/null || { echo "$me: --loss needs iptables (deploy/install-deps.sh installs it)" >&2; exit 1; }
+fi
 ip netns add "$switch"
 namespaces+=("$switch")
 ip -n "$switch" link set lo up
@@ -239,15 +250,23 @@ say "discovery servers: ds0 ${addr[ds0]}:$port, ds1 ${addr[ds1]}:$port"
 
 # ---- scene servers and their echoes ---------------------------------------------------------------
 echo_file() { printf '%s/echo-%s.txt' "$work" "$(scene_name "$1")"; }
-# telegrasp-echo's JSON lines (about 3 KB a hand skeleton) as "TOPIC CLIENT_ID KIND" ("-": none).
+# telegrasp-echo's JSON lines (about 3 KB a hand skeleton) as "TOPIC CLIENT_ID KIND UNIX_TIME" ("-":
+# none; the time it arrived here), other lines with "# " before them.
 compact() {
-  awk '{
-    if (!match($0, /"topic":"[A-Za-z]+"/)) { print "#", $0; fflush(); next }
-    t = substr($0, RSTART + 9, RLENGTH - 10); c = "-"; k = "-"
-    if (match($0, /"client_id":"[^"]*"/)) c = substr($0, RSTART + 13, RLENGTH - 14)
-    if (match($0, /"kind":"[a-z]+"/)) k = substr($0, RSTART + 8, RLENGTH - 9)
-    print t, c, k; fflush()
-  }'
+  python3 -u -c '
+import re, sys, time
+topic = re.compile(r"\"topic\":\"(\w+)\"")
+client = re.compile(r"\"client_id\":\"([^\"]*)\"")
+kind = re.compile(r"\"kind\":\"(\w+)\"")
+for line in sys.stdin:
+    t = topic.search(line)
+    if not t:
+        print("# " + line.rstrip("\n"), flush=True)
+        continue
+    c = client.search(line)
+    k = kind.search(line)
+    print(t.group(1), c.group(1) if c else "-", k.group(1) if k else "-", "%.3f" % time.time(), flush=True)
+'
 }
 scene_name() { printf 'room-%s' "$(printf '%b' "\\x$(printf '%x' $((96 + $1)))")"; }  # 1 -> room-a
 cat >"$work/scene.textproto" <<'EOF'
@@ -256,10 +275,10 @@ tick_hz: 90
 objects { model: "005_tomato_soup_can" x: 0.45 y: -0.3 }
 objects { model: "006_mustard_bottle" x: 0.78 y: -0.3 }
 EOF
-start_server() {  # start_server SCENE_INDEX HOST
+start_server() {  # start_server SCENE_INDEX HOST [LOG_SUFFIX]
   local s
   s="$(scene_name "$1")"
-  run_on "$2" "$work/server-$s-$2.log" "$bin/telegrasp-server" --config "$work/scene.textproto" --scene "$s" \
+  run_on "$2" "$work/server-$s-$2${3:-}.log" "$bin/telegrasp-server" --config "$work/scene.textproto" --scene "$s" \
     --snapshot "$work/$s.snapshot" "${dds_args[@]}"
   pid_of[server$1]=$started
 }
@@ -276,14 +295,18 @@ t_servers=$(now)
 expected_scenes="$(for i in $(seq 1 "$scenes"); do scene_name "$i"; echo; done | sort | paste -sd' ')"
 # json_scenes JSON: the scene names of `telegrasp-echo --scenes --json`, sorted, on one line ("" if
 # it is not such JSON). json_field JSON SCENE KEY: KEY of SCENE ("*": "scene=KEY" of each).
+# Only entries that serve count ("serving": false is a run still waiting out its claim on the name).
 json_scenes() {
-  python3 -c 'import json, sys; print(" ".join(sorted(str(s["scene"]) for s in json.loads(sys.argv[1]))))' "$1" \
+  python3 -c '
+import json, sys
+print(" ".join(sorted({str(s["scene"]) for s in json.loads(sys.argv[1]) if s.get("serving", True)})))' "$1" \
     2>/dev/null || true
 }
 json_field() {
   python3 -c '
 import json, sys
 for s in json.loads(sys.argv[1]):
+    if not s.get("serving", True): continue
     if sys.argv[2] == "*": print("%s=%s" % (s["scene"], s.get(sys.argv[3])), end=" ")
     elif s["scene"] == sys.argv[2]: print(s.get(sys.argv[3])); break' "$@" 2>/dev/null || true
 }
@@ -335,17 +358,17 @@ for i in $(seq 1 "$scenes"); do
   for j in $(seq 1 "$bots"); do start_bot "$i" "cl$i" "$(scene_name "$i")-bot$j" "$trials"; done
 done
 
-# Each scene's echo, compacted by `compact` to "TOPIC CLIENT_ID KIND" a sample ("-": none); lines
-# that are not samples start with "#".
 # wait_line SCENE_INDEX SKIP PATTERN START LIMIT: waits up to LIMIT s for a line of the scene's echo
-# after its first SKIP lines that starts with PATTERN; prints the seconds since START, or nothing.
+# after its first SKIP lines that starts with PATTERN; prints the seconds from START to its arrival,
+# or nothing.
 wait_line() {
   local deadline
   deadline=$(awk -v a="$(now)" -v l="$5" 'BEGIN { printf "%.0f", a + l }')
   while :; do
-    if awk -v skip="$2" -v p="$3" 'NR > skip && index($0, p) == 1 { found = 1; exit } END { exit !found }' \
-      "$(echo_file "$1")" 2>/dev/null; then
-      since "$4"
+    local at
+    at="$(awk -v skip="$2" -v p="$3" 'NR > skip && index($0, p) == 1 { print $4; exit }' "$(echo_file "$1")" 2>/dev/null)"
+    if [ -n "$at" ]; then
+      diff_s "$4" "$at"
       return 0
     fi
     [ "$(date +%s)" -lt "$deadline" ] || return 0
@@ -375,6 +398,8 @@ say "after a bot starts: $join_figures"
 # ---- (d) kill ds0; a bot started afterwards joins through ds1 -------------------------------------
 declare -A lines_at_ds0_kill=()
 for i in $(seq 1 "$scenes"); do lines_at_ds0_kill[$i]=$(lines_of "$i"); done
+running_at_ds0_kill=""
+for id in "${bot_ids[@]}"; do kill -0 "${pid_of[$id]}" 2>/dev/null && running_at_ds0_kill+="$id "; done
 kill -KILL "${pid_of[ds0]}"
 wait "${pid_of[ds0]}" 2>/dev/null || true
 t_ds0_kill=$(now)
@@ -385,13 +410,32 @@ say "killed ds0; started $late_id on host late"
 
 # ---- (e) kill srv1; its scene starts again on the spare host ------------------------------------
 moved_lines=$(lines_of 1)
+running_at_move=""
+for id in "${bot_ids[@]}"; do
+  [ "${bot_scene[$id]}" = 1 ] && [ "$id" != "$late_id" ] && kill -0 "${pid_of[$id]}" 2>/dev/null && running_at_move+="$id "
+done
 kill -KILL "${pid_of[server1]}"
 wait "${pid_of[server1]}" 2>/dev/null || true
 t_srv1_kill=$(now)
 sleep 1  # a machine does not come back at once
-start_server 1 spare
-t_moved=$(now)
-say "killed srv1 ($(scene_name 1)); started it on host spare"
+# The killed run's directory entry lives until its liveliness lease ends (3 s), and a server refuses a
+# scene that a live entry claims: so, like the systemd unit (Restart=on-failure), start it again
+# while it says "already served by", up to 5 times.
+move_tries=0
+while :; do
+  move_tries=$((move_tries + 1))
+  start_server 1 spare "-try$move_tries"
+  t_moved=$(now)
+  sleep 4  # its claim wait (1.5 s) and start
+  kill -0 "${pid_of[server1]}" 2>/dev/null && break
+  wait "${pid_of[server1]}" 2>/dev/null || true
+  if [ "$move_tries" -ge 5 ] || ! grep -q "already served by" "$work/server-$(scene_name 1)-spare-try$move_tries.log"; then
+    say "the server on spare stopped: $(tail -2 "$work/server-$(scene_name 1)-spare-try$move_tries.log" | tr '\n' ' ')"
+    break
+  fi
+  sleep 1
+done
+say "killed srv1 ($(scene_name 1)); started it on host spare $(diff_s "$t_srv1_kill" "$t_moved") s later (try $move_tries)"
 # Time for the late bot to join (through ds1 alone) and for the moved scene's bots to rejoin (their
 # first skeleton from the new server), at once.
 declare -A rejoined=()
@@ -456,7 +500,7 @@ for i in $(seq 1 "$scenes"); do
   s="$(scene_name "$i")"
   after=$(awk -v skip="${lines_at_ds0_kill[$i]}" 'NR > skip && $1 == "GraspEvent" && $3 == "grasp"' "$(echo_file "$i")" | wc -l)
   if [ "$after" -gt 0 ]; then
-    check PASS "(d) $s after ds0 died" "$after grasp events after the kill"
+    check PASS "(d) $s after ds0 died" "$after grasp events after the kill (bots running then: ${running_at_ds0_kill:-none})"
   else
     check FAIL "(d) $s after ds0 died" "no grasp event after the kill (were its bots done before it? raise --trials)"
   fi
@@ -478,9 +522,10 @@ for id in "${bot_ids[@]}"; do
 done
 [[ "$rejoin" == *never* ]] && moved_ok=""
 # The host as the server names it: its hostname (each host here has its own), or its address.
+[ -n "$running_at_move" ] || moved_ok=""  # its bots had finished: nothing was tested (raise --trials)
 [ "$moved_host" = spare ] || [[ "$moved_host" == *"${addr[spare]}"* ]] || moved_ok=""
 [ -n "$moved_incarnation" ] && [ "$moved_incarnation" != "$first_incarnation" ] || moved_ok=""
-figures="rejoined: $rejoin--scenes says host '$moved_host', incarnation $first_incarnation -> $moved_incarnation"
+figures="bots running at the kill: ${running_at_move:-none (raise --trials)}; rejoined: $rejoin--scenes says host '$moved_host', incarnation $first_incarnation -> $moved_incarnation"
 if [ -n "$moved_ok" ]; then check PASS "(e) $(scene_name 1) moved to spare" "$figures"
 else check FAIL "(e) $(scene_name 1) moved to spare" "$figures"; fi
 
