@@ -18,8 +18,8 @@
 #                      with SIGKILL: their trap never ran)
 #   -h, --help         this text
 #
-# Hosts (each a network namespace named tg<pid>-HOST with its own hostname, one veth to a bridge
-# that lives in a "switch" namespace tg<pid>-sw, an address A.B.C.X/24 and lo up):
+# Hosts (each a network namespace named tgmh<pid>-HOST with its own hostname, one veth to a bridge
+# that lives in a "switch" namespace tgmh<pid>-sw, an address A.B.C.X/24 and lo up):
 #   ds0 .10, ds1 .11   Fast DDS discovery servers 0 and 1 (fast-discovery-server -i 0|1 -p 11811,
 #                      what `fastdds discovery` runs)
 #   srv1..srvN .21..   telegrasp-server, scene room-a, room-b, ... (2 objects each, a --snapshot)
@@ -113,8 +113,8 @@ for tool in telegrasp-server telegrasp-bot telegrasp-echo; do
 done
 
 if [ -n "$clean_stale" ]; then
-  for ns in $(ip netns list | awk '{print $1}' | grep -E '^tg[0-9]+-' || true); do
-    owner="${ns#tg}"; owner="${owner%%-*}"
+  for ns in $(ip netns list | awk '{print $1}' | grep -E '^tgmh[0-9]+-' || true); do
+    owner="${ns#tgmh}"; owner="${owner%%-*}"
     if ! kill -0 "$owner" 2>/dev/null; then
       for pid in $(ip netns pids "$ns" 2>/dev/null); do kill -KILL "$pid" 2>/dev/null || true; done
       ip netns del "$ns" && echo "$me: removed stale namespace $ns (run $owner is gone)" >&2
@@ -129,7 +129,7 @@ if [ -n "$keep_logs" ]; then
 else
   work="$(mktemp -d -t telegrasp-multihost.XXXXXX)"
 fi
-prefix="tg$$"
+prefix="tgmh$$"
 switch="$prefix-sw"
 namespaces=()   # made, in order (the switch first)
 children=()     # every program started, by pid
@@ -358,15 +358,15 @@ for i in $(seq 1 "$scenes"); do
   for j in $(seq 1 "$bots"); do start_bot "$i" "cl$i" "$(scene_name "$i")-bot$j" "$trials"; done
 done
 
-# wait_line SCENE_INDEX SKIP PATTERN START LIMIT: waits up to LIMIT s for a line of the scene's echo
-# after its first SKIP lines that starts with PATTERN; prints the seconds from START to its arrival,
-# or nothing.
+# wait_line SCENE_INDEX AFTER PATTERN START LIMIT: waits up to LIMIT s for a line of the scene's echo
+# that starts with PATTERN and arrived after the Unix time AFTER; prints the seconds from START to its
+# arrival, or nothing.
 wait_line() {
   local deadline
   deadline=$(awk -v a="$(now)" -v l="$5" 'BEGIN { printf "%.0f", a + l }')
   while :; do
     local at
-    at="$(awk -v skip="$2" -v p="$3" 'NR > skip && index($0, p) == 1 { print $4; exit }' "$(echo_file "$1")" 2>/dev/null)"
+    at="$(awk -v after="$2" -v p="$3" 'index($0, p) == 1 && $4 > after { print $4; exit }' "$(echo_file "$1")" 2>/dev/null)"
     if [ -n "$at" ]; then
       diff_s "$4" "$at"
       return 0
@@ -396,8 +396,6 @@ for id in "${bot_ids[@]}"; do join_figures+="$id joined ${joined[$id]:-never} s,
 say "after a bot starts: $join_figures"
 
 # ---- (d) kill ds0; a bot started afterwards joins through ds1 -------------------------------------
-declare -A lines_at_ds0_kill=()
-for i in $(seq 1 "$scenes"); do lines_at_ds0_kill[$i]=$(lines_of "$i"); done
 running_at_ds0_kill=""
 for id in "${bot_ids[@]}"; do kill -0 "${pid_of[$id]}" 2>/dev/null && running_at_ds0_kill+="$id "; done
 kill -KILL "${pid_of[ds0]}"
@@ -409,7 +407,6 @@ start_bot "$late_scene" late "$late_id" 1
 say "killed ds0; started $late_id on host late"
 
 # ---- (e) kill srv1; its scene starts again on the spare host ------------------------------------
-moved_lines=$(lines_of 1)
 running_at_move=""
 for id in "${bot_ids[@]}"; do
   [ "${bot_scene[$id]}" = 1 ] && [ "$id" != "$late_id" ] && kill -0 "${pid_of[$id]}" 2>/dev/null && running_at_move+="$id "
@@ -447,7 +444,7 @@ while [ "$(date +%s)" -lt "$deadline" ]; do
   [ -n "$late_joined" ] || waiting=1
   for id in "${bot_ids[@]}"; do
     [ "${bot_scene[$id]}" = 1 ] && [ "$id" != "$late_id" ] || continue
-    [ -z "${rejoined[$id]:-}" ] && rejoined[$id]="$(wait_line 1 "$moved_lines" "HandSkeleton $id " "$t_moved" 0)"
+    [ -z "${rejoined[$id]:-}" ] && rejoined[$id]="$(wait_line 1 "$t_moved" "HandSkeleton $id " "$t_moved" 0)"
     [ -n "${rejoined[$id]}" ] || waiting=1
   done
   [ -z "$waiting" ] && break
@@ -498,7 +495,7 @@ done
 for i in $(seq 1 "$scenes"); do
   [ "$i" = 1 ] && [ "$scenes" -gt 1 ] && continue  # scene 1 moved: (e) judges it
   s="$(scene_name "$i")"
-  after=$(awk -v skip="${lines_at_ds0_kill[$i]}" 'NR > skip && $1 == "GraspEvent" && $3 == "grasp"' "$(echo_file "$i")" | wc -l)
+  after=$(awk -v t="$t_ds0_kill" '$1 == "GraspEvent" && $3 == "grasp" && $4 > t' "$(echo_file "$i")" | wc -l)
   if [ "$after" -gt 0 ]; then
     check PASS "(d) $s after ds0 died" "$after grasp events after the kill (bots running then: ${running_at_ds0_kill:-none})"
   else
@@ -525,7 +522,16 @@ done
 [ -n "$running_at_move" ] || moved_ok=""  # its bots had finished: nothing was tested (raise --trials)
 [ "$moved_host" = spare ] || [[ "$moved_host" == *"${addr[spare]}"* ]] || moved_ok=""
 [ -n "$moved_incarnation" ] && [ "$moved_incarnation" != "$first_incarnation" ] || moved_ok=""
-figures="bots running at the kill: ${running_at_move:-none (raise --trials)}; rejoined: $rejoin--scenes says host '$moved_host', incarnation $first_incarnation -> $moved_incarnation"
+# Each bot that was running noticed the new run (telegrasp-bot says "the server restarted (incarnation
+# OLD -> NEW)"), and the new run came back from the snapshot.
+noticed=""
+for id in $running_at_move; do
+  if grep -q "server restarted (incarnation .* -> $moved_incarnation)" "$work/bot-$id.log"; then noticed+="$id "
+  else moved_ok=""; fi
+done
+restored="$(grep -ho '[0-9]* objects back from snapshot' "$work/server-$(scene_name 1)-spare-try$move_tries.log" | head -1 || true)"
+[ -n "$restored" ] || moved_ok=""
+figures="bots running at the kill: ${running_at_move:-none (raise --trials)}, noticed the new run: ${noticed:-none}; rejoined: $rejoin${restored:-not restored from the snapshot}; --scenes says host '$moved_host', incarnation $first_incarnation -> $moved_incarnation"
 if [ -n "$moved_ok" ]; then check PASS "(e) $(scene_name 1) moved to spare" "$figures"
 else check FAIL "(e) $(scene_name 1) moved to spare" "$figures"; fi
 
