@@ -28,7 +28,9 @@
 #   late .50           a bot started after ds0 is killed
 #   ops .60            telegrasp-echo --scenes, and a duplicate server
 # Every program uses `--profile wan` with both discovery servers (--discovery-server ADDR:11811,
-# twice) and `--scene NAME`.
+# twice) and `--scene NAME`; the moved server takes its discovery servers, and the late bot its
+# scene too, from the environment instead (TELEGRASP_DISCOVERY_SERVERS="ADDR:11811;ADDR:11811",
+# TELEGRASP_SCENE), as the systemd unit gives them.
 #
 # Checks, each printed as PASS or FAIL with its figures:
 #   (a) every bot completes its grasps in its scene (exit 0, every trial held)
@@ -232,6 +234,8 @@ on() {
 # ---- discovery servers ----------------------------------------------------------------------------
 port=11811
 dds_args=(--profile wan --discovery-server "${addr[ds0]}:$port" --discovery-server "${addr[ds1]}:$port")
+# The same by environment, as the systemd unit gives them (the moved server and the late bot use it).
+dds_env="${addr[ds0]}:$port;${addr[ds1]}:$port"
 declare -A pid_of=()
 for d in 0 1; do
   run_on "ds$d" "$work/ds$d.log" fast-discovery-server -i "$d" -l "${addr[ds$d]}" -p "$port"
@@ -275,11 +279,16 @@ tick_hz: 90
 objects { model: "005_tomato_soup_can" x: 0.45 y: -0.3 }
 objects { model: "006_mustard_bottle" x: 0.78 y: -0.3 }
 EOF
-start_server() {  # start_server SCENE_INDEX HOST [LOG_SUFFIX]
+start_server() {  # start_server SCENE_INDEX HOST [LOG_SUFFIX [env]]: "env": discovery servers as the unit gives them
   local s
   s="$(scene_name "$1")"
-  run_on "$2" "$work/server-$s-$2${3:-}.log" "$bin/telegrasp-server" --config "$work/scene.textproto" --scene "$s" \
-    --snapshot "$work/$s.snapshot" "${dds_args[@]}"
+  if [ "${4:-}" = env ]; then
+    run_on "$2" "$work/server-$s-$2${3:-}.log" env TELEGRASP_DISCOVERY_SERVERS="$dds_env" "$bin/telegrasp-server" \
+      --config "$work/scene.textproto" --scene "$s" --profile wan --snapshot "$work/$s.snapshot"
+  else
+    run_on "$2" "$work/server-$s-$2${3:-}.log" "$bin/telegrasp-server" --config "$work/scene.textproto" --scene "$s" \
+      --snapshot "$work/$s.snapshot" "${dds_args[@]}"
+  fi
   pid_of[server$1]=$started
 }
 for i in $(seq 1 "$scenes"); do
@@ -343,11 +352,16 @@ fi
 # ---- bots -----------------------------------------------------------------------------------------
 declare -A bot_start=() bot_scene=() bot_host=()
 bot_ids=()
-start_bot() {  # start_bot SCENE_INDEX HOST ID TRIALS
+start_bot() {  # start_bot SCENE_INDEX HOST ID TRIALS [env]: "env": scene and discovery servers by environment
   local s
   s="$(scene_name "$1")"
-  run_on "$2" "$work/bot-$3.log" "$bin/telegrasp-bot" --client-id "$3" --trials "$4" --timeout 60 \
-    --json "$work/bot-$3.json" --scene "$s" "${dds_args[@]}"
+  if [ "${5:-}" = env ]; then
+    run_on "$2" "$work/bot-$3.log" env TELEGRASP_SCENE="$s" TELEGRASP_DISCOVERY_SERVERS="$dds_env" \
+      "$bin/telegrasp-bot" --client-id "$3" --trials "$4" --timeout 60 --json "$work/bot-$3.json" --profile wan
+  else
+    run_on "$2" "$work/bot-$3.log" "$bin/telegrasp-bot" --client-id "$3" --trials "$4" --timeout 60 \
+      --json "$work/bot-$3.json" --scene "$s" "${dds_args[@]}"
+  fi
   pid_of[$3]=$started
   bot_start[$3]=$(now)
   bot_scene[$3]=$1
@@ -403,7 +417,7 @@ wait "${pid_of[ds0]}" 2>/dev/null || true
 t_ds0_kill=$(now)
 late_scene=$((scenes >= 2 ? 2 : 1))
 late_id="$(scene_name "$late_scene")-late"
-start_bot "$late_scene" late "$late_id" 1
+start_bot "$late_scene" late "$late_id" 1 env
 say "killed ds0; started $late_id on host late"
 
 # ---- (e) kill srv1; its scene starts again on the spare host ------------------------------------
@@ -421,7 +435,7 @@ sleep 1  # a machine does not come back at once
 move_tries=0
 while :; do
   move_tries=$((move_tries + 1))
-  start_server 1 spare "-try$move_tries"
+  start_server 1 spare "-try$move_tries" env
   t_moved=$(now)
   sleep 4  # its claim wait (1.5 s) and start
   kill -0 "${pid_of[server1]}" 2>/dev/null && break

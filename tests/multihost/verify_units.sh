@@ -16,6 +16,7 @@ for f in "$units/telegrasp-server@.service" "$units/telegrasp-discovery@.service
   [ -f "$f" ] || { echo "verify_units: UNIT_DIR '$units' has no $(basename "$f")" >&2; exit 2; }
 done
 [ -x "$bin/telegrasp-server" ] || { echo "verify_units: BIN_DIR '$bin' has no telegrasp-server" >&2; exit 2; }
+bin="$(cd "$bin" && pwd)"  # ExecStart= needs an absolute path
 command -v systemd-analyze >/dev/null || { echo "verify_units: no systemd-analyze: skipped" >&2; exit 77; }
 
 work="$(mktemp -d -t telegrasp-units.XXXXXX)"
