@@ -245,7 +245,8 @@ for d in 0 1; do
   up=""
   for _ in $(seq 1 100); do  # up to 10 s
     kill -0 "${pid_of[ds$d]}" 2>/dev/null || break
-    if ip netns exec "$prefix-ds$d" ss -Huln 2>/dev/null | grep -Eq "(${addr[ds$d]}|0.0.0.0):$port "; then up=1; break; fi
+    sockets="$(ip netns exec "$prefix-ds$d" ss -Huln 2>/dev/null || true)"
+    if grep -Fq -e "${addr[ds$d]}:$port " -e "0.0.0.0:$port " <<<"$sockets"; then up=1; break; fi
     sleep 0.1
   done
   [ -n "$up" ] || { say "discovery server $d did not listen on ${addr[ds$d]}:$port:"; cat "$work/ds$d.log" >&2; exit 1; }
@@ -468,7 +469,15 @@ rejoin=""
 for id in "${!rejoined[@]}"; do rejoin+="$id ${rejoined[$id]:-never} s after the new server started; "; done
 say "$late_id joined ${late_joined:-never} s after its start; time to rejoin after the move: $rejoin"
 
-# ---- wait for every bot ---------------------------------------------------------------------------
+# ---- wait for every bot (at most 5 minutes; one still running then is stopped and fails) -----------
+deadline=$(($(date +%s) + 300))
+for id in "${bot_ids[@]}"; do
+  while kill -0 "${pid_of[$id]}" 2>/dev/null && [ "$(date +%s)" -lt "$deadline" ]; do sleep 0.5; done
+  if kill -0 "${pid_of[$id]}" 2>/dev/null; then
+    say "$id still running after 5 minutes: stopped"
+    kill -TERM "${pid_of[$id]}" 2>/dev/null || true
+  fi
+done
 declare -A bot_status=()
 for id in "${bot_ids[@]}"; do
   set +e
