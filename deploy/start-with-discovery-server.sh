@@ -11,18 +11,16 @@
 #   anything else goes to telegrasp-server (e.g. --domain 3 --objects DIR --config FILE)
 #
 # It runs `fastdds discovery -i 0 -l IP -p PORT` (from fastdds-tools; started as the binary that
-# command launches, fast-discovery-server, so that it can be stopped and reaped), waits until it listens,
-# then runs build/bin/telegrasp-server (or telegrasp-server from PATH) with `--profile wan` and
-# ROS_DISCOVERY_SERVER=IP:PORT in its environment. The shipped `wan` profile names
-# 127.0.0.1:11811 and, with Fast DDS 2.9, a profile that names its discovery server is not
-# overridden by ROS_DISCOVERY_SERVER; so for any other address the script writes a copy of the
-# profiles with IP:PORT in the `wan` profile, points TELEGRASP_PROFILES at it, and prints it:
-# clients use `--profile wan --profiles THAT_FILE` (a copy of it, on other machines). Ctrl-C, or
-# the telegrasp server exiting, stops both; the exit status is the telegrasp server's.
+# command launches, fast-discovery-server, so that it can be stopped and reaped), waits until it
+# listens, then runs build/bin/telegrasp-server (or telegrasp-server from PATH) with `--profile wan
+# --discovery-server IP:PORT`. Clients use `--profile wan --discovery-server IP:PORT` too (or
+# TELEGRASP_DISCOVERY_SERVERS=IP:PORT). For two redundant discovery servers and many scenes, see
+# the units in deploy/systemd/ and the README. Ctrl-C, or the telegrasp server exiting, stops both;
+# the exit status is the telegrasp server's.
 #
 # Example: server and a bot on one machine, through the discovery server:
 #   deploy/start-with-discovery-server.sh --domain 7 &
-#   build/bin/telegrasp-bot --profile wan --domain 7 --trials 1
+#   build/bin/telegrasp-bot --profile wan --discovery-server 127.0.0.1:11811 --domain 7 --trials 1
 set -euo pipefail
 
 here="$(cd "$(dirname "$0")" && pwd)"
@@ -57,12 +55,10 @@ command -v fast-discovery-server >/dev/null ||
 
 discovery_pid=""
 server_pid=""
-profiles_copy=""
 cleanup() {
   trap - EXIT INT TERM
   [ -n "$server_pid" ] && kill -TERM "$server_pid" 2>/dev/null && wait "$server_pid" 2>/dev/null || true
   [ -n "$discovery_pid" ] && kill -TERM "$discovery_pid" 2>/dev/null && wait "$discovery_pid" 2>/dev/null || true
-  [ -n "$profiles_copy" ] && rm -f "$profiles_copy"
 }
 trap cleanup EXIT
 trap 'exit 130' INT TERM
@@ -86,23 +82,7 @@ fi
 rm -f "$log"
 echo "start-with-discovery-server: Fast DDS discovery server listening on $ip:$port (pid $discovery_pid)" >&2
 
-export ROS_DISCOVERY_SERVER="$ip:$port"
-user_profiles=""
-for a in "${server_args[@]}"; do [ "$a" = "--profiles" ] && user_profiles=1; done
-if [ -n "$user_profiles" ]; then
-  echo "start-with-discovery-server: using your --profiles; its 'wan' profile must name $ip:$port" >&2
-elif [ "$ip:$port" != "127.0.0.1:11811" ]; then
-  shipped="${TELEGRASP_PROFILES:-$repo/deploy/fastdds/telegrasp_profiles.xml}"
-  profiles_copy="$(mktemp -t telegrasp-profiles-wan-XXXXXX.xml)"
-  sed "s|<address>127.0.0.1</address><port>11811</port>|<address>$ip</address><port>$port</port>|" "$shipped" >"$profiles_copy"
-  grep -q "<address>$ip</address><port>$port</port>" "$profiles_copy" ||
-    { echo "start-with-discovery-server: could not set $ip:$port in a copy of $shipped" >&2; exit 1; }
-  chmod 644 "$profiles_copy"
-  export TELEGRASP_PROFILES="$profiles_copy"
-  echo "start-with-discovery-server: profiles for this address: $profiles_copy (clients: --profile wan --profiles $profiles_copy)" >&2
-fi
-
-"$server" --profile wan "${server_args[@]}" &
+"$server" --profile wan --discovery-server "$ip:$port" "${server_args[@]}" &
 server_pid=$!
 set +e
 wait "$server_pid"  # Ctrl-C / SIGTERM run the trap instead: exit 130, stopping both

@@ -5,6 +5,7 @@
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
 
+#include <fastdds/dds/core/LoanableSequence.hpp>
 #include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 
@@ -21,6 +22,7 @@
 #include <set>
 #include <stdexcept>
 #include <thread>
+#include <tuple>
 #include <utility>
 
 namespace telegrasp::client {
@@ -52,8 +54,11 @@ void validate(const ClientOptions& o) {
   if (o.profile.empty())
     throw std::runtime_error(
         "ClientOptions.profile is empty; expected a participant profile name (loopback, lan, wan)");
-  if ((o.topics & ~static_cast<unsigned>(kAllTopics)) != 0)
-    throw std::runtime_error("ClientOptions.topics has bits outside kAllTopics");
+  if ((o.topics & ~static_cast<unsigned>(kAllTopics | kSceneDirectory)) != 0)
+    throw std::runtime_error("ClientOptions.topics has bits outside kAllTopics and kSceneDirectory");
+  if (!o.scene.empty())
+    if (const std::string e = idl::scene_name_error(o.scene); !e.empty())
+      throw std::runtime_error("ClientOptions.scene: " + e);
 }
 
 std::int64_t steady_now_ns() {
@@ -143,6 +148,7 @@ struct Client::Impl {
   std::optional<idl::DdsParticipant> participant;  // after the listeners: destroyed before them
   dds::DataWriter* controller_writer = nullptr;
   dds::DataWriter* command_writer = nullptr;
+  dds::DataReader* directory_reader = nullptr;  // kSceneDirectory: read on demand, no listener
 
   // Outgoing numbering; held across the write so numbers go out in order.
   std::mutex publish_mutex;
@@ -218,7 +224,8 @@ class Client::Impl::Listener final : public dds::DataReaderListener {
 Client::Impl::Impl(ClientOptions options_in) : options(std::move(options_in)) {
   validate(options);
   try {
-    participant.emplace(options.domain, options.profile, options.profiles_file);
+    participant.emplace(options.domain, options.profile, options.profiles_file, nullptr,
+                        idl::Network{options.scene, options.discovery_servers});
     controller_writer = participant->writer<msg::ControllerStatePubSubType>(idl::kControllerStateTopic);
     try {
       command_writer = participant->writer<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic);
@@ -236,6 +243,8 @@ Client::Impl::Impl(ClientOptions options_in) : options(std::move(options_in)) {
     if (options.topics & kServerStatuses) reader<msg::ServerStatusPubSubType>(idl::kServerStatusTopic);
     if (options.topics & kObjectGeometries) reader<msg::ObjectGeometryPubSubType>(idl::kObjectGeometryTopic);
     if (options.topics & kNotices) reader<msg::ClientNoticePubSubType>(idl::kClientNoticeTopic);
+    if (options.topics & kSceneDirectory)
+      directory_reader = participant->reader<msg::SceneAnnouncementPubSubType>(idl::kSceneDirectoryTopic);
   } catch (...) {
     close();
     throw;
@@ -659,6 +668,37 @@ std::optional<ContactSet> Client::latest_contact_set(const HandKey& hand) const 
   const auto it = impl_->contact_sets.latest.find(hand);
   if (it == impl_->contact_sets.latest.end()) return std::nullopt;
   return it->second;
+}
+
+std::string scene_name_error(const std::string& name) { return idl::scene_name_error(name); }
+
+std::string discovery_server_error(const std::string& address) {
+  try {
+    idl::resolve_network({idl::kDefaultScene, {address}});
+    return "";
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+}
+
+const std::string& Client::scene() const { return impl_->participant->network().scene; }
+
+std::vector<SceneInfo> Client::scenes() const {
+  std::vector<SceneInfo> live;
+  if (impl_->directory_reader == nullptr) return live;
+  FASTDDS_SEQUENCE(AnnouncementSeq, msg::SceneAnnouncement);
+  AnnouncementSeq data;
+  dds::SampleInfoSeq infos;
+  if (impl_->directory_reader->read(data, infos, dds::LENGTH_UNLIMITED, dds::ANY_SAMPLE_STATE, dds::ANY_VIEW_STATE,
+                                    dds::ALIVE_INSTANCE_STATE) != ReturnCode_t::RETCODE_OK)
+    return live;
+  for (dds::LoanableCollection::size_type i = 0; i < data.length(); ++i)
+    if (infos[i].valid_data) live.push_back(from_msg(data[i]));
+  impl_->directory_reader->return_loan(data, infos);
+  std::sort(live.begin(), live.end(), [](const SceneInfo& a, const SceneInfo& b) {
+    return std::tie(a.scene, a.started, a.incarnation) < std::tie(b.scene, b.started, b.incarnation);
+  });
+  return live;
 }
 
 std::vector<GraspEvent> Client::take_grasp_events() {

@@ -414,6 +414,7 @@ msg::ServerStatus to_msg(const client::ServerStatus& s) {
   m.objects(s.objects);
   m.tick_us_p50(s.tick_us_p50);
   m.tick_us_max(s.tick_us_max);
+  m.tick_us_p99(s.tick_us_p99);
   m.missed_ticks(s.missed_ticks);
   m.inputs_accepted(s.inputs_accepted);
   m.inputs_rejected(s.inputs_rejected);
@@ -437,6 +438,7 @@ client::ServerStatus from_msg(const msg::ServerStatus& m) {
   s.objects = m.objects();
   s.tick_us_p50 = m.tick_us_p50();
   s.tick_us_max = m.tick_us_max();
+  s.tick_us_p99 = m.tick_us_p99();
   s.missed_ticks = m.missed_ticks();
   s.inputs_accepted = m.inputs_accepted();
   s.inputs_rejected = m.inputs_rejected();
@@ -463,6 +465,26 @@ client::Notice from_msg(const msg::ClientNotice& m) {
   n.count = m.count();
   n.time = m.time();
   return n;
+}
+
+client::SceneInfo from_msg(const msg::SceneAnnouncement& m) {
+  client::SceneInfo s;
+  s.scene = m.scene().to_string();
+  s.host = m.host().to_string();
+  s.version = m.version().to_string();
+  s.incarnation = m.incarnation();
+  s.started = m.started();
+  s.serving = m.serving();
+  s.clients = m.clients();
+  s.hands = m.hands();
+  s.objects = m.objects();
+  s.tick_rate_hz = m.tick_rate_hz();
+  s.tick_us_p99 = m.tick_us_p99();
+  s.missed_ticks = m.missed_ticks();
+  s.cpu_percent = m.cpu_percent();
+  s.host_cores = m.host_cores();
+  s.host_load = m.host_load();
+  return s;
 }
 
 msg::ObjectGeometry to_msg(const client::ObjectGeometry& g) {

@@ -97,6 +97,7 @@ msg::ServerStatus to_msg(const client::ServerStatus& status);
 client::ServerStatus from_msg(const msg::ServerStatus& status);
 /// A refusal notice as the client type.
 client::Notice from_msg(const msg::ClientNotice& notice);
+client::SceneInfo from_msg(const msg::SceneAnnouncement& announcement);
 
 /// An object geometry as the IDL message (vertices and triangles flattened, every field as given).
 msg::ObjectGeometry to_msg(const client::ObjectGeometry& geometry);

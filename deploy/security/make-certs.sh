@@ -52,7 +52,7 @@ out="$(cd "$out" && pwd)"
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 
-topics_out=(HandSkeleton GraspState ContactSet GraspEvent SceneState ServerStatus ObjectGeometry ClientNotice)
+topics_out=(HandSkeleton GraspState ContactSet GraspEvent SceneState ServerStatus ObjectGeometry ClientNotice SceneDirectory)
 # Topics whose samples are people's motion (or follow it): encrypted; the rest signed.
 encrypted=(ControllerState HandSkeleton GraspState ContactSet GraspEvent SceneState)
 
@@ -115,8 +115,11 @@ identity() {
     { echo "make-certs.sh: openssl could not sign the certificate of '$name'" >&2; exit 1; }
   local subject; subject="$(openssl x509 -in "$dir/cert.pem" -noout -subject -nameopt RFC2253 | sed 's/^subject=//')"
   local publish=() subscribe=()
+  # Every scene (DDS partition telegrasp/scene/<name>) and the scene directory's partition: a
+  # rule without partitions would cover only the default, empty partition.
+  local partitions='<partitions><partition>telegrasp/scene/*</partition><partition>telegrasp/directory</partition></partitions>'
   case "$role" in
-    server) publish=("${topics_out[@]}"); subscribe=(ControllerState SceneCommand) ;;
+    server) publish=("${topics_out[@]}"); subscribe=(ControllerState SceneCommand SceneDirectory) ;;
     operator) publish=(ControllerState SceneCommand); subscribe=("${topics_out[@]}") ;;
     client) publish=(ControllerState); subscribe=("${topics_out[@]}") ;;
   esac
@@ -132,10 +135,10 @@ identity() {
     echo '        <domains><id_range><min>0</min><max>232</max></id_range></domains>'
     echo '        <publish><topics>'
     for t in "${publish[@]}"; do echo "          <topic>telegrasp/$t</topic>"; done
-    echo '        </topics></publish>'
+    echo "        </topics>$partitions</publish>"
     echo '        <subscribe><topics>'
     for t in "${subscribe[@]}"; do echo "          <topic>telegrasp/$t</topic>"; done
-    echo '        </topics></subscribe>'
+    echo "        </topics>$partitions</subscribe>"
     echo '      </allow_rule>'
     echo '      <default>DENY</default>'
     echo '    </grant>'

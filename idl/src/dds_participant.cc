@@ -9,7 +9,9 @@
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/publisher/qos/PublisherQos.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/subscriber/qos/SubscriberQos.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
@@ -20,8 +22,10 @@ namespace telegrasp::idl {
 namespace dds = eprosima::fastdds::dds;
 
 DdsParticipant::DdsParticipant(int domain, const std::string& profile, const std::string& profiles_file,
-                               dds::DomainParticipantListener* listener)
-    : profiles_file_(profiles_file.empty() ? default_profiles_file() : profiles_file), profile_(profile) {
+                               dds::DomainParticipantListener* listener, const Network& network)
+    : profiles_file_(profiles_file.empty() ? default_profiles_file() : profiles_file),
+      profile_(profile),
+      network_(resolve_network(network)) {
   load_profiles(profiles_file_, profile_);
   dds::DomainParticipantFactory* factory = dds::DomainParticipantFactory::get_instance();
   dds::DomainParticipantQos qos;
@@ -29,10 +33,11 @@ DdsParticipant::DdsParticipant(int domain, const std::string& profile, const std
     throw std::runtime_error("no participant profile '" + profile_ + "' in " + profiles_file_);
   const SecurityFiles security = security_from_environment();
   secure_ = apply_security(qos, profile_, security);
-  // Without security, the profile alone; with it, the profile's QoS plus the identity's files.
+  apply_discovery_servers(qos, network_.discovery_servers);
+  // The profile alone, unless security or discovery servers change its QoS.
   // No status reaches `listener` (discovery always does): a participant listener with
   // data_on_readers would take the samples from the readers' own listeners.
-  participant_ = secure_
+  participant_ = secure_ || !network_.discovery_servers.empty()
                      ? factory->create_participant(domain, qos, listener, dds::StatusMask::none())
                      : factory->create_participant_with_profile(domain, profile_, listener, dds::StatusMask::none());
   if (participant_ == nullptr)
@@ -43,9 +48,20 @@ DdsParticipant::DdsParticipant(int domain, const std::string& profile, const std
                                         ": an expired certificate or one of another CA, a key "
                                         "that does not match, or an unsigned governance or permissions file?)"
                                   : ""));
-  publisher_ = participant_->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
-  subscriber_ = participant_->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
-  if (publisher_ == nullptr || subscriber_ == nullptr) {
+  dds::PublisherQos scene_pub;
+  dds::SubscriberQos scene_sub;
+  scene_pub.partition().push_back(scene_partition(network_.scene).c_str());
+  scene_sub.partition().push_back(scene_partition(network_.scene).c_str());
+  dds::PublisherQos directory_pub;
+  dds::SubscriberQos directory_sub;
+  directory_pub.partition().push_back(kDirectoryPartition);
+  directory_sub.partition().push_back(kDirectoryPartition);
+  publisher_ = participant_->create_publisher(scene_pub);
+  subscriber_ = participant_->create_subscriber(scene_sub);
+  directory_publisher_ = participant_->create_publisher(directory_pub);
+  directory_subscriber_ = participant_->create_subscriber(directory_sub);
+  if (publisher_ == nullptr || subscriber_ == nullptr || directory_publisher_ == nullptr ||
+      directory_subscriber_ == nullptr) {
     close();
     throw std::runtime_error("cannot create the DDS publisher or subscriber of participant profile '" + profile + "'");
   }
@@ -61,6 +77,8 @@ void DdsParticipant::close() {
   participant_ = nullptr;
   publisher_ = nullptr;
   subscriber_ = nullptr;
+  directory_publisher_ = nullptr;
+  directory_subscriber_ = nullptr;
   topics_.clear();
   readers_.clear();
 }
@@ -83,15 +101,16 @@ dds::Topic* DdsParticipant::topic(const std::string& name, TypeFactory type) {
 
 dds::DataWriter* DdsParticipant::make_writer(const std::string& name, TypeFactory type, const std::string& qos_of) {
   const std::string profile = (qos_of.empty() ? name : qos_of) + kWriterSuffix;
+  dds::Publisher* publisher = name == kSceneDirectoryTopic ? directory_publisher_ : publisher_;
   dds::DataWriterQos qos;
   dds::DataWriter* w = nullptr;
   if (!secure_) {
-    w = publisher_->create_datawriter_with_profile(topic(name, type), profile);
-  } else if (publisher_->get_datawriter_qos_from_profile(profile, qos) == ReturnCode_t::RETCODE_OK) {
+    w = publisher->create_datawriter_with_profile(topic(name, type), profile);
+  } else if (publisher->get_datawriter_qos_from_profile(profile, qos) == ReturnCode_t::RETCODE_OK) {
     // Data-sharing hands readers the writer's buffer, which DDS Security has not encoded for them
     // (Fast DDS 2.9 then fails to decode every sample): off with security.
     qos.data_sharing().off();
-    w = publisher_->create_datawriter(topic(name, type), qos);
+    w = publisher->create_datawriter(topic(name, type), qos);
   }
   if (w == nullptr)
     throw std::runtime_error("cannot create the DDS writer of topic " + name + ": is profile '" + profile + "' in " +
@@ -102,13 +121,14 @@ dds::DataWriter* DdsParticipant::make_writer(const std::string& name, TypeFactor
 dds::DataReader* DdsParticipant::make_reader(const std::string& name, TypeFactory type,
                                              dds::DataReaderListener* listener, const std::string& qos_of) {
   const std::string profile = (qos_of.empty() ? name : qos_of) + kReaderSuffix;
+  dds::Subscriber* subscriber = name == kSceneDirectoryTopic ? directory_subscriber_ : subscriber_;
   dds::DataReaderQos qos;
   dds::DataReader* r = nullptr;
   if (!secure_) {
-    r = subscriber_->create_datareader_with_profile(topic(name, type), profile, listener);
-  } else if (subscriber_->get_datareader_qos_from_profile(profile, qos) == ReturnCode_t::RETCODE_OK) {
+    r = subscriber->create_datareader_with_profile(topic(name, type), profile, listener);
+  } else if (subscriber->get_datareader_qos_from_profile(profile, qos) == ReturnCode_t::RETCODE_OK) {
     qos.data_sharing().off();  // as for writers
-    r = subscriber_->create_datareader(topic(name, type), qos, listener);
+    r = subscriber->create_datareader(topic(name, type), qos, listener);
   }
   if (r == nullptr)
     throw std::runtime_error("cannot create the DDS reader of topic " + name + ": is profile '" + profile + "' in " +

@@ -6,6 +6,7 @@
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
 
+#include <fastdds/dds/core/LoanableSequence.hpp>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 
@@ -124,11 +125,12 @@ class SceneCommandListener : public dds::DataReaderListener {
 
 // Members in destruction order: the participant (and its readers) goes before the listeners.
 struct DdsNode::Impl {
-  Impl(int domain, const std::string& profile, const std::string& profiles_file, InputMailbox& mailbox)
+  Impl(int domain, const std::string& profile, const std::string& profiles_file, InputMailbox& mailbox,
+       const idl::Network& network)
       : participant_listener(mailbox),
         input_listener(mailbox, participant_listener),
         command_listener(mailbox, participant_listener),
-        participant(domain, profile, profiles_file, &participant_listener) {
+        participant(domain, profile, profiles_file, &participant_listener, network) {
     participant_listener.secure = participant.secure();
   }
 
@@ -140,10 +142,17 @@ struct DdsNode::Impl {
                   *status = nullptr, *geometry = nullptr, *notices = nullptr;
   std::mutex notice_mutex;
   std::deque<std::string> notice_clients;  // clients with a notice instance, oldest first
+  dds::DataWriter* directory_writer = nullptr;
+  dds::DataReader* directory_reader = nullptr;
+  // The scene directory, once announce() was called (then only the simulation thread's status).
+  std::optional<AnnouncerFacts> facts;
+  ProcessLoad load;
+  std::uint64_t conflict_logged = 0;  // the incarnation of the last conflicting claim logged
 };
 
-DdsNode::DdsNode(int domain, const std::string& profile, const std::string& profiles_file, InputMailbox& mailbox)
-    : impl_(std::make_unique<Impl>(domain, profile, profiles_file, mailbox)) {
+DdsNode::DdsNode(int domain, const std::string& profile, const std::string& profiles_file, InputMailbox& mailbox,
+                 const idl::Network& network)
+    : impl_(std::make_unique<Impl>(domain, profile, profiles_file, mailbox, network)) {
   Impl& d = *impl_;
   idl::DdsParticipant& p = d.participant;
   d.skeleton = p.writer<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic);
@@ -156,9 +165,54 @@ DdsNode::DdsNode(int domain, const std::string& profile, const std::string& prof
   d.notices = p.writer<msg::ClientNoticePubSubType>(idl::kClientNoticeTopic);
   p.reader<msg::ControllerStatePubSubType>(idl::kControllerStateTopic, &d.input_listener);
   p.reader<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic, &d.command_listener);
+  d.directory_writer = p.writer<msg::SceneAnnouncementPubSubType>(idl::kSceneDirectoryTopic);
+  d.directory_reader = p.reader<msg::SceneAnnouncementPubSubType>(idl::kSceneDirectoryTopic);
 }
 
-DdsNode::~DdsNode() = default;
+DdsNode::~DdsNode() {
+  // A clean stop leaves the directory at once (a dead server's entry goes when its lease ends).
+  if (!impl_->facts) return;
+  msg::SceneAnnouncement gone = make_claim(*impl_->facts);
+  impl_->directory_writer->dispose(&gone, dds::HANDLE_NIL);
+  impl_->directory_writer->unregister_instance(&gone, dds::HANDLE_NIL);
+}
+
+const std::string& DdsNode::scene() const { return impl_->participant.network().scene; }
+
+void DdsNode::announce(const AnnouncerFacts& facts) {
+  impl_->facts = facts;
+  msg::SceneAnnouncement claim = make_claim(facts);
+  impl_->directory_writer->write(&claim);
+}
+
+std::vector<msg::SceneAnnouncement> DdsNode::directory() {
+  FASTDDS_SEQUENCE(AnnouncementSeq, msg::SceneAnnouncement);
+  AnnouncementSeq data;
+  dds::SampleInfoSeq infos;
+  std::vector<msg::SceneAnnouncement> live;
+  if (impl_->directory_reader->read(data, infos, dds::LENGTH_UNLIMITED, dds::ANY_SAMPLE_STATE, dds::ANY_VIEW_STATE,
+                                    dds::ALIVE_INSTANCE_STATE) != ReturnCode_t::RETCODE_OK)
+    return live;
+  for (dds::LoanableCollection::size_type i = 0; i < data.length(); ++i)
+    if (infos[i].valid_data && (!impl_->facts || data[i].incarnation() != impl_->facts->incarnation))
+      live.push_back(data[i]);
+  impl_->directory_reader->return_loan(data, infos);
+  return live;
+}
+
+void DdsNode::announce_status(const msg::ServerStatus& status) {
+  Impl& d = *impl_;
+  msg::SceneAnnouncement a =
+      make_announcement(*d.facts, status, d.load.cpu_percent(), ProcessLoad::host_cores(), ProcessLoad::host_load());
+  d.directory_writer->write(&a);
+  // Another run serving this scene too (e.g. the network between them was cut while both
+  // started): the newer one refused to start if it saw this one; say so once per run.
+  for (const msg::SceneAnnouncement& other : directory()) {
+    if (other.scene() != a.scene() || other.incarnation() == d.conflict_logged) continue;
+    d.conflict_logged = other.incarnation();
+    std::cerr << "telegrasp-server: warning: " << already_served_message(other) << " as well\n";
+  }
+}
 
 void DdsNode::publish_geometries(const std::vector<sim::ObjectModelPtr>& models) {
   for (const sim::ObjectModelPtr& model : models) {
@@ -181,7 +235,10 @@ void DdsNode::publish(const msg::HandSkeleton& m) { impl_->skeleton->write(const
 void DdsNode::publish(const msg::GraspState& m) { impl_->grasp_state->write(const_cast<msg::GraspState*>(&m)); }
 void DdsNode::publish(const msg::ContactSet& m) { impl_->contacts->write(const_cast<msg::ContactSet*>(&m)); }
 void DdsNode::publish(const msg::SceneState& m) { impl_->scene->write(const_cast<msg::SceneState*>(&m)); }
-void DdsNode::publish(const msg::ServerStatus& m) { impl_->status->write(const_cast<msg::ServerStatus*>(&m)); }
+void DdsNode::publish(const msg::ServerStatus& m) {
+  impl_->status->write(const_cast<msg::ServerStatus*>(&m));
+  if (impl_->facts) announce_status(m);
+}
 void DdsNode::publish(const msg::GraspEvent& m) {
   if (!impl_->events->write(const_cast<msg::GraspEvent*>(&m)))
     std::cerr << "telegrasp-server: could not publish grasp event " << m.event_id() << "\n";

@@ -421,6 +421,7 @@ msg::ServerStatus SceneServer::status(const LoopStats& loop) const {
   m.objects(static_cast<std::int32_t>(world_->objects().size()));
   m.tick_us_p50(loop.tick_us_p50);
   m.tick_us_max(loop.tick_us_max);
+  m.tick_us_p99(loop.tick_us_p99);
   m.missed_ticks(loop.missed_ticks);
   m.inputs_accepted(mailbox_.accepted());
   const auto rejected = mailbox_.rejected();

@@ -24,7 +24,7 @@ std::vector<SceneObjectSpec> default_layout(const std::vector<sim::ObjectModelPt
 
 /// Timing of the loop that drives the SceneServer, for ServerStatus.
 struct LoopStats {
-  double tick_us_p50 = 0, tick_us_max = 0;
+  double tick_us_p50 = 0, tick_us_p99 = 0, tick_us_max = 0;
   std::uint64_t missed_ticks = 0;
 };
 

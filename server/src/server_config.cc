@@ -3,6 +3,7 @@
 #include "server_config.pb.h"
 
 #include "cli.h"
+#include "telegrasp/idl/network.h"
 
 #include <google/protobuf/io/tokenizer.h>
 #include <google/protobuf/text_format.h>
@@ -34,6 +35,9 @@ void apply_config(const proto::ServerConfig& c, ServerSettings& s, const std::st
   if (has("domain")) s.domain = c.domain();
   if (has("profile")) s.profile = c.profile();
   if (has("profiles_file")) s.profiles_file = c.profiles_file();
+  if (has("scene")) s.scene = c.scene();
+  if (c.discovery_servers_size() > 0) s.discovery_servers.assign(c.discovery_servers().begin(), c.discovery_servers().end());
+  if (has("claim_wait_s")) s.claim_wait_s = c.claim_wait_s();
   if (has("tick_hz")) s.tick_hz = c.tick_hz();
   if (has("objects_dir")) s.objects_dir = c.objects_dir();
   if (has("fill_standins")) s.fill_standins = c.fill_standins();
@@ -93,6 +97,9 @@ void validate_settings(const ServerSettings& s, const std::string& origin) {
   auto fail = [&](const std::string& what) { throw std::runtime_error(origin + ": " + what); };
   if (s.domain < 0 || s.domain > 232) fail("domain must be in [0, 232], got " + std::to_string(s.domain));
   if (s.profile.empty()) fail("profile must not be empty");
+  if (!s.scene.empty())
+    if (const std::string e = idl::scene_name_error(s.scene); !e.empty()) fail("scene: " + e);
+  if (!(s.claim_wait_s >= 0 && s.claim_wait_s <= 60)) fail("claim_wait_s must be in [0, 60]");
   if (!(s.tick_hz >= 1 && s.tick_hz <= 2000))
     fail("tick_hz must be in [1, 2000], got " + cli::format_number(s.tick_hz));
   if (!(s.freeze_after_s > 0)) fail("freeze_after_s must be > 0");
@@ -125,6 +132,9 @@ proto::ServerConfig to_proto(const ServerSettings& s) {
   c.set_domain(s.domain);
   c.set_profile(s.profile);
   c.set_profiles_file(s.profiles_file);
+  c.set_scene(s.scene);
+  for (const auto& server : s.discovery_servers) c.add_discovery_servers(server);
+  c.set_claim_wait_s(s.claim_wait_s);
   c.set_tick_hz(s.tick_hz);
   c.set_objects_dir(s.objects_dir);
   c.set_fill_standins(s.fill_standins);

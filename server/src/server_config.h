@@ -41,6 +41,14 @@ struct ServerSettings {
   int domain = 0;
   std::string profile = "loopback";
   std::string profiles_file;
+  /// The scene (DDS partition) served; "": $TELEGRASP_SCENE, else "default" (idl/network.h).
+  std::string scene;
+  /// Fast DDS discovery servers, HOST[:PORT] in server-id order; empty: $TELEGRASP_DISCOVERY_SERVERS,
+  /// else the profile's discovery.
+  std::vector<std::string> discovery_servers;
+  /// Seconds the server waits, announcing its claim on the scene name, before it serves: a live
+  /// server with an older claim on the same scene makes it refuse to start.
+  double claim_wait_s = 1.5;
   double tick_hz = 90;
   std::string objects_dir;
   /// With objects_dir: also the built-in stand-in of every protocol object that has no mesh there

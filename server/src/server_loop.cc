@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <cmath>
 
 namespace telegrasp::server {
 namespace {
@@ -14,13 +15,19 @@ std::int64_t to_ns(LoopClock::time_point t) {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
 }
 
-// Median and maximum of the tick work times of one status period; clears them.
+// Median, 99th percentile (nearest rank) and maximum of the tick work times of one status period;
+// clears them.
 LoopStats summarize(std::vector<double>& tick_us, std::uint64_t missed) {
   LoopStats s;
   s.missed_ticks = missed;
   if (tick_us.empty()) return s;
-  std::nth_element(tick_us.begin(), tick_us.begin() + tick_us.size() / 2, tick_us.end());
-  s.tick_us_p50 = tick_us[tick_us.size() / 2];
+  const auto rank = [&](double q) {
+    const std::size_t i = std::min(tick_us.size() - 1, static_cast<std::size_t>(std::ceil(q * tick_us.size())) - 1);
+    std::nth_element(tick_us.begin(), tick_us.begin() + i, tick_us.end());
+    return tick_us[i];
+  };
+  s.tick_us_p50 = rank(0.5);
+  s.tick_us_p99 = rank(0.99);
   s.tick_us_max = *std::max_element(tick_us.begin(), tick_us.end());
   tick_us.clear();
   return s;

@@ -14,7 +14,9 @@
 
 #include <pthread.h>
 #include <signal.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <iostream>
 #include <optional>
@@ -39,6 +41,19 @@ Options (override the --config file):
   --profile NAME      Fast DDS participant profile: loopback (default), udp, lan, wan, secure (loopback
                       with DDS Security: see --security, --identity and the README)
   --profiles FILE     Fast DDS XML profiles (default: deploy/fastdds/telegrasp_profiles.xml)
+  --scene NAME        the scene (room) to serve: its topics are in DDS partition
+                      telegrasp/scene/NAME, so clients of other scenes never see them; 1-64
+                      letters, digits, '-', '_', '.' (default $TELEGRASP_SCENE, else default).
+                      The server announces itself on the scene directory (telegrasp-echo
+                      --scenes) and, before serving, waits --claim-wait seconds for an older run
+                      of the same scene: if one is live, it refuses to start (exit 1)
+  --claim-wait S      seconds to wait for an older claim on the scene name (default 1.5; 0:
+                      do not wait, e.g. in tests that start many servers)
+  --discovery-server HOST[:PORT]
+                      a Fast DDS discovery server (port 11811 when left out); repeat for more, in
+                      the order of their ids (`fastdds discovery -i 0`, `-i 1`, ...): discovery
+                      goes through them only, and losing one of two changes nothing (default
+                      $TELEGRASP_DISCOVERY_SERVERS "HOST:PORT;HOST:PORT", else the profile's)
   --security DIR      with --profile secure: the folder deploy/security/make-certs.sh made
                       (default $TELEGRASP_SECURITY_DIR)
   --identity NAME     with --profile secure: this server's identity in it (default
@@ -94,6 +109,7 @@ struct Flags {
   bool list_models = false;
   bool objects_flag = false;  // --objects given (else objects_dir, if any, is the config file's)
   std::string security_dir, identity;  // --security, --identity ("": the environment's)
+  std::vector<std::string> discovery_servers;  // --discovery-server: replace the config file's
 };
 
 // --security and --identity are passed to DdsParticipant (security.h) as the environment it reads;
@@ -118,6 +134,12 @@ void apply_flags(int argc, char** argv, Flags& f, std::vector<std::string>& conf
       s.profile = cli::parse_profile(a, value(), usage_error);
     else if (a == "--profiles")
       s.profiles_file = value();
+    else if (a == "--scene")
+      s.scene = value();
+    else if (a == "--claim-wait")
+      s.claim_wait_s = cli::parse_number(a, value(), 0, 60, usage_error);
+    else if (a == "--discovery-server")
+      f.discovery_servers.push_back(value());
     else if (a == "--security")
       f.security_dir = value();
     else if (a == "--identity")
@@ -185,8 +207,11 @@ Flags parse(int argc, char** argv) {
   }
   std::vector<std::string> again;
   apply_flags(argc, argv, f, again);
+  if (!f.discovery_servers.empty()) f.settings.discovery_servers = f.discovery_servers;
   try {
     validate_settings(f.settings, "command line");
+    const idl::Network network = idl::resolve_network({f.settings.scene, f.settings.discovery_servers});
+    f.settings.scene = network.scene;
   } catch (const std::exception& e) {
     usage_error(e.what());
   }
@@ -228,6 +253,27 @@ class StopOnSignal {
   sigset_t signals_;
   std::thread thread_;
 };
+
+// Announces this run on the scene directory and waits settings.claim_wait_s for an older live
+// run of the same scene (the directory's samples come from live servers only: a dead one's writer
+// answers nobody). Returns false, having said why, when one keeps the scene.
+bool claim_scene(DdsNode& node, const ServerSettings& settings) {
+  char host[256] = {};
+  gethostname(host, sizeof host - 1);
+  const AnnouncerFacts facts{settings.scene, host, telegrasp_version(), settings.incarnation,
+                             std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count()};
+  node.announce(facts);
+  const msg::SceneAnnouncement mine = make_claim(facts);
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(settings.claim_wait_s);
+  do {
+    if (const auto keeper = older_claim(mine, node.directory())) {
+      std::cerr << "telegrasp-server: " << already_served_message(*keeper) << "\n";
+      return false;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  } while (std::chrono::steady_clock::now() < until);
+  return true;
+}
 
 }  // namespace
 
@@ -274,7 +320,9 @@ int main(int argc, char** argv) {
   InputMailbox mailbox({assets.left_rig->fingers().size(), assets.right_rig->fingers().size()}, input_limits(settings));
   const sigset_t stop_signals = block_stop_signals();  // before the DDS threads start
   try {
-    DdsNode node(settings.domain, settings.profile, settings.profiles_file, mailbox);
+    DdsNode node(settings.domain, settings.profile, settings.profiles_file, mailbox,
+                 {settings.scene, settings.discovery_servers});
+    if (!claim_scene(node, settings)) return cli::kExitFailure;
     node.publish_geometries(assets.models);
     mailbox.set_notifier([&node](const Refusal& r) { node.publish(make_client_notice(r)); });
     // Declared before the scene, so the scene goes first and the recorder then closes the file.
@@ -289,7 +337,8 @@ int main(int argc, char** argv) {
     LiveFeed feed(mailbox, [&node] { return node.take_commands(); });
     ServerLoop loop(loop_settings(settings), scene, feed, feed, sink, recorder ? &*recorder : nullptr);
     const StopOnSignal stop_on_signal(loop, stop_signals);
-    std::cerr << "telegrasp-server: domain " << settings.domain << ", profile " << settings.profile << ", "
+    std::cerr << "telegrasp-server: scene " << settings.scene << ", domain " << settings.domain << ", profile "
+              << settings.profile << ", "
               << scene.world().objects().size() << " objects, " << settings.tick_hz << " Hz"
               << (settings.lockstep     ? " in lockstep"
                   : settings.late_latch ? ", late-latched skeletons"

@@ -86,7 +86,7 @@ TEST(ClientOptionsTest, RejectsAMissingProfilesFile) {
 
 TEST(ClientOptionsTest, RejectsUnknownTopicBits) {
   ClientOptions o = good_options();
-  o.topics = kAllTopics + 1;
+  o.topics = (kAllTopics | kSceneDirectory) + 1;
   EXPECT_ERROR_MENTIONS(o, "topics");
 }
 
@@ -110,6 +110,42 @@ TEST(ClientOptionsTest, RejectsValuesTheWireCannotCarry) {
   // Neither used up a number.
   EXPECT_EQ(client.publish(ControllerSample{}), 1u);
   EXPECT_EQ(client.send_command(SceneCommand{}), 1u);
+}
+
+TEST(ClientOptionsTest, RejectsASceneNameThatIsAPartitionPattern) {
+  ClientOptions o = good_options();
+  o.scene = "room*";
+  EXPECT_ERROR_MENTIONS(o, "ClientOptions.scene");
+  EXPECT_ERROR_MENTIONS(o, "room*");
+  o.scene = "room-1";
+  EXPECT_EQ(construction_error(o), "");
+  EXPECT_EQ(Client(o).scene(), "room-1");
+  EXPECT_EQ(scene_name_error("room-1"), "");
+}
+
+TEST(ClientOptionsTest, RejectsADiscoveryServerThatIsNotHostPort) {
+  ClientOptions o = good_options();
+  o.discovery_servers = {"127.0.0.1:99999"};
+  EXPECT_ERROR_MENTIONS(o, "127.0.0.1:99999");
+  EXPECT_NE(discovery_server_error("127.0.0.1:99999"), "");
+  EXPECT_EQ(discovery_server_error("127.0.0.1:11811"), "");
+}
+
+TEST(ClientOptionsTest, TheLeastLoadedHostIsTheOneWithTheLowestLoadPerCore) {
+  auto scene = [](const std::string& host, double load, int hands) {
+    SceneInfo s;
+    s.host = host;
+    s.host_load = load;
+    s.hands = hands;
+    return s;
+  };
+  EXPECT_FALSE(least_loaded_host({}));
+  EXPECT_EQ(least_loaded_host({scene("a", 0.9, 1), scene("b", 0.2, 40), scene("c", 0.5, 0)}), "b");
+  // A host's load is the highest any of its servers reports.
+  EXPECT_EQ(least_loaded_host({scene("a", 0.3, 0), scene("a", 0.8, 0), scene("b", 0.5, 0)}), "b");
+  // Equal loads: fewer hands served there, then the name.
+  EXPECT_EQ(least_loaded_host({scene("a", 0.5, 4), scene("b", 0.5, 2), scene("b", 0.5, 1)}), "b");
+  EXPECT_EQ(least_loaded_host({scene("b", 0.5, 0), scene("a", 0.5, 0)}), "a");
 }
 
 }  // namespace

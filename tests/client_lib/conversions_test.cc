@@ -432,6 +432,7 @@ TEST(ConversionsTest, ServerStatusRoundTrip) {
   s.objects = 7;
   s.tick_us_p50 = 410.5;
   s.tick_us_max = 2200.25;
+  s.tick_us_p99 = 1900.5;
   s.missed_ticks = 4;
   s.inputs_accepted = 123456;
   s.inputs_rejected = 9;
@@ -453,6 +454,7 @@ TEST(ConversionsTest, ServerStatusRoundTrip) {
   EXPECT_EQ(r.objects, s.objects);
   EXPECT_EQ(r.tick_us_p50, s.tick_us_p50);
   EXPECT_EQ(r.tick_us_max, s.tick_us_max);
+  EXPECT_EQ(r.tick_us_p99, s.tick_us_p99);
   EXPECT_EQ(r.missed_ticks, s.missed_ticks);
   EXPECT_EQ(r.inputs_accepted, s.inputs_accepted);
   EXPECT_EQ(r.inputs_rejected, s.inputs_rejected);

@@ -32,16 +32,6 @@ using client::ClientOptions;
 constexpr auto kStartGuard = 60s;
 constexpr auto kGuard = 20s;
 
-template <typename F>
-bool eventually(F done, std::chrono::milliseconds timeout) {
-  const auto end = std::chrono::steady_clock::now() + timeout;
-  while (std::chrono::steady_clock::now() < end) {
-    if (done()) return true;
-    std::this_thread::sleep_for(10ms);
-  }
-  return done();
-}
-
 ClientOptions options(const std::string& id, int domain) {
   ClientOptions o;
   o.client_id = id;

@@ -34,17 +34,6 @@ std::string read_file(const std::string& path) {
   return s.str();
 }
 
-// Polls `done` every 10 ms until it holds or `timeout` passes.
-template <typename F>
-bool eventually(F done, std::chrono::milliseconds timeout) {
-  const auto end = std::chrono::steady_clock::now() + timeout;
-  while (std::chrono::steady_clock::now() < end) {
-    if (done()) return true;
-    std::this_thread::sleep_for(10ms);
-  }
-  return done();
-}
-
 std::unique_ptr<ChildProcess> start_server(int domain, const std::vector<std::string>& extra, const std::string& name) {
   std::vector<std::string> args{bin("telegrasp-server"), "--domain", std::to_string(domain), "--profile", "loopback"};
   args.insert(args.end(), extra.begin(), extra.end());

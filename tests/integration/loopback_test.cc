@@ -100,17 +100,6 @@ std::unique_ptr<ChildProcess> start_bot(int domain, const std::string& id, const
       work_path(id + ".log"));
 }
 
-// Polls `done` every 10 ms until it holds (true) or `timeout` passes (false).
-template <typename F>
-bool eventually(F done, std::chrono::milliseconds timeout) {
-  const auto end = std::chrono::steady_clock::now() + timeout;
-  while (std::chrono::steady_clock::now() < end) {
-    if (done()) return true;
-    std::this_thread::sleep_for(10ms);
-  }
-  return done();
-}
-
 std::uint64_t rejected(const client::ServerStatus& s, const std::string& reason) {
   auto it = s.rejected.find(reason);
   return it == s.rejected.end() ? 0 : it->second;

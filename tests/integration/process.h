@@ -4,7 +4,9 @@
 
 #include "child_process.h"
 
+#include <chrono>
 #include <string>
+#include <thread>
 
 namespace telegrasp::testing {
 
@@ -18,5 +20,16 @@ std::string bin(const std::string& name);
 /// logs and results of the programs a test starts. The folder is removed at exit when every test
 /// passed and kept, its path printed, when one failed.
 std::string work_path(const std::string& name);
+
+/// Polls `done` every 10 ms until it returns true or `timeout` passes; its last answer.
+template <typename F>
+bool eventually(F done, std::chrono::milliseconds timeout) {
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < end) {
+    if (done()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return done();
+}
 
 }  // namespace telegrasp::testing

@@ -44,16 +44,6 @@ objects { model: "013_apple" x: 0.8 y: -0.35 }
 )";
 const char* const kSpawned = "009_gelatin_box";
 
-template <typename F>
-bool eventually(F done, std::chrono::milliseconds timeout) {
-  const auto end = Clock::now() + timeout;
-  while (Clock::now() < end) {
-    if (done()) return true;
-    std::this_thread::sleep_for(10ms);
-  }
-  return done();
-}
-
 // What the observer saw, guarded by one mutex.
 struct Observed {
   std::mutex mutex;

@@ -33,16 +33,6 @@ constexpr auto kEventGuard = 20s;  // something that follows from what the test 
 constexpr auto kRefusedWindow = 4s;
 constexpr double kPoseTolerance = 1e-3;  // m: a tracked palm "at" a published pose
 
-template <typename F>
-bool eventually(F done, std::chrono::milliseconds timeout) {
-  const auto end = std::chrono::steady_clock::now() + timeout;
-  while (std::chrono::steady_clock::now() < end) {
-    if (done()) return true;
-    std::this_thread::sleep_for(10ms);
-  }
-  return done();
-}
-
 Eigen::Isometry3d palm_at(double x, double y, double z) {
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
   X.translation() = Eigen::Vector3d(x, y, z);

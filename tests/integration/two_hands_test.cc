@@ -35,16 +35,6 @@ constexpr auto kStartGuard = 60s;
 constexpr auto kEventGuard = 30s;
 const Eigen::Vector3d kHalfExtents(0.3, 0.04, 0.04);  // a 0.6 x 0.08 x 0.08 m box
 
-template <typename F>
-bool eventually(F done, std::chrono::milliseconds timeout) {
-  const auto end = std::chrono::steady_clock::now() + timeout;
-  while (std::chrono::steady_clock::now() < end) {
-    if (done()) return true;
-    std::this_thread::sleep_for(10ms);
-  }
-  return done();
-}
-
 // The box as an OBJ file in a folder of its own (the server's objects_dir); returns the folder.
 std::string write_long_box() {
   const std::string dir = work_path("two_hands_objects");

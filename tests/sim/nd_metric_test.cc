@@ -22,7 +22,6 @@ namespace {
 
 constexpr double kDt = 1.0 / 90.0;
 constexpr double kTol = 0.05e-3;
-constexpr double kInf = std::numeric_limits<double>::infinity();  // GraspSettings default contact tolerance
 
 // One phalanx hinged at (0.04, 0, 0) in the palm frame, flexing about +y (the tip goes to -z):
 // capsule from x = 3 mm to 27 mm, radius 5 mm; Sp on its axis and CTc on the palmar skin at

@@ -72,10 +72,11 @@ TEST(WorldTest, ReleaseCarriesTheHandVelocity) {
   ControllerInput in;
   in.X_WorldPalm = world.hand(hand).state().X_WorldPalm;
   in.trigger = 1.0;
+  const double dt = world.dt();  // clang 14 cannot capture a structured binding
   const auto advance = [&] {
-    in.X_WorldPalm.translation() += v * world.dt();
+    in.X_WorldPalm.translation() += v * dt;
     in.X_WorldPalm.linear() =
-        Eigen::AngleAxisd(w.norm() * world.dt(), w.normalized()).toRotationMatrix() * in.X_WorldPalm.linear();
+        Eigen::AngleAxisd(w.norm() * dt, w.normalized()).toRotationMatrix() * in.X_WorldPalm.linear();
   };
   for (int t = 0; t < 10; ++t) {
     advance();

@@ -36,6 +36,8 @@ struct Options {
   std::string client_id;  // default bot-<pid>
   std::vector<client::HandSide> hands{client::HandSide::kRight};
   std::string skill = "experienced", objects_dir, json_path, profile = "loopback", profiles_file;
+  std::string scene;  // "": $TELEGRASP_SCENE, else default
+  std::vector<std::string> discovery_servers;
   int trials = 1, domain = 0;
   std::uint64_t seed = 1;
   double timeout_s = 20;

@@ -2,6 +2,7 @@
 // over DDS. It grasps every object of the server's scene --trials times, records each grasp
 // from the server's GraspEvent, and prints the same table and JSON records as telegrasp-eval.
 #include "bot.h"
+#include "network_flags.h"
 #include "cli.h"
 #include "telegrasp/sim/standin_objects.h"
 
@@ -79,6 +80,9 @@ Options:
   --domain N          DDS domain, 0..232 (default 0)
   --profile NAME      Fast DDS participant profile: loopback (default), udp, lan, wan, secure
   --profiles FILE     Fast DDS XML profiles (default: $TELEGRASP_PROFILES, else the shipped file)
+  --scene NAME        the scene (room) to join (default $TELEGRASP_SCENE, else default)
+  --discovery-server HOST[:PORT]
+                      a Fast DDS discovery server; repeat in id order (telegrasp-server --help)
   --timeout S         give up when no server is found (or it goes silent) for S seconds
                       (default 20)
   -h, --help          this text
@@ -137,6 +141,8 @@ Options parse(int argc, char** argv) {
       o.profile = telegrasp::cli::parse_profile(a, value(), usage_error);
     else if (a == "--profiles")
       o.profiles_file = value();
+    else if (telegrasp::tools::parse_network_flag(a, value, o, usage_error))
+      ;
     else if (a == "--timeout")
       o.timeout_s = telegrasp::cli::parse_number(a, value(), 0.1, 86400, usage_error);
     else {
@@ -188,6 +194,8 @@ int main(int argc, char** argv) {
   copt.domain = opt.domain;
   copt.profile = opt.profile;
   copt.profiles_file = opt.profiles_file;
+  copt.scene = opt.scene;
+  copt.discovery_servers = opt.discovery_servers;
   copt.topics = client::kNotices | client::kHandSkeletons | client::kGraspStates | client::kGraspEvents |
                 client::kSceneStates | client::kServerStatuses | client::kObjectGeometries;
   std::unique_ptr<client::Client> c;

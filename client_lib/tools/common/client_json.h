@@ -173,6 +173,7 @@ Json server_status(const client::ServerStatus& s) {
               {"hands", s.hands},
               {"objects", s.objects},
               {"tick_us_p50", s.tick_us_p50},
+              {"tick_us_p99", s.tick_us_p99},
               {"tick_us_max", s.tick_us_max},
               {"missed_ticks", s.missed_ticks},
               {"inputs_accepted", s.inputs_accepted},

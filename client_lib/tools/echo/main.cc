@@ -5,6 +5,7 @@
 // of positions in metres (_m), the grasp metrics in millimetres (nd_mm, signed_distance_mm,
 // hand_error_mm), times in seconds (_s); the format is printed by --help (kUsage).
 #include "client_json.h"
+#include "network_flags.h"
 #include "telegrasp/client/client.h"
 
 #include "cli.h"
@@ -57,8 +58,22 @@ Options:
   --domain N       DDS domain, 0..232 (default 0)
   --profile NAME   participant profile: loopback, udp, lan, wan, secure (default loopback)
   --profiles FILE  Fast DDS XML profiles (default $TELEGRASP_PROFILES, else the shipped file)
+  --scene NAME     the scene (room) to listen to (default $TELEGRASP_SCENE, else default)
+  --discovery-server HOST[:PORT]
+                   a Fast DDS discovery server; repeat in id order (telegrasp-server --help)
   --count N        exit after N lines
   --seconds S      exit after S seconds
+  --scenes         instead of samples: list the live servers of every scene from the scene
+                   directory after --seconds (default 3) of listening, one line each (scene,
+                   host, serving, clients, hands, objects, tick p99, missed ticks, CPU, host
+                   load); exit 3 when there is none
+  --json           with --scenes: one JSON array instead, an object per server ("scene",
+                   "host", "version", "incarnation", "started_unix_s", "serving", "clients",
+                   "hands", "objects", "tick_rate_hz", "tick_us_p99", "missed_ticks",
+                   "cpu_percent", "host_cores", "host_load")
+  --pick NAME      with --scenes: print only the host to run scene NAME on: the host that
+                   serves it, else the least loaded host (lowest load per core, then fewest
+                   hands); exit 3 when no server is live
   -h, --help       this text
 
 Output: one object per sample, "topic" first, field names as in the client library's types
@@ -88,7 +103,7 @@ X_WorldObject is the object's pose in the world frame.
   SceneState      "objects": {"id","name","X_WorldObject","v_WorldObject_m_per_s","held",
                   "holder" (if held: the first), "holders" (if held: every hand holding
                   it, in grasp order; two may share one object), "spawn_time_s"}
-  ServerStatus    "tick_rate_hz", "clients", "hands", "objects", "tick_us_p50", "tick_us_max",
+  ServerStatus    "tick_rate_hz", "clients", "hands", "objects", "tick_us_p50", "tick_us_p99", "tick_us_max",
                   "missed_ticks", "inputs_accepted", "inputs_rejected", "rejected" (per reason),
                   "commands_accepted", "commands_rejected", "commands_rejected_by_reason"
                   (per reason), "notices_sent", "models"
@@ -108,7 +123,8 @@ NaN prints as null.
 
 Stops cleanly on SIGINT or SIGTERM, or when stdout is closed (e.g. piped into head).
 Exit status: 0 done (count, seconds, a signal or a closed stdout), 1 a runtime failure (DDS could
-not start, e.g. an unknown --profile), 2 a usage error (a bad or missing option or value).
+not start, e.g. an unknown --profile), 2 a usage error (a bad or missing option or value), 3 with
+--scenes: no live server found.
 )";
 
 // ---------------------------------------------------------------------------------------------
@@ -153,6 +169,8 @@ struct Args {
   tc::ClientOptions options;
   std::optional<std::uint64_t> count;
   std::optional<double> seconds;
+  bool scenes = false, json = false;
+  std::optional<std::string> pick;
 };
 
 [[noreturn]] void usage_error(const std::string& what) { telegrasp::cli::usage_exit("telegrasp-echo", what); }
@@ -189,11 +207,76 @@ Args parse_args(int argc, char** argv) {
       args.count = static_cast<std::uint64_t>(cli::parse_whole(a, value(), 1, 1'000'000'000'000, usage_error));
     else if (a == "--seconds")
       args.seconds = cli::parse_number(a, value(), 0.001, 1e9, usage_error);
-    else
+    else if (telegrasp::tools::parse_network_flag(a, value, args.options, usage_error))
+      ;
+    else if (a == "--scenes")
+      args.scenes = true;
+    else if (a == "--json")
+      args.json = true;
+    else if (a == "--pick") {
+      args.pick = value();
+      if (const std::string e = tc::scene_name_error(*args.pick); !e.empty()) usage_error("--pick: " + e);
+    } else
       return false;
     return true;
   });
+  if ((args.json || args.pick) && !args.scenes) usage_error("--json and --pick go with --scenes");
+  if (args.scenes) args.options.topics = tc::kSceneDirectory;
   return args;
+}
+
+Json scene_json(const tc::SceneInfo& s) {
+  char incarnation[17];
+  std::snprintf(incarnation, sizeof incarnation, "%016llx", static_cast<unsigned long long>(s.incarnation));
+  return {{"scene", s.scene},
+          {"host", s.host},
+          {"version", s.version},
+          {"incarnation", incarnation},
+          {"started_unix_s", s.started},
+          {"serving", s.serving},
+          {"clients", s.clients},
+          {"hands", s.hands},
+          {"objects", s.objects},
+          {"tick_rate_hz", s.tick_rate_hz},
+          {"tick_us_p99", s.tick_us_p99},
+          {"missed_ticks", s.missed_ticks},
+          {"cpu_percent", s.cpu_percent},
+          {"host_cores", s.host_cores},
+          {"host_load", s.host_load}};
+}
+
+// --scenes: the directory after `seconds` of listening.
+int list_scenes(const Args& args, tc::Client& client) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(args.seconds.value_or(3.0));
+  while (!g_signalled && std::chrono::steady_clock::now() < until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  const std::vector<tc::SceneInfo> scenes = client.scenes();
+  if (args.pick) {
+    std::optional<std::string> host;
+    for (const tc::SceneInfo& s : scenes)
+      if (s.scene == *args.pick) host = s.host;
+    if (!host) host = tc::least_loaded_host(scenes);
+    if (!host) {
+      std::cerr << "telegrasp-echo: no live server on the scene directory\n";
+      return 3;
+    }
+    std::cout << *host << "\n";
+    return 0;
+  }
+  if (args.json) {
+    Json all = Json::array();
+    for (const tc::SceneInfo& s : scenes) all.push_back(scene_json(s));
+    std::cout << all.dump(2) << "\n";
+  } else {
+    std::printf("%-24s %-20s %-7s %7s %5s %7s %10s %6s %6s %9s\n", "scene", "host", "serving", "clients", "hands",
+                "objects", "p99_ms", "missed", "cpu_%", "host_load");
+    for (const tc::SceneInfo& s : scenes)
+      std::printf("%-24s %-20s %-7s %7d %5d %7d %10.2f %6llu %6.1f %9.2f\n", s.scene.c_str(), s.host.c_str(),
+                  s.serving ? "yes" : "no", s.clients, s.hands, s.objects, s.tick_us_p99 / 1000.0,
+                  static_cast<unsigned long long>(s.missed_ticks), s.cpu_percent, s.host_load);
+  }
+  if (scenes.empty()) std::cerr << "telegrasp-echo: no live server on the scene directory\n";
+  return scenes.empty() ? 3 : 0;
 }
 
 // Prints lines from any DDS thread, one whole line at a time, up to an optional count.
@@ -235,6 +318,11 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-echo: " << e.what() << "\n";
     return telegrasp::cli::kExitFailure;
+  }
+  if (args.scenes) {
+    const int status = list_scenes(args, *client);
+    client.reset();
+    return status;
   }
   LinePrinter printer(args.count);
   client->on_hand_skeleton([&](const tc::HandSkeleton& s) { printer.print(s); });

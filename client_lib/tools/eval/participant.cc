@@ -7,6 +7,7 @@
 // Each record also keeps the hand at the grasp tick (the server's HandSkeleton of that tick, in the
 // object's frame), so the report can draw the grasp.
 #include "cli.h"
+#include "network_flags.h"
 #include "commands.h"
 #include "grasp_event_record.h"
 #include "grasp_report.h"
@@ -47,6 +48,9 @@ Options:
   --domain N        DDS domain of the server (default 0)
   --profile NAME    Fast DDS participant profile (default loopback)
   --profiles FILE   Fast DDS XML profiles (default: the shipped file)
+  --scene NAME      the scene (room) to join (default $TELEGRASP_SCENE, else default)
+  --discovery-server HOST[:PORT]
+                    a Fast DDS discovery server; repeat in id order (telegrasp-server --help)
   --group NAME      experienced | inexperienced (default experienced)
   --skills FILE     skill profiles overriding the built-in ones (see telegrasp-eval protocol --help)
   --participant P   participant number, 1-based (default 1)
@@ -70,6 +74,8 @@ constexpr double kDt = 1.0 / 90.0;  // the operator's step; the server's tick is
 
 struct Options {
   int domain = 0, participant = 1, count = 30;
+  std::string scene;  // "": $TELEGRASP_SCENE, else default
+  std::vector<std::string> discovery_servers;
   std::string profile = "loopback", profiles_file, group = "experienced", mode = "precise", objects_dir, json_path,
               skills_path;
   std::vector<sim::OperatorSkill> skills;  // from --skills
@@ -90,6 +96,8 @@ Options parse(int argc, char** argv) {
       o.profile = cli::parse_profile(a, value(), usage_error);
     else if (a == "--profiles")
       o.profiles_file = value();
+    else if (telegrasp::tools::parse_network_flag(a, value, o, usage_error))
+      ;
     else if (a == "--group") {
       o.group = value();
       try {
@@ -346,6 +354,8 @@ int run_participant(int argc, char** argv) {
   copt.domain = opt.domain;
   copt.profile = opt.profile;
   copt.profiles_file = opt.profiles_file;
+  copt.scene = opt.scene;
+  copt.discovery_servers = opt.discovery_servers;
   copt.topics =
       client::kNotices | client::kGraspEvents | client::kSceneStates | client::kServerStatuses | client::kHandSkeletons;
   try {

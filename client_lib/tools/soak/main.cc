@@ -3,6 +3,7 @@
 // already running), runs telegrasp-bot processes (two hands each) and restarts each bot when it
 // ends, samples every --sample-s seconds and prints the samples and a verdict as JSON.
 #include "child_process.h"
+#include "network_flags.h"
 #include "cli.h"
 #include "telegrasp/client/client.h"
 
@@ -66,6 +67,9 @@ Options:
   --profile NAME      Fast DDS participant profile for the server, bots and the soak (default
                       loopback)
   --profiles FILE     Fast DDS XML profiles (default: $TELEGRASP_PROFILES, else the shipped file)
+  --scene NAME        the scene of the server and bots (default $TELEGRASP_SCENE, else default)
+  --discovery-server HOST[:PORT]
+                      a Fast DDS discovery server; repeat in id order (telegrasp-server --help)
   --server-pid PID    watch this already running server instead of starting one (it must be on
                       --domain with --profile; its RSS is read from /proc/PID/status)
   --server-config F   the started server's --config file (default: none, the 30 stand-ins)
@@ -95,6 +99,8 @@ struct Options {
   int hands = 0;
   double minutes = 0, sample_s = 10, warmup_s = -1, max_growth_pct = 1;
   int domain = 0;
+  std::string scene;  // "": $TELEGRASP_SCENE, else default
+  std::vector<std::string> discovery_servers;
   std::string profile = "loopback", profiles_file, server_config, skill = "experienced", log_dir, json_path;
   int server_pid = 0;
   int bot_nice = 10;
@@ -120,6 +126,8 @@ Options parse(int argc, char** argv) {
       o.profile = telegrasp::cli::parse_profile(a, value(), usage_error);
     else if (a == "--profiles")
       o.profiles_file = value();
+    else if (telegrasp::tools::parse_network_flag(a, value, o, usage_error))
+      ;
     else if (a == "--server-pid")
       o.server_pid = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 1L << 30, usage_error));
     else if (a == "--bot-nice")
@@ -233,6 +241,8 @@ int main(int argc, char** argv) {
 
   std::vector<std::string> dds = {"--domain", std::to_string(opt.domain), "--profile", opt.profile};
   if (!opt.profiles_file.empty()) dds.insert(dds.end(), {"--profiles", opt.profiles_file});
+  if (!opt.scene.empty()) dds.insert(dds.end(), {"--scene", opt.scene});
+  for (const std::string& server : opt.discovery_servers) dds.insert(dds.end(), {"--discovery-server", server});
 
   // The server: started here (and stopped at the end), or one already running.
   ChildProcess server;
@@ -263,6 +273,8 @@ int main(int argc, char** argv) {
     copt.domain = opt.domain;
     copt.profile = opt.profile;
     copt.profiles_file = opt.profiles_file;
+    copt.scene = opt.scene;
+    copt.discovery_servers = opt.discovery_servers;
     copt.topics = client::kServerStatuses | client::kGraspEvents;
     c = std::make_unique<client::Client>(copt);
   } catch (const std::exception& e) {

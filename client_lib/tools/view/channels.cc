@@ -114,6 +114,7 @@ Json server_status_schema() {
                                         {"hands", integer()},
                                         {"objects", integer()},
                                         {"tick_us_p50", number()},
+                                        {"tick_us_p99", number()},
                                         {"tick_us_max", number()},
                                         {"missed_ticks", integer()},
                                         {"inputs_accepted", integer()},

@@ -3,6 +3,7 @@
 // (Foxglove and Lichtblick connect to ws://host:8765) and a built-in three.js page
 // (http://host:8765/) speaking the same protocol. See client_lib/tools/view/README.md.
 #include "channels.h"
+#include "network_flags.h"
 #include "cli.h"
 #include "mcap_recorder.h"
 #include "step_messages.h"
@@ -54,6 +55,9 @@ Options:
   --domain N         DDS domain, 0..232 (default 0)
   --profile NAME     Fast DDS participant profile: loopback (default), udp, lan, wan, secure
   --profiles FILE    Fast DDS XML profiles (default: $TELEGRASP_PROFILES, else the shipped file)
+  --scene NAME       the scene (room) to show (default $TELEGRASP_SCENE, else default)
+  --discovery-server HOST[:PORT]
+                     a Fast DDS discovery server; repeat in id order (telegrasp-server --help)
   --web DIR          the page's files and schemas (default: share/telegrasp/view of this
                      installation or build)
   --record FILE      also write every channel into the MCAP file FILE (Foxglove and Lichtblick
@@ -103,6 +107,8 @@ Args parse(int argc, char** argv) {
       a.client.profile = cli::parse_profile(flag, value(), usage_error);
     else if (flag == "--profiles")
       a.client.profiles_file = value();
+    else if (telegrasp::tools::parse_network_flag(flag, value, a.client, usage_error))
+      ;
     else if (flag == "--web")
       a.web_dir = value();
     else if (flag == "--stats")

@@ -25,7 +25,9 @@ enum Topics : unsigned {
   kServerStatuses = 1u << 5,
   kObjectGeometries = 1u << 6,  ///< Each model's mesh and mass, once per model (late joiners too).
   kNotices = 1u << 7,  ///< Why the server refused this client's inputs or commands (only this client's).
-  kAllTopics = (1u << 8) - 1,
+  kAllTopics = (1u << 8) - 1,  ///< Every output of the client's scene.
+  /// The scene directory (every scene's servers: Client::scenes()); not in kAllTopics.
+  kSceneDirectory = 1u << 8,
 };
 
 struct ClientOptions {
@@ -35,8 +37,21 @@ struct ClientOptions {
   /// $TELEGRASP_SECURITY_DIR and $TELEGRASP_IDENTITY).
   std::string profile = "loopback";
   std::string profiles_file;  ///< "": $TELEGRASP_PROFILES, else the shipped file.
-  unsigned topics = kAllTopics;  ///< Outputs to subscribe to.
+  /// The scene (room) to join: only its server's samples arrive (DDS partition
+  /// telegrasp/scene/<scene>). 1-64 letters, digits, '-', '_', '.'; "": $TELEGRASP_SCENE, else
+  /// "default".
+  std::string scene;
+  /// Fast DDS discovery servers, "HOST[:PORT]" in server-id order (`fastdds discovery -i 0`, ...);
+  /// empty: $TELEGRASP_DISCOVERY_SERVERS, else the profile's discovery.
+  std::vector<std::string> discovery_servers;
+  unsigned topics = kAllTopics;  ///< Outputs to subscribe to (bits of Topics).
 };
+
+/// "" when `name` can be a scene name (ClientOptions::scene), else why not.
+std::string scene_name_error(const std::string& name);
+/// "" when `address` can be a discovery server (ClientOptions::discovery_servers: HOST[:PORT],
+/// HOST resolving to an IPv4 address), else why not.
+std::string discovery_server_error(const std::string& address);
 
 /// One DDS participant with a writer per input topic and a reader per subscribed output.
 /// Thread-safe. Callbacks run on a DDS thread: keep them short, do not call back into the
@@ -102,6 +117,12 @@ class Client {
   std::map<std::string, std::shared_ptr<const ObjectGeometry>> object_geometries() const;
   /// The newest refusal of this client, if the server refused anything (kNotices).
   std::optional<Notice> last_notice() const;
+  /// The live servers on the scene directory, every scene (kSceneDirectory; empty without it).
+  /// A server appears within about a second of discovery and goes when it stops, or 3 s after it
+  /// dies.
+  std::vector<SceneInfo> scenes() const;
+  /// The scene joined (resolved: never empty).
+  const std::string& scene() const;
   /// Every grasp event received since the last call, in arrival order.
   std::vector<GraspEvent> take_grasp_events();
 

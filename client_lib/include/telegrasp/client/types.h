@@ -8,6 +8,7 @@
 #include <compare>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -165,7 +166,7 @@ struct ServerStatus {
   double time = 0;
   double tick_rate_hz = 0;
   int clients = 0, hands = 0, objects = 0;
-  double tick_us_p50 = 0, tick_us_max = 0;
+  double tick_us_p50 = 0, tick_us_p99 = 0, tick_us_max = 0;
   std::uint64_t missed_ticks = 0;
   std::uint64_t inputs_accepted = 0, inputs_rejected = 0;
   std::map<std::string, std::uint64_t> rejected;  ///< Per reason, since the server started.
@@ -187,6 +188,29 @@ struct Notice {
   std::uint64_t count = 0;  ///< This client's refusals for this reason, since the server started.
   double time = 0;  ///< Scene time of a command the scene refused; 0 otherwise.
 };
+
+/// A server run as it announces itself on the scene directory (Client::scenes()): one per live
+/// server, every scene.
+struct SceneInfo {
+  std::string scene;  ///< The scene it serves (ClientOptions::scene).
+  std::string host;  ///< The server's host name.
+  std::string version;  ///< Its telegrasp version.
+  std::uint64_t incarnation = 0;  ///< The server run (ServerStatus::incarnation).
+  double started = 0;  ///< Unix time, s.
+  bool serving = false;  ///< False while it still waits out its claim on the scene name.
+  int clients = 0, hands = 0, objects = 0;
+  double tick_rate_hz = 0;
+  double tick_us_p99 = 0;  ///< Tick work over the last second.
+  std::uint64_t missed_ticks = 0;
+  double cpu_percent = 0;  ///< The server process, over the last second, % of one core.
+  int host_cores = 0;
+  double host_load = 0;  ///< The host's 1-minute load average per core.
+};
+
+/// Where to start a server for a new scene: the host of `scenes` with the lowest load per core
+/// (the highest its servers report; ties: fewer hands served there, then the name); none when
+/// `scenes` is empty.
+std::optional<std::string> least_loaded_host(const std::vector<SceneInfo>& scenes);
 
 /// A restarted server, noticed by its new incarnation (Client::on_server_restart).
 struct ServerRestart {

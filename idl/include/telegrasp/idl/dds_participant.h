@@ -2,6 +2,7 @@
 // subscriber, topics, writers, readers), all made from the XML profiles by name.
 #pragma once
 
+#include "telegrasp/idl/network.h"
 #include "telegrasp/idl/safe_type.h"
 
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -25,7 +26,8 @@ namespace telegrasp::idl {
 
 /// A DomainParticipant joined by participant profile, with one publisher and one subscriber, the
 /// topics (one per name, its type registered once) and the writers and readers made with the
-/// profiles "<topic>.writer" and "<topic>.reader" (topics.h). Everything it creates it deletes.
+/// profiles "<topic>.writer" and "<topic>.reader" (topics.h). Writers and readers are in the
+/// scene's DDS partition, those of the scene directory topic in the directory's. Everything it creates it deletes.
 /// Several participants in one process can deadlock Fast DDS 2.9: make one per process (the
 /// network benchmarks make several, with intraprocess delivery off).
 class DdsParticipant {
@@ -33,10 +35,12 @@ class DdsParticipant {
   /// Loads `profiles_file` ("" = default_profiles_file()) and joins `domain` with the participant
   /// profile `profile`. A profile with DDS Security (`secure`) gets its identity's files from
   /// security_from_environment() (security.h). `listener` (may be null; must outlive this object)
-  /// hears of remote participants from the start, before any sample of theirs arrives. Throws
-  /// std::runtime_error naming the file, variable or profile that failed.
+  /// hears of remote participants from the start, before any sample of theirs arrives. `network`
+  /// (resolve_network(): the environment fills what it leaves empty) names the scene, whose DDS
+  /// partition every topic but the directory's is in, and any discovery servers. Throws
+  /// std::runtime_error naming the file, variable, value or profile that failed.
   DdsParticipant(int domain, const std::string& profile, const std::string& profiles_file = "",
-                 eprosima::fastdds::dds::DomainParticipantListener* listener = nullptr);
+                 eprosima::fastdds::dds::DomainParticipantListener* listener = nullptr, const Network& network = {});
   /// Detaches the readers' listeners, deletes every contained entity, then the participant.
   /// Listeners given to reader() must outlive this object.
   ~DdsParticipant();
@@ -67,6 +71,8 @@ class DdsParticipant {
   const std::string& profiles_file() const { return profiles_file_; }
   /// Whether the participant runs with DDS Security (authenticated, access controlled).
   bool secure() const { return secure_; }
+  /// The scene and discovery servers in use (resolved).
+  const Network& network() const { return network_; }
 
  private:
   using TypeFactory = eprosima::fastdds::dds::TopicDataType* (*)();
@@ -85,10 +91,14 @@ class DdsParticipant {
 
   std::string profiles_file_;
   std::string profile_;
+  Network network_;
   bool secure_ = false;
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
   eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
   eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
+  // The scene directory's topic, in its own partition (topics.h).
+  eprosima::fastdds::dds::Publisher* directory_publisher_ = nullptr;
+  eprosima::fastdds::dds::Subscriber* directory_subscriber_ = nullptr;
   std::map<std::string, eprosima::fastdds::dds::Topic*> topics_;
   std::vector<eprosima::fastdds::dds::DataReader*> readers_;
 };

@@ -14,6 +14,15 @@ inline constexpr const char* kSceneCommandTopic = "telegrasp/SceneCommand";
 inline constexpr const char* kServerStatusTopic = "telegrasp/ServerStatus";
 inline constexpr const char* kObjectGeometryTopic = "telegrasp/ObjectGeometry";
 inline constexpr const char* kClientNoticeTopic = "telegrasp/ClientNotice";
+/// The scene directory (SceneAnnouncement): the one topic in kDirectoryPartition; every other
+/// topic is in the scene's partition, kScenePartitionPrefix + scene name.
+inline constexpr const char* kSceneDirectoryTopic = "telegrasp/SceneDirectory";
+
+/// DDS partitions: a scene's topics in "telegrasp/scene/<name>", the directory in
+/// "telegrasp/directory" (network.h).
+inline constexpr const char* kScenePartitionPrefix = "telegrasp/scene/";
+inline constexpr const char* kDirectoryPartition = "telegrasp/directory";
+inline constexpr const char* kDefaultScene = "default";
 
 /// Participant profiles in deploy/fastdds/telegrasp_profiles.xml (transport and discovery).
 inline constexpr const char* kDefaultParticipantProfile = "loopback";

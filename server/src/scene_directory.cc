@@ -1,0 +1,103 @@
+#include "scene_directory.h"
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+namespace telegrasp::server {
+
+namespace {
+
+double process_cpu_s() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  const auto s = [](const timeval& t) { return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec); };
+  return s(u.ru_utime) + s(u.ru_stime);
+}
+
+double wall_s() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+}  // namespace
+
+ProcessLoad::ProcessLoad() : last_cpu_s_(process_cpu_s()), last_wall_s_(wall_s()) {}
+
+double ProcessLoad::cpu_percent() {
+  const double cpu = process_cpu_s(), wall = wall_s();
+  const double percent = wall > last_wall_s_ ? 100.0 * (cpu - last_cpu_s_) / (wall - last_wall_s_) : 0.0;
+  last_cpu_s_ = cpu;
+  last_wall_s_ = wall;
+  return percent;
+}
+
+int ProcessLoad::host_cores() {
+  const long n = sysconf(_SC_NPROCESSORS_ONLN);
+  return n > 0 ? static_cast<int>(n) : 1;
+}
+
+double ProcessLoad::host_load() {
+  std::ifstream in("/proc/loadavg");
+  double load1 = 0;
+  if (!(in >> load1)) return 0;
+  return load1 / host_cores();
+}
+
+msg::SceneAnnouncement make_claim(const AnnouncerFacts& facts) {
+  msg::SceneAnnouncement a;
+  a.incarnation(facts.incarnation);
+  a.scene(facts.scene);
+  a.host(facts.host.substr(0, 128));
+  a.version(facts.version.substr(0, 64));
+  a.started(facts.started);
+  a.serving(false);
+  return a;
+}
+
+msg::SceneAnnouncement make_announcement(const AnnouncerFacts& facts, const msg::ServerStatus& status,
+                                         double cpu_percent, int host_cores, double host_load) {
+  msg::SceneAnnouncement a = make_claim(facts);
+  a.serving(true);
+  a.clients(status.clients());
+  a.hands(status.hands());
+  a.objects(status.objects());
+  a.tick_rate_hz(status.tick_rate_hz());
+  a.tick_us_p99(status.tick_us_p99());
+  a.missed_ticks(status.missed_ticks());
+  a.cpu_percent(cpu_percent);
+  a.host_cores(host_cores);
+  a.host_load(host_load);
+  return a;
+}
+
+bool claimed_before(const msg::SceneAnnouncement& a, const msg::SceneAnnouncement& b) {
+  if (a.started() != b.started()) return a.started() < b.started();
+  return a.incarnation() < b.incarnation();
+}
+
+std::optional<msg::SceneAnnouncement> older_claim(const msg::SceneAnnouncement& mine,
+                                                  const std::vector<msg::SceneAnnouncement>& live) {
+  std::optional<msg::SceneAnnouncement> oldest;
+  for (const msg::SceneAnnouncement& a : live) {
+    if (a.incarnation() == mine.incarnation() || a.scene() != mine.scene()) continue;
+    if (!claimed_before(a, mine)) continue;
+    if (!oldest || claimed_before(a, *oldest)) oldest = a;
+  }
+  return oldest;
+}
+
+std::string already_served_message(const msg::SceneAnnouncement& keeper) {
+  std::ostringstream out;
+  char incarnation[17];
+  std::snprintf(incarnation, sizeof incarnation, "%016llx", static_cast<unsigned long long>(keeper.incarnation()));
+  out << "scene '" << keeper.scene().to_string() << "' is already served by " << keeper.host().to_string()
+      << " (run " << incarnation << ", telegrasp " << keeper.version().to_string() << ", " << keeper.hands()
+      << " hands): stop that server first, or serve another scene with --scene NAME";
+  return out.str();
+}
+
+}  // namespace telegrasp::server

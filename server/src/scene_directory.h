@@ -1,0 +1,58 @@
+// The scene directory, server side: what a server announces about itself (SceneAnnouncement, on
+// the directory topic in the common partition) and the rule that decides which of two servers
+// claiming one scene name keeps it. No DDS here; DdsNode publishes and reads.
+#pragma once
+
+#include "telegrasp/idl/telegrasp.h"
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace telegrasp::server {
+
+/// What stays fixed for a server run.
+struct AnnouncerFacts {
+  std::string scene;
+  std::string host;  ///< gethostname()
+  std::string version;
+  std::uint64_t incarnation = 0;
+  double started = 0;  ///< Unix time, s.
+};
+
+/// CPU use of this process between two calls (getrusage), and the host's load (/proc/loadavg).
+class ProcessLoad {
+ public:
+  ProcessLoad();
+  /// The process's CPU time since the last call (or construction) over the wall time, % of one core.
+  double cpu_percent();
+  static int host_cores();
+  /// The 1-minute load average over host_cores(); 0 when unknown.
+  static double host_load();
+
+ private:
+  double last_cpu_s_;
+  double last_wall_s_;
+};
+
+/// The announcement of a run that is serving, from its latest status and load.
+msg::SceneAnnouncement make_announcement(const AnnouncerFacts& facts, const msg::ServerStatus& status,
+                                         double cpu_percent, int host_cores, double host_load);
+/// The announcement of a run still waiting out its claim (serving false, no load figures).
+msg::SceneAnnouncement make_claim(const AnnouncerFacts& facts);
+
+/// Whether `a` claimed its scene before `b`: the earlier start, ties broken by the smaller
+/// incarnation (so two runs always agree on which one keeps the scene).
+bool claimed_before(const msg::SceneAnnouncement& a, const msg::SceneAnnouncement& b);
+
+/// Among the live announcements `live`, the oldest claim on `mine`'s scene that is older than
+/// `mine` (another run keeps the scene: `mine` must not serve it); none when `mine` keeps it.
+/// `mine` itself (same incarnation) is ignored.
+std::optional<msg::SceneAnnouncement> older_claim(const msg::SceneAnnouncement& mine,
+                                                  const std::vector<msg::SceneAnnouncement>& live);
+
+/// The refusal printed when another run keeps the scene.
+std::string already_served_message(const msg::SceneAnnouncement& keeper);
+
+}  // namespace telegrasp::server
