@@ -68,8 +68,9 @@ loss=0
 usage_error() { echo "$me: $*" >&2; echo "$me: see --help" >&2; exit 2; }
 need_value() { [ "$2" -ge 2 ] || usage_error "$1 needs a value"; }
 int_in() {  # int_in OPTION VALUE MIN MAX
-  [[ "$2" =~ ^[0-9]+$ ]] && [ "$2" -ge "$3" ] && [ "$2" -le "$4" ] ||
+  if ! [[ "$2" =~ ^[0-9]{1,4}$ ]] || [ "$2" -lt "$3" ] || [ "$2" -gt "$4" ]; then
     usage_error "$1 expects an integer $3..$4, got '$2'"
+  fi
 }
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -85,9 +86,10 @@ while [ $# -gt 0 ]; do
     *) usage_error "unknown option '$1'" ;;
   esac
 done
-[[ "$subnet" =~ ^([0-9]{1,3})\.([0-9]{1,3})\.([0-9]{1,3})$ ]] &&
-  [ "${BASH_REMATCH[1]}" -le 255 ] && [ "${BASH_REMATCH[2]}" -le 255 ] && [ "${BASH_REMATCH[3]}" -le 255 ] ||
+if ! [[ "$subnet" =~ ^([0-9]{1,3})\.([0-9]{1,3})\.([0-9]{1,3})$ ]] || [ "${BASH_REMATCH[1]}" -gt 255 ] ||
+  [ "${BASH_REMATCH[2]}" -gt 255 ] || [ "${BASH_REMATCH[3]}" -gt 255 ]; then
   usage_error "--subnet expects the first three numbers of an IPv4 /24, e.g. 10.203.0, got '$subnet'"
+fi
 
 # ---- what it needs --------------------------------------------------------------------------------
 skip() { echo "$me: $*: skipped" >&2; exit 77; }
@@ -215,8 +217,8 @@ make_host ops 60
 
 # run_on HOST LOG PROGRAM ARGS...: starts PROGRAM in HOST's namespace with HOST as its hostname (its
 # own UTS namespace), output to LOG; its pid in $started.
-# shellcheck disable=SC2016  # $0 and $@ are the inner shell's
 started=""
+# shellcheck disable=SC2016  # $0 and $@ are the inner shell's
 run_on() {
   local host="$1" log="$2"
   shift 2
@@ -460,7 +462,7 @@ while [ "$(date +%s)" -lt "$deadline" ]; do
   [ -z "$late_joined" ] && late_joined="$(wait_line "$late_scene" 0 "HandSkeleton $late_id " "${bot_start[$late_id]}" 0)"
   [ -n "$late_joined" ] || waiting=1
   for id in "${bot_ids[@]}"; do
-    [ "${bot_scene[$id]}" = 1 ] && [ "$id" != "$late_id" ] || continue
+    if [ "${bot_scene[$id]}" != 1 ] || [ "$id" = "$late_id" ]; then continue; fi
     [ -z "${rejoined[$id]:-}" ] && rejoined[$id]="$(wait_line 1 "$t_moved" "HandSkeleton $id " "$t_moved" 0)"
     [ -n "${rejoined[$id]}" ] || waiting=1
   done
