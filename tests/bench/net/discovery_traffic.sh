@@ -66,7 +66,8 @@ for profile in $profiles; do
   for n in $clients; do
     pids=()
     if [[ "$profile" == wan ]]; then
-      fastdds discovery -i 0 -l 127.0.0.1 -p 11811 > "$tmp/ds.log" 2>&1 &
+      # The server itself (`fastdds discovery` is a wrapper that would leave it behind when killed).
+      fast-discovery-server -i 0 -l 127.0.0.1 -p 11811 > "$tmp/ds.log" 2>&1 &
       pids+=($!)
       sleep 1
     fi
