@@ -100,19 +100,39 @@ ActiveHands::ActiveHands(const std::string& model, int max_hands, double sample_
 void ActiveHands::on_data_available(eprosima::fastdds::dds::DataReader* reader) {
   msg::GraspEvent e;
   eprosima::fastdds::dds::SampleInfo info;
-  while (reader->take_next_sample(&e, &info) == ReturnCode_t::RETCODE_OK) {
-    if (!info.valid_data) continue;
-    const int h = hand_of(e.client_id().to_string(), e.hand_side());
-    if (h < 0 || h >= static_cast<int>(hands_.size())) continue;
-    const bool grasp = e.kind() == msg::GRASP_EVENT_GRASP;
-    grasped_[h] = grasp;
-    std::lock_guard lock(mutex_);
-    if (grasp) {
-      ++counts_.grasps;
-      ++counts_.grasps_per_hand[h];
-    } else {
-      ++counts_.releases;
-    }
+  while (reader->take_next_sample(&e, &info) == ReturnCode_t::RETCODE_OK)
+    if (info.valid_data) on_grasp_event(e);
+}
+
+void ActiveHands::on_grasp_event(const msg::GraspEvent& e) {
+  const int h = hand_of(e.client_id().to_string(), e.hand_side());
+  if (h < 0 || h >= static_cast<int>(hands_.size())) return;
+  const bool grasp = e.kind() == msg::GRASP_EVENT_GRASP;
+  grasped_[h] = grasp;
+  std::lock_guard lock(mutex_);
+  if (grasp) {
+    ++counts_.grasps;
+    ++counts_.grasps_per_hand[h];
+  } else {
+    ++counts_.releases;
+  }
+}
+
+void ActiveHands::on_scene_state(const msg::SceneState& scene, double t) {
+  std::lock_guard lock(mutex_);
+  take_poses(scene, t);
+}
+
+void ActiveHands::take_poses(const msg::SceneState& scene, double t) {
+  poses_taken_t_ = t;
+  object_poses_.clear();
+  for (const msg::ObjectState& o : scene.objects()) {
+    const Eigen::Isometry3d X = to_eigen(o.pose());
+    const int col = static_cast<int>(std::lround((X.translation().x() - kX0) / kColumnStep));
+    const int row = static_cast<int>(std::lround((X.translation().y() - kY0) / kRowStep));
+    if (col < 0 || col >= kColumns || row < 0) continue;
+    const int h = row * kColumns + col;
+    if ((X.translation().head<2>() - active_object_xy(h)).norm() < kPlaced) object_poses_[h] = X;
   }
 }
 
@@ -131,18 +151,7 @@ std::optional<Eigen::Isometry3d> ActiveHands::object_pose(int hand, double t) {
     bool any = false;
     while (scene_reader_->take_next_sample(&scene, &info) == ReturnCode_t::RETCODE_OK)
       if (info.valid_data) newest = scene, any = true;
-    if (any) {
-      poses_taken_t_ = t;
-      object_poses_.clear();
-      for (const msg::ObjectState& o : newest.objects()) {
-        const Eigen::Isometry3d X = to_eigen(o.pose());
-        const int col = static_cast<int>(std::lround((X.translation().x() - kX0) / kColumnStep));
-        const int row = static_cast<int>(std::lround((X.translation().y() - kY0) / kRowStep));
-        if (col < 0 || col >= kColumns || row < 0) continue;
-        const int h = row * kColumns + col;
-        if ((X.translation().head<2>() - active_object_xy(h)).norm() < kPlaced) object_poses_[h] = X;
-      }
-    }
+    if (any) take_poses(newest, t);
   }
   const auto it = object_poses_.find(hand);
   if (it == object_poses_.end()) {

@@ -58,8 +58,13 @@ class ActiveHands : public eprosima::fastdds::dds::DataReaderListener {
 
   /// The SceneState reader to take object poses from (no listener; newest sample taken when needed).
   void set_scene_reader(eprosima::fastdds::dds::DataReader* reader) { scene_reader_ = reader; }
-  /// GraspEvent reader listener: counts the events of "scale-<c>" hands and tracks which hold.
+  /// GraspEvent reader listener: takes every event to on_grasp_event().
   void on_data_available(eprosima::fastdds::dds::DataReader* reader) override;
+  /// Counts a GraspEvent of a "scale-<c>" hand and tracks whether that hand holds (others ignored).
+  void on_grasp_event(const msg::GraspEvent& event);
+  /// Takes the object poses of a SceneState: each object within 0.12 m of a grid place is that
+  /// place's hand's. (With a scene reader set, the newest SceneState is taken when needed.)
+  void on_scene_state(const msg::SceneState& scene, double t);
 
   /// Idle: every hand hovers 0.3 m above its object, wobbling, trigger oscillating (as the idle
   /// bench's hands, closing on nothing). Active: each hand runs grasp trials on its object.
@@ -85,6 +90,7 @@ class ActiveHands : public eprosima::fastdds::dds::DataReaderListener {
   };
   /// The pose of object `hand` as last published, if it stands upright within 0.12 m of its place.
   std::optional<Eigen::Isometry3d> object_pose(int hand, double t);
+  void take_poses(const msg::SceneState& scene, double t);  // with mutex_ held
   Eigen::Isometry3d hover_pose(int hand, int side) const;
 
   std::string model_name_;

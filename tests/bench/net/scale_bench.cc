@@ -640,7 +640,7 @@ struct Sweep {
 };
 
 void print_sweep_summary(const Sweep& w, const Options& o, const std::string& label) {
-  std::cout << std::fixed << label << "hands sustained at " << o.sample_hz
+  std::cout << std::fixed << label << "hands sustained at " << cli::format_number(o.sample_hz)
             << " Hz with no missed tick: " << w.hands_sustained << " (stop: " << w.stop_reason << ")\n"
             << std::setprecision(2) << label << "server CPU per hand per tick at that level: " << w.per_hand_tick()
             << " us (all threads, fixed cost included); marginal " << w.slope << " us/hand/tick over a fixed "
@@ -648,8 +648,9 @@ void print_sweep_summary(const Sweep& w, const Options& o, const std::string& la
             << " us/tick (least squares over the sustained, unsaturated levels)\n"
             << std::setprecision(2);
   if (o.allow_missed_pct > 0)
-    std::cout << label << "hands with <= " << o.allow_missed_pct << "% of ticks missed: " << w.hands_tolerated
-              << ", server CPU per hand per tick there " << w.per_hand_tick_tolerated() << " us\n";
+    std::cout << label << "hands with <= " << cli::format_number(o.allow_missed_pct)
+              << "% of ticks missed: " << w.hands_tolerated << ", server CPU per hand per tick there "
+              << w.per_hand_tick_tolerated() << " us\n";
   std::cout << label
             << "largest unsaturated level (machine < 80% busy; * marks saturated levels): " << w.hands_unsaturated
             << " hands, " << w.per_hand_tick_unsaturated() << " us/hand/tick; largest sustained"
