@@ -620,7 +620,7 @@ struct Sweep {
       }
     const double denom = n * sxx - sx * sx;
     slope = n >= 2 && denom > 0 ? (n * sxy - sx * sy) / denom : 0;
-    intercept = n >= 2 ? (sy - slope * sx) / n : 0;
+    intercept = n >= 2 && denom > 0 ? (sy - slope * sx) / n : 0;  // one level (tried twice) gives no line
   }
 
   nlohmann::ordered_json json() const {
