@@ -70,6 +70,11 @@ Eigen::Vector2d active_object_xy(int hand) {
   return {kX0 + kColumnStep * (hand % kColumns), kY0 + kRowStep * (hand / kColumns)};
 }
 
+bool is_active_model(const std::string& model) {
+  const auto object = sim::find_protocol_object(model);
+  return object && object->name == model;
+}
+
 std::string active_objects_config(int hands, const std::string& model) {
   std::ostringstream out;
   out.precision(6);
@@ -82,10 +87,8 @@ std::string active_objects_config(int hands, const std::string& model) {
 
 ActiveHands::ActiveHands(const std::string& model, int max_hands, double sample_hz)
     : model_name_(model), sample_hz_(sample_hz), hands_(max_hands), grasped_(new std::atomic<bool>[max_hands]) {
-  const auto object = sim::find_protocol_object(model);
-  if (!object || object->name != model)
-    throw std::runtime_error("--active-model: no built-in stand-in '" + model + "'");
-  model_ = sim::make_standin_model(*object);
+  if (!is_active_model(model)) throw std::runtime_error("no built-in stand-in '" + model + "'");
+  model_ = sim::make_standin_model(*sim::find_protocol_object(model));
   rigs_[idl::kHandLeft] =
       std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_left")));
   rigs_[idl::kHandRight] =

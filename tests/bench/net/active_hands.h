@@ -35,6 +35,9 @@ namespace telegrasp::bench {
 constexpr int kMaxActiveHands = 128;
 Eigen::Vector2d active_object_xy(int hand);
 
+/// Whether `model` names a built-in stand-in (the objects --active can put in the scene).
+bool is_active_model(const std::string& model);
+
 /// The server configuration lines of the grid's first `hands` objects of `model`.
 std::string active_objects_config(int hands, const std::string& model);
 

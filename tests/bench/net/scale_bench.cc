@@ -63,12 +63,13 @@ server: first idle (each hand hovers 0.3 m above its object, moving, trigger osc
 on nothing), then active: each hand runs the sim's scripted operator ("perfect" skill; the grasp
 planned once per hand side by sim::plan_grasp and moved onto the object's pose from the newest
 SceneState): reach, close until the server's GraspEvent says it holds, lift 10 cm, hold 1 s,
-release, pause 0.3 s, again (trials start staggered over 2 s). Per level it also reports the
+put it down (0.4 s), release, pause 0.3 s, again (trials start staggered over 2 s; each active
+level's window opens 3 s after its hands were added). Per level it also reports the
 GraspEvents (grasps, releases; grasps/s), the hands that grasped in the window, and the held
 fraction (trials held through lift and hold / trials finished). An active level is sustained only
 if, besides the above, >= 90% of its hands grasped in the window and >= 80% of the trials
 finished in it were held. The summary compares idle and active cost at the largest level both
-sustained.
+sweeps sustained (or tolerated, see --allow-missed-pct).
 
 --count-outputs: one more participant in this process subscribes to the server's per-hand and
 scene outputs (HandSkeleton, GraspState, ContactSet, SceneState, GraspEvent), as a viewer would,
@@ -149,6 +150,11 @@ Options parse(int argc, char** argv) {
   });
   if (o.max == 0) o.max = o.active ? kMaxActiveHands : 512;
   if (o.seconds_per_step == 0) o.seconds_per_step = o.active ? 6 : 3;
+  if (!o.active && o.active_model != Options{}.active_model) usage_error("--active-model needs --active");
+  if (o.active && !is_active_model(o.active_model))
+    usage_error(
+        "--active-model expects a built-in stand-in's name (telegrasp-server --list-models without --objects), got '" +
+        o.active_model + "'");
   if (o.active && o.max > kMaxActiveHands)
     usage_error("--max with --active is at most " + std::to_string(kMaxActiveHands) +
                 " (one object per hand; a scene holds at most 128), got " + std::to_string(o.max));
