@@ -76,8 +76,10 @@ scene outputs (HandSkeleton, GraspState, ContactSet, SceneState, GraspEvent), as
 and counts per level the samples it takes and their serialized (CDR) bytes: the payload a
 subscriber receives, per topic and per hand. Every level also records the bytes and packets of
 the loopback interface (/proc/net/dev): inside `unshare -n` with --profile udp that is all of the
-run's DDS traffic on the wire (headers included), so two runs with and without --count-outputs
-give the bytes one more subscriber costs.
+run's DDS traffic sent by UDP (headers included), so two runs with and without --count-outputs
+give the bytes one more subscriber costs on the wire. Not there: SceneState and GraspEvent, which
+Fast DDS delivers between processes of one host by data-sharing whatever the profile (seen: the
+counting subscriber received SceneState that never crossed `lo`).
 
 Options:
   --sample-hz HZ         controller sample rate per hand (default 90; --hz, its old name, still
