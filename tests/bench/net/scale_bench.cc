@@ -77,9 +77,10 @@ and counts per level the samples it takes and their serialized (CDR) bytes: the 
 subscriber receives, per topic and per hand. Every level also records the bytes and packets of
 the loopback interface (/proc/net/dev): inside `unshare -n` with --profile udp that is all of the
 run's DDS traffic sent by UDP (headers included), so two runs with and without --count-outputs
-give the bytes one more subscriber costs on the wire. Not there: SceneState and GraspEvent, which
-Fast DDS delivers between processes of one host by data-sharing whatever the profile (seen: the
-counting subscriber received SceneState that never crossed `lo`).
+give the bytes one more subscriber costs on the wire. Not there: SceneState (the counting
+subscriber received it, `lo` did not carry it; most likely Fast DDS data-sharing, used between
+processes of one host for unkeyed bounded types whatever the profile), and probably GraspEvent,
+unkeyed and bounded too (too small to tell).
 
 Options:
   --sample-hz HZ         controller sample rate per hand (default 90; --hz, its old name, still
