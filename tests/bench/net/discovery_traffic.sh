@@ -35,7 +35,7 @@ while [[ $# -gt 0 ]]; do
     --clients) clients="$2"; shift 2 ;;
     --profiles) profiles="$2"; shift 2 ;;
     --topics) topics="$2"; shift 2 ;;
-    -h|--help) sed -n '2,27p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,25p' "$0"; exit 0 ;;
     *) echo "discovery_traffic.sh: unknown option '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
