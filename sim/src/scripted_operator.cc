@@ -410,7 +410,12 @@ Eigen::Isometry3d ScriptedOperator::noisy(const Eigen::Isometry3d& X) {
 
 void ScriptedOperator::begin(const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject,
                              const Eigen::Isometry3d& X_WorldPalm, double t0, std::optional<int> grasps_done) {
-  plan_ = plan_grasp(rig_, settings_, model, X_WorldObject, dt_, 0.0);
+  begin(plan_grasp(rig_, settings_, model, X_WorldObject, dt_, 0.0), model, X_WorldPalm, t0, grasps_done);
+}
+
+void ScriptedOperator::begin(const GraspPlan& plan, const ObjectModel& model, const Eigen::Isometry3d& X_WorldPalm,
+                             double t0, std::optional<int> grasps_done) {
+  plan_ = plan;
   practice_ = grasps_done ? practice_factor(skill_, *grasps_done) : 1.0;
   const Eigen::Vector3d extent = model.p_ObjectMax - model.p_ObjectMin;
   standoff_ = skill_.approach_clearance + skill_.size_standoff * extent.maxCoeff();

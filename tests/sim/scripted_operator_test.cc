@@ -174,6 +174,77 @@ TEST(ScriptedOperatorTest, PerfectOperatorLiftsACan) {
 TEST(ScriptedOperatorTest, LeftHandLiftsABox) { EXPECT_TRUE(trial("human_left", "004_sugar_box", "perfect")); }
 TEST(ScriptedOperatorTest, GripperLiftsABall) { EXPECT_TRUE(trial("gripper3", "055_baseball", "perfect")); }
 
+// A plan made for an upright object, moved with the object along the table (and turned about
+// +z), still closes cleanly on it: telegrasp-bench-scale --active plans once per model and moves
+// the plan to each hand's object. (plan_grasp at the new pose may pick another, symmetric
+// candidate of equal score, so the test closes the moved plan rather than comparing plans.)
+Eigen::Isometry3d moved(const Eigen::Isometry3d& X, const Eigen::Vector3d& d) {
+  Eigen::Isometry3d out = X;
+  out.translation() += d;
+  return out;
+}
+
+TEST(ScriptedOperatorTest, AMovedPlanStillClosesOnTheObject) {
+  const auto hand_rig = rig("human_right");
+  for (const char* name : {"005_tomato_soup_can", "004_sugar_box"}) {
+    const auto model = standin(name);
+    const Eigen::Isometry3d X_here = World::resting_pose(*model, 0.0, 0.0, 0.0);
+    const Eigen::Isometry3d X_there = World::resting_pose(*model, -1.4, 1.05, 0.4);
+    const GraspPlan here = plan_grasp(hand_rig, {}, *model, X_here, 1.0 / 90);
+    ASSERT_TRUE(here.predicted_grasp) << name;
+    const Eigen::Isometry3d X_WorldPalm = X_there * X_here.inverse() * here.X_WorldPalm;
+    const OfflineClosing c = close_offline(hand_rig, {}, *model, X_there, X_WorldPalm, 1.0 / 90);
+    EXPECT_TRUE(c.grasped) << name;
+    EXPECT_FALSE(c.penetrating) << name;
+    EXPECT_FALSE(c.below_table) << name;
+    EXPECT_EQ(c.blocked, here.predicted_blocked) << name;
+  }
+}
+
+// begin() with the plan plan_grasp makes runs exactly as begin() planning itself.
+TEST(ScriptedOperatorTest, BeginWithAPlanRunsAsBeginWithTheModel) {
+  const auto hand_rig = rig("human_right");
+  const auto model = standin("005_tomato_soup_can");
+  const Eigen::Isometry3d X_WorldObject = World::resting_pose(*model, 0.7, -1.05, 0.0);
+  const Eigen::Isometry3d X_WorldStart = moved(X_WorldObject, Eigen::Vector3d(-0.15, -0.1, 0.3));
+  const GraspPlan plan = plan_grasp(hand_rig, {}, *model, X_WorldObject, 1.0 / 90);
+  ScriptedOperator a(hand_rig, skill_profile("experienced"), 5), b(hand_rig, skill_profile("experienced"), 5);
+  a.begin(*model, X_WorldObject, X_WorldStart, 0.0);
+  b.begin(plan, *model, X_WorldStart, 0.0);
+  int ticks = 0;
+  for (int k = 0; k < 500 && !a.done(); ++k, ++ticks) {
+    const bool grasped = k > 150 && k < 300;  // as a server would answer mid-squeeze, then a drop
+    const ControllerInput ia = a.next(k / 90.0, grasped), ib = b.next(k / 90.0, grasped);
+    ASSERT_EQ(ia.X_WorldPalm.matrix(), ib.X_WorldPalm.matrix()) << "tick " << k;
+    ASSERT_EQ(ia.trigger, ib.trigger) << "tick " << k;
+    ASSERT_EQ(a.phase(), b.phase()) << "tick " << k;
+  }
+  EXPECT_GT(ticks, 150);
+}
+
+// A plan made at the origin, moved to an object near the table's corner, lifts it in a world.
+TEST(ScriptedOperatorTest, AMovedPlanLiftsTheObject) {
+  World world;
+  const auto model = standin("005_tomato_soup_can");
+  const ObjectId id = world.add_object(model, World::resting_pose(*model, 0.7, -0.65, 0.0));
+  const auto hand_rig = rig("human_right");
+  const HandId hand = world.add_hand(hand_rig);
+  for (int i = 0; i < 30; ++i) world.step();
+  GraspPlan plan = plan_grasp(hand_rig, {}, *model, World::resting_pose(*model, 0.0, 0.0, 0.0), 1.0 / 90);
+  plan.X_WorldPalm = moved(plan.X_WorldPalm, Eigen::Vector3d(0.7, -0.65, 0.0));
+  ScriptedOperator op(hand_rig, skill_profile("perfect"), 1);
+  const double z0 = world.object_pose(id).translation().z();
+  op.begin(plan, *model, moved(world.object_pose(id), Eigen::Vector3d(-0.15, -0.1, 0.3)), world.time());
+  double z_max = z0;
+  while (!op.done() && world.time() < 20) {
+    world.set_input(hand, op.next(world.time(), world.holder(id) == hand));
+    world.step();
+    z_max = std::max(z_max, world.object_pose(id).translation().z());
+  }
+  EXPECT_TRUE(op.held_after_lift());
+  EXPECT_GT(z_max - z0, 0.09) << "lifted about 10 cm";
+}
+
 void fast_close_on(const ObjectModelPtr& knife);
 
 // The built-in knife, and the YCB scan when ../shared/data/ycb is present.

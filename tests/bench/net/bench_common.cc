@@ -155,6 +155,22 @@ std::int64_t machine_busy_us() {
   return (user + nice + system + irq + softirq + steal) * 1000000LL / ticks;
 }
 
+InterfaceCounters loopback_counters() {
+  std::ifstream in("/proc/net/dev");
+  std::string line;
+  while (std::getline(in, line)) {
+    const auto colon = line.find(':');
+    if (colon == std::string::npos) continue;
+    std::string name = line.substr(0, colon);
+    name.erase(0, name.find_first_not_of(' '));
+    if (name != "lo") continue;
+    std::istringstream fields(line.substr(colon + 1));
+    InterfaceCounters c;
+    if (fields >> c.bytes >> c.packets) return c;
+  }
+  return {};
+}
+
 // ---------------------------------------------------------------------------------------------
 
 void load_profiles(const std::string& file, const std::string& participant_profile) {
@@ -201,16 +217,10 @@ ServerOptions server_options(const CommonOptions& o) {
 
 std::vector<std::string> server_argv(const ServerOptions& o) {
   // The benchmarks drive many hands from one participant at any rate: the per-client limits are lifted.
-  std::vector<std::string> a{o.path,
-                             "--domain",
-                             std::to_string(o.domain),
-                             "--profile",
-                             o.profile,
-                             "--empty-scene",
-                             "--max-hands-per-participant",
-                             "4096",
-                             "--max-input-rate",
-                             "1000000"};
+  std::vector<std::string> a{o.path,      "--domain",         std::to_string(o.domain),
+                             "--profile", o.profile,          "--max-hands-per-participant",
+                             "4096",      "--max-input-rate", "1000000"};
+  if (o.empty_scene) a.insert(a.begin() + 5, "--empty-scene");
   if (!o.profiles_file.empty()) a.insert(a.end(), {"--profiles", o.profiles_file});
   if (!o.late_latch) a.push_back("--no-late-latch");
   if (o.tick_hz > 0) a.insert(a.end(), {"--tick-hz", cli::format_number(o.tick_hz)});
@@ -240,6 +250,7 @@ void StatusCollector::on_data_available(dds::DataReader* reader) {
     r.sim_thread_cpu_us = thread_cpu_us(pid, pid);
     r.self_cpu_us = self_cpu_us();
     r.machine_busy_us = machine_busy_us();
+    r.lo = loopback_counters();
     std::lock_guard lock(mutex_);
     records_.push_back(r);
     cv_.notify_all();

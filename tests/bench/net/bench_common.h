@@ -153,6 +153,13 @@ std::map<pid_t, std::int64_t> threads_cpu_us(pid_t pid);
 std::int64_t self_cpu_us();
 /// CPU time every core of the machine spent busy (not idle or iowait) since boot, /proc/stat, us.
 std::int64_t machine_busy_us();
+/// Bytes and packets the loopback interface carried since it came up (/proc/net/dev, received
+/// side: every packet sent on `lo` is received on it once). Inside `unshare -n` with the `udp`
+/// profile that is exactly this run's DDS traffic; {-1, -1} if unreadable.
+struct InterfaceCounters {
+  std::int64_t bytes = -1, packets = -1;
+};
+InterfaceCounters loopback_counters();
 
 // ---------------------------------------------------------------------------------------------
 // Fast DDS.
@@ -181,6 +188,7 @@ struct ServerOptions {
   std::string profiles_file;  ///< "" = the server's default.
   bool late_latch = true;
   double tick_hz = 0;  ///< The server's --tick-hz; 0 = its default.
+  bool empty_scene = true;  ///< --empty-scene; false: the scene of the configuration (--config in `extra`).
   std::vector<std::string> extra;  ///< More arguments (--server-arg).
   std::string log_path;
 };
@@ -205,6 +213,7 @@ class StatusCollector : public dds::DataReaderListener {
     std::int64_t sim_thread_cpu_us = -1;  ///< the server's main thread (its simulation thread)
     std::int64_t self_cpu_us = -1;  ///< the benchmark process
     std::int64_t machine_busy_us = -1;  ///< every process of the machine
+    InterfaceCounters lo;  ///< the loopback interface
     msg::ServerStatus status;
   };
   void set_server_pid(pid_t pid) { server_pid_ = pid; }

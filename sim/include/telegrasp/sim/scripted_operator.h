@@ -153,6 +153,12 @@ class ScriptedOperator {
   /// (factor 1: tools that do not run sessions, such as telegrasp-bot and telegrasp-eval run).
   void begin(const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject, const Eigen::Isometry3d& X_WorldPalm,
              double t0, std::optional<int> grasps_done = std::nullopt);
+  /// The same with a plan made beforehand (plan_grasp for the object at its pose now), so that
+  /// many operators of one object kind need one plan: plan_grasp of an upright object moved on
+  /// the table by d is its plan at the old pose moved by d (telegrasp-bench-scale --active plans
+  /// once per model and moves the plan to each object).
+  void begin(const GraspPlan& plan, const ObjectModel& model, const Eigen::Isometry3d& X_WorldPalm, double t0,
+             std::optional<int> grasps_done = std::nullopt);
   /// The input for time `t`; `grasped` is whether the hand holds the trial's object now.
   ControllerInput next(double t, bool grasped);
 
