@@ -3,7 +3,7 @@
 #   build-asan  clang, AddressSanitizer + UndefinedBehaviorSanitizer, asserts on (the build
 #               deploy/run-fuzz.sh fuzzes in, -DTELEGRASP_FUZZ=ON): the unit and integration
 #               tests (sim, server, idl, client library, common, tools, integration);
-#   build-tsan  clang, ThreadSanitizer: the server and client library tests.
+#   build-tsan  clang, ThreadSanitizer: the server tests (not the client library's: see below).
 # Every report is fatal (halt_on_error); leaks are checked under ASan. The suppressions in
 # tests/sanitizers/ name third-party libraries only (Fast DDS, protobuf), each with its reason.
 # Options: --asan-only, --tsan-only. Exits non-zero on a build error or a failing test.
@@ -58,11 +58,13 @@ if [ "$run_asan" = 1 ]; then
     ctest --test-dir build-asan --output-on-failure -j"$jobs" -E "$not_here" || status=1
 fi
 if [ "$run_tsan" = 1 ]; then
-  configure_and_build build-tsan thread telegrasp-tests-server telegrasp-tests-client
-  step "server and client library tests under TSan"
-  TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$supp/tsan.supp:print_suppressions=0" \
-    ctest --test-dir build-tsan --output-on-failure -j"$jobs" -R '^client_lib\.' -E "$not_here" || status=1
-  # The server tests carry no prefix: run their binary's tests by name from its own listing.
+  # The server's tests (no DDS: the mailbox fed from other threads, the loop, the scene server,
+  # recording). Not the client library's: every one of them runs Fast DDS, which Debian ships
+  # uninstrumented, and TSan then reports Fast DDS's own internals (its timed mutexes are locked
+  # through pthread_mutex_clocklock, which clang 14's TSan does not intercept, and its inline
+  # libstdc++ code resolves to the instrumented copies in our binaries), not our code.
+  configure_and_build build-tsan thread telegrasp-tests-server
+  step "server tests under TSan"
   TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$supp/tsan.supp:print_suppressions=0" \
   TELEGRASP_SOURCE_DIR="$root" build-tsan/bin/telegrasp-tests-server || status=1
 fi
