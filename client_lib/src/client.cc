@@ -5,7 +5,6 @@
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
 
-#include <fastdds/dds/core/LoanableSequence.hpp>
 #include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 
@@ -686,15 +685,8 @@ const std::string& Client::scene() const { return impl_->participant->network().
 std::vector<SceneInfo> Client::scenes() const {
   std::vector<SceneInfo> live;
   if (impl_->directory_reader == nullptr) return live;
-  FASTDDS_SEQUENCE(AnnouncementSeq, msg::SceneAnnouncement);
-  AnnouncementSeq data;
-  dds::SampleInfoSeq infos;
-  if (impl_->directory_reader->read(data, infos, dds::LENGTH_UNLIMITED, dds::ANY_SAMPLE_STATE, dds::ANY_VIEW_STATE,
-                                    dds::ALIVE_INSTANCE_STATE) != ReturnCode_t::RETCODE_OK)
-    return live;
-  for (dds::LoanableCollection::size_type i = 0; i < data.length(); ++i)
-    if (infos[i].valid_data) live.push_back(from_msg(data[i]));
-  impl_->directory_reader->return_loan(data, infos);
+  for (const msg::SceneAnnouncement& a : idl::read_alive_instances<msg::SceneAnnouncement>(impl_->directory_reader))
+    live.push_back(from_msg(a));
   std::sort(live.begin(), live.end(), [](const SceneInfo& a, const SceneInfo& b) {
     return std::tie(a.scene, a.started, a.incarnation) < std::tie(b.scene, b.started, b.incarnation);
   });

@@ -6,7 +6,6 @@
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"
 
-#include <fastdds/dds/core/LoanableSequence.hpp>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 
@@ -186,17 +185,9 @@ void DdsNode::announce(const AnnouncerFacts& facts) {
 }
 
 std::vector<msg::SceneAnnouncement> DdsNode::directory() {
-  FASTDDS_SEQUENCE(AnnouncementSeq, msg::SceneAnnouncement);
-  AnnouncementSeq data;
-  dds::SampleInfoSeq infos;
-  std::vector<msg::SceneAnnouncement> live;
-  if (impl_->directory_reader->read(data, infos, dds::LENGTH_UNLIMITED, dds::ANY_SAMPLE_STATE, dds::ANY_VIEW_STATE,
-                                    dds::ALIVE_INSTANCE_STATE) != ReturnCode_t::RETCODE_OK)
-    return live;
-  for (dds::LoanableCollection::size_type i = 0; i < data.length(); ++i)
-    if (infos[i].valid_data && (!impl_->facts || data[i].incarnation() != impl_->facts->incarnation))
-      live.push_back(data[i]);
-  impl_->directory_reader->return_loan(data, infos);
+  std::vector<msg::SceneAnnouncement> live = idl::read_alive_instances<msg::SceneAnnouncement>(impl_->directory_reader);
+  if (impl_->facts)
+    std::erase_if(live, [&](const msg::SceneAnnouncement& a) { return a.incarnation() == impl_->facts->incarnation; });
   return live;
 }
 
@@ -210,7 +201,8 @@ void DdsNode::announce_status(const msg::ServerStatus& status) {
   for (const msg::SceneAnnouncement& other : directory()) {
     if (other.scene() != a.scene() || other.incarnation() == d.conflict_logged) continue;
     d.conflict_logged = other.incarnation();
-    std::cerr << "telegrasp-server: warning: " << already_served_message(other) << " as well\n";
+    std::cerr << "telegrasp-server: warning: scene '" << a.scene().to_string() << "' is also served by "
+              << describe_run(other) << "; the run that started later should stop\n";
   }
 }
 

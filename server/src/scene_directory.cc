@@ -90,14 +90,18 @@ std::optional<msg::SceneAnnouncement> older_claim(const msg::SceneAnnouncement& 
   return oldest;
 }
 
-std::string already_served_message(const msg::SceneAnnouncement& keeper) {
+std::string describe_run(const msg::SceneAnnouncement& run) {
   std::ostringstream out;
   char incarnation[17];
-  std::snprintf(incarnation, sizeof incarnation, "%016llx", static_cast<unsigned long long>(keeper.incarnation()));
-  out << "scene '" << keeper.scene().to_string() << "' is already served by " << keeper.host().to_string()
-      << " (run " << incarnation << ", telegrasp " << keeper.version().to_string() << ", " << keeper.hands()
-      << " hands): stop that server first, or serve another scene with --scene NAME";
+  std::snprintf(incarnation, sizeof incarnation, "%016llx", static_cast<unsigned long long>(run.incarnation()));
+  out << run.host().to_string() << " (run " << incarnation << ", telegrasp " << run.version().to_string() << ", "
+      << run.hands() << " hands)";
   return out.str();
+}
+
+std::string already_served_message(const msg::SceneAnnouncement& keeper) {
+  return "scene '" + keeper.scene().to_string() + "' is already served by " + describe_run(keeper) +
+         ": stop that server first, or serve another scene with --scene NAME";
 }
 
 }  // namespace telegrasp::server

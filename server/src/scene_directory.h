@@ -52,6 +52,8 @@ bool claimed_before(const msg::SceneAnnouncement& a, const msg::SceneAnnouncemen
 std::optional<msg::SceneAnnouncement> older_claim(const msg::SceneAnnouncement& mine,
                                                   const std::vector<msg::SceneAnnouncement>& live);
 
+/// A run for people: "HOST (run 00c0ffee..., telegrasp 0.1.0, 3 hands)".
+std::string describe_run(const msg::SceneAnnouncement& run);
 /// The refusal printed when another run keeps the scene.
 std::string already_served_message(const msg::SceneAnnouncement& keeper);
 

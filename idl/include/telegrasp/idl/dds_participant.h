@@ -5,9 +5,11 @@
 #include "telegrasp/idl/network.h"
 #include "telegrasp/idl/safe_type.h"
 
+#include <fastdds/dds/core/LoanableSequence.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/topic/TopicDataType.hpp>
 
 #include <map>
@@ -102,5 +104,23 @@ class DdsParticipant {
   std::map<std::string, eprosima::fastdds::dds::Topic*> topics_;
   std::vector<eprosima::fastdds::dds::DataReader*> readers_;
 };
+
+/// The newest sample of every alive instance of `reader` (of type T), read, not taken: they stay
+/// for the next call. An instance whose writer is gone (unregistered, or its liveliness lost) is
+/// left out.
+template <class T>
+std::vector<T> read_alive_instances(eprosima::fastdds::dds::DataReader* reader) {
+  namespace dds = eprosima::fastdds::dds;
+  dds::LoanableSequence<T> data;
+  dds::SampleInfoSeq infos;
+  std::vector<T> alive;
+  if (reader->read(data, infos, dds::LENGTH_UNLIMITED, dds::ANY_SAMPLE_STATE, dds::ANY_VIEW_STATE,
+                   dds::ALIVE_INSTANCE_STATE) != ReturnCode_t::RETCODE_OK)
+    return alive;
+  for (dds::LoanableCollection::size_type i = 0; i < data.length(); ++i)
+    if (infos[i].valid_data) alive.push_back(data[i]);
+  reader->return_loan(data, infos);
+  return alive;
+}
 
 }  // namespace telegrasp::idl
