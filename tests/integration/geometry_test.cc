@@ -42,7 +42,7 @@ std::unique_ptr<ChildProcess> start_server(int domain, const std::vector<std::st
 
 // Waits until the server has printed its start-up line (its geometry is published before it).
 bool server_started(ChildProcess& server) {
-  return eventually([&] { return read_file(server.log_path()).find("telegrasp-server: domain") != std::string::npos; },
+  return eventually([&] { return read_file(server.log_path()).find("; Ctrl-C to stop") != std::string::npos; },
                     60s);
 }
 
