@@ -182,6 +182,12 @@ void check_ply_header(const std::string& path, std::uint64_t file_size, const Me
       std::string count;
       line >> e.name >> count;
       e.line = line_number;
+      // assimp freed memory it had not allocated on a header declaring "face" twice (found by
+      // telegrasp-fuzz-mesh): every element once.
+      for (const Element& before : elements)
+        if (before.name == e.name)
+          throw MeshLoadError(describe(path) + "PLY header line " + std::to_string(line_number) + ": element '" +
+                              e.name + "' is declared twice (first on line " + std::to_string(before.line) + ")");
       const auto [rest, error] = std::from_chars(count.data(), count.data() + count.size(), e.count);
       if (count.empty() || error != std::errc() || rest != count.data() + count.size()) {
         throw MeshLoadError(describe(path) + "PLY header line " + std::to_string(line_number) + ": element '" + e.name +
@@ -195,6 +201,10 @@ void check_ply_header(const std::string& path, std::uint64_t file_size, const Me
       if (type == "list") line >> type;
       elements.back().binary_bytes += ply_scalar_bytes(type);
       elements.back().ascii_bytes += 2;
+    } else if (!keyword.empty() && keyword != "comment" && keyword != "obj_info" && keyword != "property" &&
+               !(keyword == "ply" && line_number == 1)) {
+      throw MeshLoadError(describe(path) + "PLY header line " + std::to_string(line_number) + ": unknown keyword '" +
+                          keyword.substr(0, 32) + "'");
     }
   }
   if (!header_ended) {

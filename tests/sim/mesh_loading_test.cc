@@ -388,6 +388,28 @@ TEST(LoadMeshFile, PlyWithUnreadableCountIsRefused) {
                     "first line must be 'ply'");
 }
 
+TEST(LoadMeshFile, PlyHeaderWithAnUnknownKeywordOrAnElementDeclaredTwiceIsRefused) {
+  // Found by telegrasp-fuzz-mesh: this header (a mangled "end_header" line, then "face" declared
+  // again) made assimp free memory it had not allocated. Refused before assimp reads it.
+  TempDir dir;
+  const std::string fuzzed =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 4\nproperty list uchar int vertex_indices\nend_headeroperty float x\nproperty float y\n"
+      "property float z\nelement face 6\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0\n0.1 0 0\n0 0.1 0\n0 0 0.1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+  expect_load_error(dir.write("fuzzed.ply", fuzzed), "line 9: unknown keyword 'end_headeroperty'");
+  std::string twice = ply_header("ascii", 4, 4);
+  twice.insert(twice.find("end_header"), "element face 4\n");
+  expect_load_error(dir.write("twice.ply", twice + "0 0 0\n0.1 0 0\n0 0.1 0\n0 0 0.1\n"),
+                    "element 'face' is declared twice");
+  // Comments and obj_info lines are fine.
+  std::string commented = ply_header("ascii", 4, 4);
+  commented.insert(commented.find("element"), "comment made by hand\nobj_info a tetrahedron\n");
+  EXPECT_NO_THROW(load_mesh_file(dir.write("commented.ply", commented +
+                                                                "0 0 0\n0.1 0 0\n0 0.1 0\n0 0 0.1\n"
+                                                                "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n")));
+}
+
 TEST(LoadMeshFile, PlyFaceIndexPastTheVerticesIsRefused) {
   // Found by telegrasp-fuzz-mesh: a binary PLY face naming vertex 100000 of 4 made assimp's
   // Triangulate step read out of bounds (SEGV). Now refused with the file named.
