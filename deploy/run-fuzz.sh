@@ -4,8 +4,10 @@
 # the repository's own files (rigs, the example configuration and questionnaire) and the seeds
 # telegrasp-fuzz-seeds generates (CDR samples and commands, a recording, small meshes).
 #
-# usage: deploy/run-fuzz.sh [--seconds S] [--runs N] [--only NAME] [--jobs J] [--corpus DIR]
+# usage: deploy/run-fuzz.sh [--seconds S] [--runs N] [--seed N] [--only NAME] [--jobs J] [--corpus DIR]
 #   --seconds S   time per harness (default 60)
+#   --seed N      libFuzzer's random seed (default: a new one each run); the test command uses 1,
+#                 so CI mutates the same inputs as a run checked here (only how far it gets varies)
 #   --runs N      stop a harness after N executions instead (whichever comes first)
 #   --only NAME   run one harness (controller-state, scene-command, server-config, rig-text,
 #                 mesh, recording, questionnaire)
@@ -17,12 +19,13 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 TELEGRASP_DEPS_SANITIZERS=1 deploy/install-deps.sh
 root="$PWD"
-seconds=60 runs=-1 only="" jobs=1 corpus=""
-usage() { sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'; }
+seconds=60 runs=-1 seed=0 only="" jobs=1 corpus=""
+usage() { sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'; }
 while [ $# -gt 0 ]; do
   case "$1" in
     --seconds) seconds="${2:?--seconds needs a value}"; shift 2 ;;
     --runs) runs="${2:?--runs needs a value}"; shift 2 ;;
+    --seed) seed="${2:?--seed needs a value}"; shift 2 ;;
     --only) only="${2:?--only needs a harness name}"; shift 2 ;;
     --jobs) jobs="${2:?--jobs needs a value}"; shift 2 ;;
     --corpus) corpus="${2:?--corpus needs a folder}"; shift 2 ;;
@@ -34,6 +37,7 @@ for v in seconds jobs; do
   [[ "${!v}" =~ ^[1-9][0-9]*$ ]] || { echo "run-fuzz: --$v '${!v}' is not a positive integer" >&2; exit 2; }
 done
 [[ "$runs" =~ ^(-1|[1-9][0-9]*)$ ]] || { echo "run-fuzz: --runs '$runs' is not a positive integer" >&2; exit 2; }
+[[ "$seed" =~ ^[0-9]{1,9}$ ]] || { echo "run-fuzz: --seed '$seed' is not a whole number below 10^9" >&2; exit 2; }
 harnesses=(controller-state scene-command server-config rig-text mesh recording questionnaire)
 if [ -n "$only" ]; then
   [[ " ${harnesses[*]} " == *" $only "* ]] || { echo "run-fuzz: --only '$only' is none of: ${harnesses[*]}" >&2; exit 2; }
@@ -75,7 +79,7 @@ run_one() {
   rm -rf "$dir/rc" "$dir/artifacts"  # each run reports only its own findings
   mkdir -p "$dir/corpus" "$dir/artifacts"
   [ -d "$seed_dir" ] || mkdir -p "$seed_dir"
-  "$root/$build/bin/telegrasp-fuzz-$h" "$dir/corpus" "$seed_dir" -max_total_time="$seconds" -runs="$runs" \
+  "$root/$build/bin/telegrasp-fuzz-$h" "$dir/corpus" "$seed_dir" -max_total_time="$seconds" -runs="$runs" -seed="$seed" \
     -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
     -artifact_prefix="$dir/artifacts/" >"$dir/log" 2>&1 && echo 0 >"$dir/rc" || echo $? >"$dir/rc"
 }
