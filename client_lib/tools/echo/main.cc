@@ -226,12 +226,10 @@ Args parse_args(int argc, char** argv) {
 }
 
 Json scene_json(const tc::SceneInfo& s) {
-  char incarnation[17];
-  std::snprintf(incarnation, sizeof incarnation, "%016llx", static_cast<unsigned long long>(s.incarnation));
   return {{"scene", s.scene},
           {"host", s.host},
           {"version", s.version},
-          {"incarnation", incarnation},
+          {"incarnation", incarnation_hex(s.incarnation)},
           {"started_unix_s", s.started},
           {"serving", s.serving},
           {"clients", s.clients},
