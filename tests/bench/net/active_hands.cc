@@ -2,6 +2,7 @@
 
 #include "bench_common.h"
 
+#include "telegrasp/idl/eigen_conversions.h"
 #include "telegrasp/idl/topics.h"
 #include "telegrasp/sim/standin_objects.h"
 #include "telegrasp/sim/world.h"
@@ -27,32 +28,6 @@ constexpr double kRetry = 1.0;  // s before a hand whose object is not found tri
 constexpr double kPosesMaxAge = 0.2;  // s: object poses are taken again when older
 constexpr double kPutDown = 0.4;  // s to lower a held object back ...
 constexpr double kPutDownHeight = sim::ScriptedOperator::kLiftHeight - 0.005;  // ... by this, m
-
-Eigen::Isometry3d to_eigen(const msg::Pose3& p) {
-  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-  X.translation() = Eigen::Vector3d(p.position().x(), p.position().y(), p.position().z());
-  X.linear() = Eigen::Quaterniond(p.orientation().w(), p.orientation().x(), p.orientation().y(), p.orientation().z())
-                   .normalized()
-                   .toRotationMatrix();
-  return X;
-}
-
-msg::Pose3 to_msg(const Eigen::Isometry3d& X) {
-  msg::Pose3 p;
-  msg::Vec3 v;
-  v.x(X.translation().x());
-  v.y(X.translation().y());
-  v.z(X.translation().z());
-  p.position(v);
-  const Eigen::Quaterniond q(X.linear());
-  msg::Quat m;
-  m.w(q.w());
-  m.x(q.x());
-  m.y(q.y());
-  m.z(q.z());
-  p.orientation(m);
-  return p;
-}
 
 // The hand of a bench client id "scale-<c>" and side, or -1.
 int hand_of(const std::string& client_id, int side) {
@@ -130,7 +105,7 @@ void ActiveHands::take_poses(const msg::SceneState& scene, double t) {
   poses_taken_t_ = t;
   object_poses_.clear();
   for (const msg::ObjectState& o : scene.objects()) {
-    const Eigen::Isometry3d X = to_eigen(o.pose());
+    const Eigen::Isometry3d X = idl::to_eigen(o.pose());
     const int col = static_cast<int>(std::lround((X.translation().x() - kX0) / kColumnStep));
     const int row = static_cast<int>(std::lround((X.translation().y() - kY0) / kRowStep));
     if (col < 0 || col >= kColumns || row < 0) continue;
@@ -244,7 +219,7 @@ msg::ControllerState ActiveHands::sample(const std::string& client_id, int clien
   s.client_id(client_id);
   s.hand_side(static_cast<std::uint8_t>(side));
   s.sequence_number(seq);
-  s.palm(to_msg(input.X_WorldPalm));
+  s.palm(idl::to_msg(input.X_WorldPalm));
   s.trigger(input.trigger);
   s.buttons(0);
   s.tracking_valid(true);
