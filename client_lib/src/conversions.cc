@@ -415,6 +415,8 @@ msg::ServerStatus to_msg(const client::ServerStatus& s) {
   m.tick_us_p50(s.tick_us_p50);
   m.tick_us_max(s.tick_us_max);
   m.tick_us_p99(s.tick_us_p99);
+  m.rss_kib(s.rss_kib);
+  m.heap_kib(s.heap_kib);
   m.missed_ticks(s.missed_ticks);
   m.inputs_accepted(s.inputs_accepted);
   m.inputs_rejected(s.inputs_rejected);
@@ -439,6 +441,8 @@ client::ServerStatus from_msg(const msg::ServerStatus& m) {
   s.tick_us_p50 = m.tick_us_p50();
   s.tick_us_max = m.tick_us_max();
   s.tick_us_p99 = m.tick_us_p99();
+  s.rss_kib = m.rss_kib();
+  s.heap_kib = m.heap_kib();
   s.missed_ticks = m.missed_ticks();
   s.inputs_accepted = m.inputs_accepted();
   s.inputs_rejected = m.inputs_rejected();

@@ -5,6 +5,7 @@
 
 #include "input_mailbox.h"
 #include "output_sink.h"
+#include "process_stats.h"
 #include "scene_directory.h"
 
 #include "telegrasp/idl/network.h"

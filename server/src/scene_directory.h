@@ -21,21 +21,6 @@ struct AnnouncerFacts {
   double started = 0;  ///< Unix time, s.
 };
 
-/// CPU use of this process between two calls (getrusage), and the host's load (/proc/loadavg).
-class ProcessLoad {
- public:
-  ProcessLoad();
-  /// The process's CPU time since the last call (or construction) over the wall time, % of one core.
-  double cpu_percent();
-  static int host_cores();
-  /// The 1-minute load average over host_cores(); 0 when unknown.
-  static double host_load();
-
- private:
-  double last_cpu_s_;
-  double last_wall_s_;
-};
-
 /// The announcement of a run that is serving, from its latest status and load.
 msg::SceneAnnouncement make_announcement(const AnnouncerFacts& facts, const msg::ServerStatus& status,
                                          double cpu_percent, int host_cores, double host_load);

@@ -422,6 +422,8 @@ msg::ServerStatus SceneServer::status(const LoopStats& loop) const {
   m.tick_us_p50(loop.tick_us_p50);
   m.tick_us_max(loop.tick_us_max);
   m.tick_us_p99(loop.tick_us_p99);
+  m.rss_kib(loop.rss_kib);
+  m.heap_kib(loop.heap_kib);
   m.missed_ticks(loop.missed_ticks);
   m.inputs_accepted(mailbox_.accepted());
   const auto rejected = mailbox_.rejected();

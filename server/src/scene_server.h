@@ -22,10 +22,11 @@ namespace telegrasp::server {
 std::vector<SceneObjectSpec> default_layout(const std::vector<sim::ObjectModelPtr>& models, double gap,
                                             double table_half_extent);
 
-/// Timing of the loop that drives the SceneServer, for ServerStatus.
+/// Timing of the loop that drives the SceneServer and the process's memory, for ServerStatus.
 struct LoopStats {
   double tick_us_p50 = 0, tick_us_p99 = 0, tick_us_max = 0;
   std::uint64_t missed_ticks = 0;
+  std::uint64_t rss_kib = 0, heap_kib = 0;
 };
 
 class SceneServer {

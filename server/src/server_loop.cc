@@ -1,5 +1,7 @@
 #include "server_loop.h"
 
+#include "process_stats.h"
+
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -134,7 +136,11 @@ void ServerLoop::tick(time_point now) {
 }
 
 void ServerLoop::publish_status(time_point now) {
-  status_sink_.publish(scene_.status(summarize(tick_us_, missed_)));
+  LoopStats stats = summarize(tick_us_, missed_);
+  const ProcessMemory memory = process_memory();
+  stats.rss_kib = memory.rss_kib;
+  stats.heap_kib = memory.heap_kib;
+  status_sink_.publish(scene_.status(stats));
   next_status_ += status_period_;
   if (next_status_ <= now) next_status_ = now + status_period_;
 }

@@ -176,6 +176,8 @@ Json server_status(const client::ServerStatus& s) {
               {"tick_us_p99", s.tick_us_p99},
               {"tick_us_max", s.tick_us_max},
               {"missed_ticks", s.missed_ticks},
+              {"rss_kib", s.rss_kib},
+              {"heap_kib", s.heap_kib},
               {"inputs_accepted", s.inputs_accepted},
               {"inputs_rejected", s.inputs_rejected},
               {"rejected", rejected},

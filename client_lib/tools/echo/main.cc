@@ -104,7 +104,8 @@ X_WorldObject is the object's pose in the world frame.
                   "holder" (if held: the first), "holders" (if held: every hand holding
                   it, in grasp order; two may share one object), "spawn_time_s"}
   ServerStatus    "tick_rate_hz", "clients", "hands", "objects", "tick_us_p50", "tick_us_p99", "tick_us_max",
-                  "missed_ticks", "inputs_accepted", "inputs_rejected", "rejected" (per reason),
+                  "missed_ticks", "rss_kib", "heap_kib" (the server's resident set and heap in
+                  use), "inputs_accepted", "inputs_rejected", "rejected" (per reason),
                   "commands_accepted", "commands_rejected", "commands_rejected_by_reason"
                   (per reason), "notices_sent", "models"
   ObjectGeometry  a summary, never the mesh: "model", "content_hash" (16 hex digits),

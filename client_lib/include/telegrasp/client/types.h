@@ -175,6 +175,8 @@ struct ServerStatus {
   std::uint64_t incarnation = 0;  ///< The server run, as in SceneState::incarnation.
   std::map<std::string, std::uint64_t> commands_rejected_by_reason;  ///< Per reason, since the server started.
   std::uint64_t notices_sent = 0;  ///< Refusals told to their clients (Notice), since the server started.
+  std::uint64_t rss_kib = 0;   ///< The server process's resident set, KiB.
+  std::uint64_t heap_kib = 0;  ///< Its heap in use (malloc'd, not freed), KiB: what a leak makes grow.
 };
 
 /// Why the server refused this client's input or command (ClientNotice): the client learns it
