@@ -192,11 +192,7 @@ void SceneServer::tick(std::int64_t now_ns) {
   retired_hands_.clear();
   retired_objects_.clear();
 
-  for (auto& [id, o] : objects_)
-    if (world_->object_pose(sim::ObjectId(id)).translation().z() < kFallenHeight &&
-        world_->place_object(sim::ObjectId(id), o.X_WorldSpawn))
-      std::cerr << "telegrasp-server: " << o.name << " (object " << id
-                << ") fell off the table: put back where it was spawned\n";
+  put_back_fallen();
 
   const std::uint64_t tick = world_->tick();
   const double time = world_->time();
@@ -284,14 +280,36 @@ bool SceneServer::is_operator(const std::string& client_id) const {
          std::find(settings_.operators.begin(), settings_.operators.end(), client_id) != settings_.operators.end();
 }
 
-std::optional<Eigen::Vector2d> SceneServer::free_spot(const sim::ObjectModel& model, double x, double y) const {
+void SceneServer::put_back_fallen() {
+  for (auto& [id, o] : objects_) {
+    const sim::ObjectId object(id);
+    if (world_->object_pose(object).translation().z() >= kFallenHeight) continue;
+    // Another object may have come to rest where this one was spawned: placed into it, Bullet
+    // would push the two apart at metres per second. A spawn pose off the table stays as it is.
+    Eigen::Isometry3d X_WorldObject = o.X_WorldSpawn;
+    const Eigen::Vector3d spawn = o.X_WorldSpawn.translation();
+    const bool on_table = spawn.head<2>().cwiseAbs().maxCoeff() <= kTableHalfExtent - kTableMargin;
+    if (const auto spot =
+            on_table ? free_spot(world_->object_model(object), spawn.x(), spawn.y(), object) : std::nullopt)
+      X_WorldObject.translation().head<2>() = *spot;
+    if (!world_->place_object(object, X_WorldObject)) continue;
+    std::cerr << "telegrasp-server: " << o.name << " (object " << id << ") fell off the table: put back "
+              << (X_WorldObject.translation() == spawn ? "where it was spawned"
+                                                       : "at the free spot nearest to where it was spawned")
+              << "\n";
+  }
+}
+
+std::optional<Eigen::Vector2d> SceneServer::free_spot(const sim::ObjectModel& model, double x, double y,
+                                                      sim::ObjectId ignored) const {
   // Footprints as circles about the centre of mass: the new object's horizontal reach (its
   // bounds turn with yaw), every other object's whole reach (it may lie in any orientation).
   const Eigen::Vector3d reach = model.p_ObjectMin.cwiseAbs().cwiseMax(model.p_ObjectMax.cwiseAbs());
-  const double radius = std::hypot(reach.x(), reach.y()), gap = 0.005, lim = kTableHalfExtent - 0.05;
+  const double radius = std::hypot(reach.x(), reach.y()), gap = 0.005, lim = kTableHalfExtent - kTableMargin;
   auto free = [&](const Eigen::Vector2d& p) {
     if (std::abs(p.x()) > lim || std::abs(p.y()) > lim) return false;
     for (sim::ObjectId id : world_->objects()) {
+      if (id == ignored) continue;
       const Eigen::Vector3d at = world_->object_pose(id).translation();
       if ((at.head<2>() - p).norm() < radius + world_->object_model(id).max_radius + gap) return false;
     }
@@ -327,7 +345,7 @@ std::pair<std::string, std::string> SceneServer::try_spawn(const msg::SceneComma
   }
   const sim::ObjectModel& model = *it->second;
   if (c.on_table()) {
-    const double lim = kTableHalfExtent - 0.05;
+    const double lim = kTableHalfExtent - kTableMargin;
     if (!std::isfinite(c.x()) || !std::isfinite(c.y()) || !std::isfinite(c.yaw()) || std::abs(c.x()) > lim ||
         std::abs(c.y()) > lim)
       return {"bad_pose", "spawn on the table needs finite x, y in [-" + std::to_string(lim) + ", " +

@@ -61,7 +61,10 @@ class SceneServer {
   /// The hand of a client, if present.
   std::optional<sim::HandId> hand_id(const HandAddress& hand) const;
   static constexpr double kTableHalfExtent = 2.0;
-  /// An object below this height fell off the table: it is put back where it was spawned.
+  /// Objects set down on the table keep their centre this far inside its edge, m.
+  static constexpr double kTableMargin = 0.05;
+  /// An object below this height fell off the table: it is put back where it was spawned, or at
+  /// the nearest free spot when another object now stands there.
   static constexpr double kFallenHeight = -1.0;
   /// How far from the requested spot a spawn on the table may be moved to a free one, m.
   static constexpr double kFreeSpotSearch = 0.5;
@@ -89,9 +92,12 @@ class SceneServer {
   /// The command's outcome: {"", ""} or {reason, detail}.
   std::pair<std::string, std::string> try_command(const msg::SceneCommand& command);
   std::pair<std::string, std::string> try_spawn(const msg::SceneCommand& command, bool is_operator);
-  /// The nearest spot on the table to (x, y) where `model` overlaps no object, if one is within
-  /// kFreeSpotSearch.
-  std::optional<Eigen::Vector2d> free_spot(const sim::ObjectModel& model, double x, double y) const;
+  /// The nearest spot on the table to (x, y) where `model` overlaps no object (but `ignored`), if
+  /// one is within kFreeSpotSearch.
+  std::optional<Eigen::Vector2d> free_spot(const sim::ObjectModel& model, double x, double y,
+                                           sim::ObjectId ignored = {}) const;
+  /// Puts the objects that fell off the table back (kFallenHeight).
+  void put_back_fallen();
   bool is_operator(const std::string& client_id) const;
   void remove_hand(std::map<HandAddress, Hand>::iterator it);
   void remove_object(sim::ObjectId id);

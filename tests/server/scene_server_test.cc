@@ -330,6 +330,59 @@ TEST_F(SceneServerTest, AnObjectThatFallsOffTheTableIsPutBack) {
   EXPECT_TRUE(scene->world().object_pose(sim::ObjectId(ball)).isApprox(X_spawn, 1e-3));  // the other one never moved
 }
 
+// An object that falls off the table while another one stands where it was spawned goes back at
+// the nearest free spot instead: placed into the other one, both would be pushed apart at metres
+// per second (a bot once saw a knife "moving at 39 m/s" after such a put-back).
+TEST_F(SceneServerTest, AFallenObjectIsPutBackClearOfWhatStandsAtItsSpawn) {
+  const int can = spawn("005_tomato_soup_can", 1.8, 0.0);
+  const sim::ObjectId can_id(can);
+  const Eigen::Vector3d spawned = scene->world().object_pose(can_id).translation();
+  // Alice takes the can, carries it past the table's edge and opens her hand there.
+  const sim::ObjectModel& model = scene->world().object_model(can_id);
+  sim::ScriptedOperator op(right, sim::skill_profile("perfect"), 7);
+  Eigen::Isometry3d start = Eigen::Isometry3d::Identity();
+  start.translation() = spawned + Eigen::Vector3d(-0.3, -0.2, 0.3);
+  op.begin(model, scene->world().object_pose(can_id), start, scene->world().time());
+  sim::ControllerInput in;
+  while (op.phase() != sim::OperatorPhase::kHold && scene->world().time() < 20) {
+    in = op.next(scene->world().time(), scene->world().holder(can_id).valid());
+    send("alice", 1, in);
+    tick();
+  }
+  ASSERT_TRUE(scene->world().holder(can_id).valid());
+  for (int i = 0; i < 90; ++i) {  // 0.5 m in +x over 1 s
+    in.X_WorldPalm.translation().x() += 0.5 / 90;
+    send("alice", 1, in);
+    tick();
+  }
+  ASSERT_TRUE(scene->world().holder(can_id).valid());
+  ASSERT_GT(scene->world().object_pose(can_id).translation().x(), SceneServer::kTableHalfExtent);
+  // Meanwhile a ball was set down where the can was spawned.
+  const int ball = spawn("056_tennis_ball", spawned.x(), spawned.y());
+  const sim::ObjectId ball_id(ball);
+  const Eigen::Vector3d ball_at = scene->world().object_pose(ball_id).translation();
+  ASSERT_LT((ball_at.head<2>() - spawned.head<2>()).norm(), 1e-9);
+  in.trigger = 0;
+  std::fill(in.curls.begin(), in.curls.end(), 0.0);
+  bool fell = false;
+  for (int i = 0; i < 90 * 3; ++i) {
+    send("alice", 1, in);
+    tick();
+    fell = fell || scene->world().object_pose(can_id).translation().z() < 0;
+  }
+  ASSERT_TRUE(fell);
+  const Eigen::Vector3d can_at = scene->world().object_pose(can_id).translation();
+  EXPECT_GT(can_at.z(), -0.01);  // back on the table
+  // Clear of the ball: the can's footprint (upright: its horizontal reach) and the ball's radius.
+  const Eigen::Vector3d reach = model.p_ObjectMin.cwiseAbs().cwiseMax(model.p_ObjectMax.cwiseAbs());
+  EXPECT_GE((can_at.head<2>() - ball_at.head<2>()).norm(),
+            std::hypot(reach.x(), reach.y()) + scene->world().object_model(ball_id).max_radius);
+  EXPECT_LT((can_at.head<2>() - spawned.head<2>()).norm(), SceneServer::kFreeSpotSearch);
+  EXPECT_LT((scene->world().object_pose(ball_id).translation() - ball_at).norm(), 1e-3);  // the ball never moved
+  EXPECT_LT(scene->world().object_velocity(can_id).norm(), 0.02);
+  EXPECT_LT(scene->world().object_velocity(ball_id).norm(), 0.02);
+}
+
 TEST(SceneServerResetTest, ResetRestoresTheConfiguredScene) {
   ServerSettings settings;
   settings.objects = {{"005_tomato_soup_can", 0.4, 0.0, 0.0}, {"056_tennis_ball", 0.6, 0.2, 0.5}};
