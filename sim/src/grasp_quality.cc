@@ -49,7 +49,7 @@ void tangents(const Eigen::Vector3d& n, Eigen::Vector3d& t1, Eigen::Vector3d& t2
 }
 
 // Affine dimension of the points is 6 (the columns of w, one wrench each).
-bool full_dimensional(const Eigen::Matrix<double, kDim, Eigen::Dynamic>& w) {
+bool full_dimensional(const Wrenches& w) {
   if (w.cols() <= kDim) return false;  // 6 points span at most 5 dimensions
   const Eigen::Matrix<double, kDim, 1> centroid = w.rowwise().mean();
   // The singular values of the centred wrenches are those of the 6x6 R of a QR factorisation of
@@ -64,18 +64,17 @@ bool full_dimensional(const Eigen::Matrix<double, kDim, Eigen::Dynamic>& w) {
 
 }  // namespace
 
-GraspQuality grasp_quality(std::span<const QualityContact> contacts, double mu, double torque_scale, int cone_edges) {
-  GraspQuality out;
+Wrenches contact_wrenches(std::span<const QualityContact> contacts, double mu, double torque_scale, int cone_edges) {
   if (!(mu >= 0) || !std::isfinite(mu) || !(torque_scale > 0) || !std::isfinite(torque_scale) || cone_edges < 1)
-    return out;
+    return Wrenches(kDim, 0);
   // Frictionless contacts push along their normal only: one wrench each.
   const int edges = mu > 0 ? cone_edges : 1;
-  Eigen::Matrix<double, kDim, Eigen::Dynamic> w(kDim, static_cast<Eigen::Index>(contacts.size()) * edges);
+  Wrenches w(kDim, static_cast<Eigen::Index>(contacts.size()) * edges);
   Eigen::Index col = 0;
   for (const QualityContact& c : contacts) {
-    if (!c.p.allFinite() || !c.n.allFinite()) return out;
+    if (!c.p.allFinite() || !c.n.allFinite()) return Wrenches(kDim, 0);
     const double norm = c.n.norm();
-    if (!(norm > 0)) return out;
+    if (!(norm > 0)) return Wrenches(kDim, 0);
     const Eigen::Vector3d n = c.n / norm;
     Eigen::Vector3d t1, t2;
     tangents(n, t1, t2);
@@ -88,6 +87,15 @@ GraspQuality grasp_quality(std::span<const QualityContact> contacts, double mu, 
       ++col;
     }
   }
+  return w;
+}
+
+GraspQuality grasp_quality(std::span<const QualityContact> contacts, double mu, double torque_scale, int cone_edges) {
+  return wrench_quality(contact_wrenches(contacts, mu, torque_scale, cone_edges));
+}
+
+GraspQuality wrench_quality(const Wrenches& w) {
+  GraspQuality out;
   if (!w.allFinite() || !full_dimensional(w)) return out;
 
   // First without merging ('Q0': about twice as fast on these inputs); on a precision error (flat
@@ -101,7 +109,10 @@ GraspQuality grasp_quality(std::span<const QualityContact> contacts, double mu, 
     qhT qh_storage;
     qhT* qh = &qh_storage;
     qh_zero(qh, err);
-    const int code = qh_new_qhull(qh, kDim, static_cast<int>(w.cols()), w.data(), False, command, nullptr, err);
+    // With these options (no scaling, rotation or joggle) Qhull only reads the points; ismalloc
+    // False: it does not free them either.
+    const int code =
+        qh_new_qhull(qh, kDim, static_cast<int>(w.cols()), const_cast<coordT*>(w.data()), False, command, nullptr, err);
     if (code == qh_ERRnone) {
       double nearest = std::numeric_limits<double>::infinity();
       facetT* facet;

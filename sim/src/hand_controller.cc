@@ -33,10 +33,21 @@ double distance_to_bounds(const ObjectModel& model, const Eigen::Vector3d& p) {
 // changes, and every contact left out saves a tenth to a half of Qhull's time. (Speed only.)
 constexpr double kQualityMergeDistance = 1e-3;
 constexpr double kQualityMergeCos = 0.999;
-// Contacts that moved less than this since the last hull keep its quality: the Qhull hull costs
-// milliseconds, and rounding (a two-hand hold re-attaching each tick) must not rebuild it.
-constexpr double kQualitySameDistance = 1e-6;  // m
-constexpr double kQualitySameNormal = 1e-6;
+// The qualities of the last few distinct wrench sets are kept: a Qhull hull costs milliseconds,
+// and a hold comes back to earlier contact sets (the fingers that blocked one by one as the
+// squeeze completed unblock in reverse order as the trigger is released). A set whose every
+// wrench lies within kQualitySameWrench of the same column of a kept set takes that set's
+// quality, so that rounding (a two-hand hold re-attaching each tick moves the contacts by
+// ~1e-17 m) does not rebuild the hull. Error bound: hand_controller.h, quality_hulls().
+constexpr std::size_t kQualityMemo = 8;
+constexpr double kQualitySameWrench = 1e-11;  // wrench units (forces per unit normal force)
+
+// Largest distance between corresponding wrenches; infinite when the sets differ in size.
+double wrench_distance(const Wrenches& a, const Wrenches& b) {
+  if (a.cols() != b.cols()) return kInf;
+  if (a.cols() == 0) return 0;
+  return (a - b).colwise().norm().maxCoeff();
+}
 
 // Blocked capsules lie within the contact tolerance (plus hysteresis) of the surface; searches
 // for their closest point need look no farther than this beyond the radius.
@@ -870,19 +881,22 @@ GraspQuality HandController::contact_quality() const {
     });
     if (!near_kept) kept.push_back({c.p_ObjectContact, c.n_Object});
   }
-  const bool same =
-      quality_model_ == held_model_ && kept.size() == quality_contacts_.size() &&
-      std::equal(kept.begin(), kept.end(), quality_contacts_.begin(),
-                 [](const QualityContact& a, const QualityContact& b) {
-                   return (a.p - b.p).norm() <= kQualitySameDistance && (a.n - b.n).norm() <= kQualitySameNormal;
-                 });
-  if (!same) {
-    const double mu = held_model_->friction.value_or(rig_->friction());
-    quality_ = grasp_quality(kept, mu, held_model_->max_radius);
-    quality_contacts_ = std::move(kept);
-    quality_model_ = held_model_;
+  const double mu = held_model_->friction.value_or(rig_->friction());
+  Wrenches wrenches = contact_wrenches(kept, mu, held_model_->max_radius);
+  // The quality is a pure function of the wrenches (friction and radius are in them), so a kept
+  // entry serves any object. Most recently used first.
+  auto it = std::find_if(quality_memo_.begin(), quality_memo_.end(), [&](const QualityMemo& m) {
+    return wrench_distance(m.wrenches, wrenches) <= kQualitySameWrench;
+  });
+  if (it == quality_memo_.end()) {
+    ++quality_hulls_;
+    const GraspQuality q = wrench_quality(wrenches);
+    if (quality_memo_.size() == kQualityMemo) quality_memo_.pop_back();
+    quality_memo_.insert(quality_memo_.begin(), QualityMemo{std::move(wrenches), q});
+  } else {
+    std::rotate(quality_memo_.begin(), it, it + 1);
   }
-  return quality_;
+  return quality_memo_.front().quality;
 }
 
 std::vector<Contact> HandController::contacts() const {

@@ -2,6 +2,13 @@
 // wrenches, epsilon and volume) for n contacts spread over a 4 cm sphere with radial normals
 // (seeded, 8 different sets cycled). BM_GraspQuality/held/<object>: the contacts of the human
 // hand holding a built-in stand-in after a full squeeze (as BM_HandTick's holding tick).
+// BM_GraspQualityTrial/<object>: one scripted trial of the human hand on a built-in stand-in in a
+// World (react, reach, squeeze, lift, hold 1 s, release; "experienced" operator, seed 3), asking
+// hold_metrics() on every held tick as the server does. Counters per trial: held_ticks, hulls
+// (HandController::quality_hulls(): the Qhull runs), hulls_per_held_tick, distinct_sets (the
+// distinct contact sets held, the least any cache can do), last_only_hulls (what reusing only
+// the last hull's quality, for contacts within 1e-6 m and 1e-6 of it, would build: the rule before
+// the hand kept several) and hold_ms (CPU time in hold_metrics(): every hull but the grasp tick's).
 #include "telegrasp/sim/grasp_quality.h"
 #include "telegrasp/sim/hand_controller.h"
 #include "telegrasp/sim/scripted_operator.h"
@@ -11,6 +18,8 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <chrono>
+#include <ctime>
 #include <random>
 #include <string>
 #include <vector>
@@ -66,11 +75,94 @@ void BM_GraspQualityHeld(benchmark::State& state, const std::string& object) {
   state.counters["epsilon"] = q.epsilon;
 }
 
+// The contacts the quality is taken of: those farther than 1 mm or 2.6 degrees from every one kept
+// before them (HandController::quality_hulls()).
+std::vector<QualityContact> merged_contacts(const HandController& hand) {
+  std::vector<QualityContact> kept;
+  for (const Contact& c : hand.contacts()) {
+    const bool near = std::any_of(kept.begin(), kept.end(), [&](const QualityContact& k) {
+      return (k.p - c.p_ObjectContact).norm() < 1e-3 && k.n.dot(c.n_Object) > 0.999;
+    });
+    if (!near) kept.push_back({c.p_ObjectContact, c.n_Object});
+  }
+  return kept;
+}
+
+bool same_contacts(const std::vector<QualityContact>& a, const std::vector<QualityContact>& b, double tolerance) {
+  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [&](const auto& x, const auto& y) {
+           return (x.p - y.p).norm() <= tolerance && (x.n - y.n).norm() <= tolerance;
+         });
+}
+
+double cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+void BM_GraspQualityTrial(benchmark::State& state, const std::string& object) {
+  static const auto rig = std::make_shared<const HandRig>(HandRig::load(HandRig::builtin_path("human_right")));
+  const ObjectModelPtr model = make_standin_model(*find_protocol_object(object));
+  int held = 0, distinct = 0, last_only = 0;
+  std::uint64_t hulls = 0;
+  double hold_s = 0;
+  for (auto _ : state) {
+    World world;
+    const ObjectId id = world.add_object(model, World::resting_pose(*model, 0.45, 0.02, 0.5));
+    const HandId hand_id = world.add_hand(rig);
+    for (int i = 0; i < 30; ++i) world.step();
+    ScriptedOperator op(rig, skill_profile("experienced"), 3);
+    op.begin(*model, world.object_pose(id), Eigen::Isometry3d(Eigen::Translation3d(0.15, -0.2, 0.3)), world.time());
+    std::vector<std::vector<QualityContact>> seen;
+    std::vector<QualityContact> last_hull;
+    bool have_last = false;
+    held = distinct = last_only = 0;
+    hold_s = 0;
+    while (!op.done() && world.time() < 20) {
+      world.set_input(hand_id, op.next(world.time(), world.holder(id) == hand_id));
+      world.step();
+      const HandController& hand = world.hand(hand_id);
+      if (!hand.state().grasped.valid()) {
+        have_last = false;
+        continue;
+      }
+      const double t1 = cpu_seconds();
+      benchmark::DoNotOptimize(hand.hold_metrics());
+      hold_s += cpu_seconds() - t1;
+      ++held;
+      state.PauseTiming();
+      const std::vector<QualityContact> kept = merged_contacts(hand);
+      if (std::none_of(seen.begin(), seen.end(), [&](const auto& s) { return same_contacts(s, kept, 0); })) {
+        seen.push_back(kept);
+      }
+      if (!have_last || !same_contacts(kept, last_hull, 1e-6)) {
+        ++last_only;
+        last_hull = kept;
+        have_last = true;
+      }
+      state.ResumeTiming();
+    }
+    distinct = static_cast<int>(seen.size());
+    hulls = world.hand(hand_id).quality_hulls();
+  }
+  state.counters["held_ticks"] = held;
+  state.counters["hulls"] = static_cast<double>(hulls);
+  state.counters["hulls_per_held_tick"] = held ? static_cast<double>(hulls) / held : 0.0;
+  state.counters["distinct_sets"] = distinct;
+  state.counters["last_only_hulls"] = last_only;
+  state.counters["hold_ms"] = 1e3 * hold_s;
+}
+
 const bool registered = [] {
   for (const char* object : {"006_mustard_bottle", "011_banana", "013_apple", "035_power_drill"})
     benchmark::RegisterBenchmark((std::string("BM_GraspQuality/held/") + object).c_str(), BM_GraspQualityHeld,
                                  std::string(object))
         ->Unit(benchmark::kMicrosecond);
+  for (const char* object : {"002_master_chef_can", "005_tomato_soup_can", "006_mustard_bottle", "013_apple"})
+    benchmark::RegisterBenchmark((std::string("BM_GraspQualityTrial/") + object).c_str(), BM_GraspQualityTrial,
+                                 std::string(object))
+        ->Unit(benchmark::kMillisecond)
+        ->Iterations(2);
   return true;
 }();
 

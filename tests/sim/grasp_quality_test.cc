@@ -276,6 +276,82 @@ TEST(GraspQuality, DegenerateInputsGiveZeroQuietly) {
   expect_zero(quiet_quality(twelve_on_cube(0.5), std::numeric_limits<double>::infinity(), 1.0));
 }
 
+// n contacts on a sphere of radius r about the centre of mass, normals radial (seeded).
+Contacts on_sphere(int n, double r, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> gauss;
+  Contacts c;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d d = Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)).normalized();
+    c.push_back({r * d, d});
+  }
+  return c;
+}
+
+// contact_wrenches: one column per cone edge (one per contact without friction), each a unit push
+// along -n plus a friction force of size mu across n, its torque p x f over the torque scale;
+// grasp_quality is the hull's quality of exactly these, bit for bit.
+TEST(GraspQuality, IsTheQualityOfTheContactWrenches) {
+  const Contacts c = on_sphere(6, 0.04, 5);
+  for (double mu : {0.0, 0.5}) {
+    const Wrenches w = contact_wrenches(c, mu, 0.04);
+    const int edges = mu > 0 ? 8 : 1;
+    ASSERT_EQ(w.cols(), 6 * edges);
+    for (Eigen::Index col = 0; col < w.cols(); ++col) {
+      const QualityContact& k = c[col / edges];
+      const Eigen::Vector3d f = w.col(col).head<3>();
+      EXPECT_NEAR(f.dot(k.n), -1.0, 1e-12);
+      EXPECT_NEAR((f + k.n).norm(), mu, 1e-12);
+      EXPECT_NEAR((w.col(col).tail<3>() - k.p.cross(f) / 0.04).norm(), 0.0, 1e-12);
+    }
+    const GraspQuality direct = grasp_quality(c, mu, 0.04), hull = wrench_quality(w);
+    EXPECT_EQ(direct.epsilon, hull.epsilon);
+    EXPECT_EQ(direct.volume, hull.volume);
+    EXPECT_EQ(direct.force_closure, hull.force_closure);
+  }
+  EXPECT_GT(wrench_quality(contact_wrenches(c, 0.5, 0.04)).volume, 0.0);
+  // Degenerate inputs have no wrenches, and no wrenches no quality.
+  EXPECT_EQ(contact_wrenches({}, 0.5, 0.1).cols(), 0);
+  Contacts bad = c;
+  bad[2].n.setZero();
+  EXPECT_EQ(contact_wrenches(bad, 0.5, 0.1).cols(), 0);
+  EXPECT_EQ(contact_wrenches(c, -0.5, 0.1).cols(), 0);
+  EXPECT_EQ(contact_wrenches(c, 0.5, 0.0).cols(), 0);
+  expect_zero(wrench_quality(Wrenches(6, 0)));
+}
+
+// The bound under which HandController reuses a hull's quality (hand_controller.h,
+// quality_hulls()): moving no wrench by more than d moves epsilon by at most d (plus the 1e-12
+// closure threshold) and the volume by at most kappa6 ((R + d)^6 - R^6), R the largest wrench norm.
+TEST(GraspQuality, MovingTheWrenchesByDMovesTheQualityWithinTheBound) {
+  const double kappa6 = kPi * kPi * kPi / 6;  // volume of the unit 6-ball
+  constexpr double kRounding = 1e-12;  // Qhull's, on wrenches of norm ~1
+  std::mt19937 rng(7);
+  std::normal_distribution<double> gauss;
+  int closures = 0, moved_epsilons = 0;
+  for (int trial = 0; trial < 12; ++trial) {
+    const Wrenches w = contact_wrenches(on_sphere(5 + trial % 4, 0.04, 100 + trial), 0.5, 0.04);
+    const GraspQuality q = wrench_quality(w);
+    closures += q.force_closure;
+    for (double d : {1e-11, 1e-6, 1e-3}) {
+      Wrenches moved = w;
+      for (Eigen::Index j = 0; j < moved.cols(); ++j) {
+        Eigen::Matrix<double, 6, 1> dir;
+        for (int r = 0; r < 6; ++r) dir[r] = gauss(rng);
+        moved.col(j) += d * dir.normalized();
+      }
+      const GraspQuality m = wrench_quality(moved);
+      const double R = std::max(w.colwise().norm().maxCoeff(), moved.colwise().norm().maxCoeff());
+      EXPECT_LE(std::abs(m.epsilon - q.epsilon), d + 1e-12 + kRounding) << trial << " " << d;
+      EXPECT_LE(std::abs(m.volume - q.volume), kappa6 * (std::pow(R + d, 6) - std::pow(R, 6)) + kRounding)
+          << trial << " " << d;
+      moved_epsilons += d == 1e-3 && m.epsilon != q.epsilon;
+    }
+  }
+  EXPECT_GE(closures, 6);  // the bound is exercised on grasps with closure
+  EXPECT_GE(moved_epsilons, 6);  // and the moves do move epsilon
+}
+
 TEST(GraspQuality, DuplicateContactsChangeNothing) {
   // Each contact three times over: the same hull, so the same epsilon and volume.
   Contacts c;

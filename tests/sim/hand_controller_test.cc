@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -569,6 +570,127 @@ TEST(HandControllerTest, GraspQualityIsThatOfTheContacts) {
       EXPECT_EQ(held.volume, 0.0);  // frictionless: one wrench per contact, 7 needed to span 6-D
     }
   }
+}
+
+// The contacts the grasp quality is taken of (hand_controller.h, quality_hulls()): each contact
+// farther than 1 mm or 2.6 degrees (normals' cosine 0.999) from every one kept before it.
+std::vector<QualityContact> quality_contacts(const HandController& hand) {
+  std::vector<QualityContact> kept;
+  for (const Contact& c : hand.contacts()) {
+    const bool near = std::any_of(kept.begin(), kept.end(), [&](const QualityContact& k) {
+      return (k.p - c.p_ObjectContact).norm() < 1e-3 && k.n.dot(c.n_Object) > 0.999;
+    });
+    if (!near) kept.push_back({c.p_ObjectContact, c.n_Object});
+  }
+  return kept;
+}
+
+bool bit_identical(const std::vector<QualityContact>& a, const std::vector<QualityContact>& b) {
+  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(),
+                                            [](const auto& x, const auto& y) { return x.p == y.p && x.n == y.n; });
+}
+
+// A scripted trial as a bot runs it (reach, squeeze, lift, hold 1 s, release), asking the hold
+// quality every tick as the server does: every held tick's quality is exactly a fresh
+// grasp_quality() of the current contacts, and the hand builds one hull per distinct contact set
+// held, none while the hold is steady; the release, unblocking the fingers that blocked during
+// the lift, comes back to contact sets held before and reuses their hulls.
+TEST(HandControllerTest, HoldQualityIsAFreshHullOfTheContactsAndOneHullPerContactSet) {
+  auto rig = std::make_shared<const HandRig>(HandRig::load(HandRig::builtin_path("human_right")));
+  const ObjectModelPtr model = make_standin_model(*find_protocol_object("005_tomato_soup_can"));
+  World world;
+  const ObjectId id = world.add_object(model, World::resting_pose(*model, 0.45, 0.02, 0.5));
+  const HandId hand_id = world.add_hand(rig);
+  for (int i = 0; i < 30; ++i) world.step();
+  ScriptedOperator op(rig, skill_profile("experienced"), 3);
+  op.begin(*model, world.object_pose(id), Eigen::Isometry3d(Eigen::Translation3d(0.15, -0.2, 0.3)), world.time());
+  const double mu = model->friction.value_or(rig->friction());
+  std::vector<std::vector<QualityContact>> distinct;
+  std::vector<QualityContact> previous;
+  int held = 0, set_changes = 0;
+  std::optional<std::uint64_t> hulls_at_hold;
+  while (!op.done() && world.time() < 20) {
+    world.set_input(hand_id, op.next(world.time(), world.holder(id) == hand_id));
+    world.step();
+    const HandController& hand = world.hand(hand_id);
+    const auto metrics = hand.hold_metrics();
+    if (!metrics) continue;
+    ++held;
+    const std::vector<QualityContact> kept = quality_contacts(hand);
+    const GraspQuality fresh = grasp_quality(kept, mu, model->max_radius);
+    EXPECT_EQ(metrics->quality.epsilon, fresh.epsilon) << "tick " << world.tick();
+    EXPECT_EQ(metrics->quality.volume, fresh.volume) << "tick " << world.tick();
+    EXPECT_EQ(metrics->quality.force_closure, fresh.force_closure);
+    if (std::none_of(distinct.begin(), distinct.end(), [&](const auto& d) { return bit_identical(d, kept); }))
+      distinct.push_back(kept);
+    set_changes += !bit_identical(kept, previous);
+    previous = kept;
+    if (op.phase() == OperatorPhase::kHold) {
+      if (!hulls_at_hold) hulls_at_hold = hand.quality_hulls();
+      EXPECT_EQ(hand.quality_hulls(), *hulls_at_hold) << "a steady hold builds no hull";
+    }
+  }
+  EXPECT_TRUE(op.held_after_lift());
+  EXPECT_GT(held, 100);
+  ASSERT_TRUE(hulls_at_hold.has_value());
+  EXPECT_EQ(world.hand(hand_id).quality_hulls(), distinct.size());
+  EXPECT_GT(set_changes, static_cast<int>(distinct.size())) << "the release comes back to earlier contact sets";
+}
+
+// Two hands holding a long box re-attach to it every tick. While they rise together their
+// contacts move by rounding only: no hull is rebuilt, and the quality stays within the bound of
+// hand_controller.h (quality_hulls()) of a fresh hull. Pulled apart, the hands slide along the
+// box: the contacts really move, and each tick builds a hull per hand.
+TEST(HandControllerTest, TwoHandHoldRebuildsTheHullOnlyWhenTheContactsMove) {
+  auto rig = std::make_shared<const HandRig>(HandRig::load(HandRig::builtin_path("human_right")));
+  const ObjectModelPtr model = make_object_model("long_box", box_mesh({0.3, 0.04, 0.04}), 0.5, "test");
+  World world;
+  const ObjectId box = world.add_object(model, World::resting_pose(*model, 0.4, 0.0, 0.0));
+  const HandId a = world.add_hand(rig), b = world.add_hand(rig);
+  for (int i = 0; i < 30; ++i) world.step();
+  const GraspPlan plan = plan_grasp(rig, {}, *model, world.object_pose(box), world.dt());
+  const Eigen::Isometry3d Xa = Eigen::Translation3d(-0.2, 0, 0) * plan.X_WorldPalm;
+  const Eigen::Isometry3d Xb = Eigen::Translation3d(0.2, 0, 0) * plan.X_WorldPalm;
+  auto step = [&](const Eigen::Vector3d& up, double apart, double trigger) {
+    ControllerInput in;
+    in.trigger = trigger;
+    in.X_WorldPalm = Eigen::Translation3d(up - Eigen::Vector3d(apart, 0, 0)) * Xa;
+    ASSERT_EQ(world.set_input(a, in), "");
+    in.X_WorldPalm = Eigen::Translation3d(up + Eigen::Vector3d(apart, 0, 0)) * Xb;
+    ASSERT_EQ(world.set_input(b, in), "");
+    world.step();
+    for (HandId h : {a, b}) world.hand(h).hold_metrics();
+  };
+  for (int t = 1; t <= 60; ++t) step({0, 0, 0}, 0, std::min(1.0, t / 30.0));
+  ASSERT_EQ(world.holders(box).size(), 2u);
+  const double mu = model->friction.value_or(rig->friction());
+  const double kappa6 = std::pow(std::numbers::pi, 3) / 6;
+  const std::uint64_t hulls_a = world.hand(a).quality_hulls(), hulls_b = world.hand(b).quality_hulls();
+  const std::vector<QualityContact> before_a = quality_contacts(world.hand(a)),
+                                    before_b = quality_contacts(world.hand(b));
+  int rounded = 0;  // ticks on which rounding moved some contact
+  for (int t = 1; t <= 90; ++t) {
+    step({0, 0, 0.1 * t / 90}, 0, 1);
+    rounded += !bit_identical(quality_contacts(world.hand(a)), before_a) ||
+               !bit_identical(quality_contacts(world.hand(b)), before_b);
+  }
+  ASSERT_EQ(world.holders(box).size(), 2u);
+  EXPECT_EQ(world.hand(a).quality_hulls(), hulls_a);
+  EXPECT_EQ(world.hand(b).quality_hulls(), hulls_b);
+  EXPECT_GT(rounded, 0) << "rounding did move the contacts";
+  for (HandId h : {a, b}) {
+    const std::vector<QualityContact> kept = quality_contacts(world.hand(h));
+    const Wrenches w = contact_wrenches(kept, mu, model->max_radius);
+    const GraspQuality fresh = wrench_quality(w), held = world.hand(h).hold_metrics()->quality;
+    const double d = 1e-11, R = w.colwise().norm().maxCoeff() + d;
+    EXPECT_LE(std::abs(held.epsilon - fresh.epsilon), d + 1e-12);
+    EXPECT_LE(std::abs(held.volume - fresh.volume), kappa6 * (std::pow(R + d, 6) - std::pow(R, 6)));
+    EXPECT_GT(fresh.volume, 0.0);
+  }
+  for (int t = 1; t <= 30; ++t) step({0, 0, 0.1}, 0.02 * t / 30, 1);
+  ASSERT_EQ(world.holders(box).size(), 2u);
+  EXPECT_GE(world.hand(a).quality_hulls(), hulls_a + 25);
+  EXPECT_GE(world.hand(b).quality_hulls(), hulls_b + 25);
 }
 
 // The closing modes' names, as flags, configuration files and records write them, read back.

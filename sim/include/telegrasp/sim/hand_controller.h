@@ -152,6 +152,21 @@ class HandController {
   /// ND and signed distances of the hand as it is now while holding (the statistics kept while
   /// the object is held; the grasp tick's are in grasp_metrics()); empty when not holding.
   std::optional<GraspMetrics> hold_metrics() const;
+  /// How many grasp-quality hulls (wrench_quality(): a Qhull run of milliseconds) this hand has
+  /// built. The quality of the grasp tick and of hold_metrics() is that of the current contacts'
+  /// wrenches W (contact_wrenches() of the contacts, less those within 1 mm and 2.6 degrees of one
+  /// kept before them); a hull is built only when W is farther than d = 1e-11 from each of the 8
+  /// wrench sets used last (distance: same column count, largest distance between corresponding
+  /// columns), else that set's quality is returned. Bound on a reused quality's error: the two
+  /// hulls are within Hausdorff distance d, and epsilon is 1-Lipschitz in it, so epsilon is off by
+  /// at most d + 1e-12 (1e-12: the least epsilon reported as closure); the volumes differ by at
+  /// most kappa6 ((R + d)^6 - R^6) ~ 31 R^5 d (Steiner's formula for V(K + dB), each
+  /// quermassintegral of K at most that of the ball B_R holding it; kappa6 = pi^3 / 6, R the
+  /// largest wrench norm, <= sqrt(2 (1 + mu^2)) as contacts lie within the torque scale of the
+  /// centre of mass): about 1e-8 for mu <= 1. Except where grasp_quality() itself jumps (a set at
+  /// its flatness threshold gives all zero). A one-hand hold recomputes a contact set's wrenches
+  /// bit-identically, so it reuses exact matches only; d absorbs the rounding of two-hand holds.
+  std::uint64_t quality_hulls() const { return quality_hulls_; }
   /// World pose of the grasped object, if any.
   std::optional<Eigen::Isometry3d> grasped_object_pose() const;
   /// Keeps holding the grasped object where it now is (the World moves an object two hands hold):
@@ -188,7 +203,7 @@ class HandController {
   void block(int id);
   void refresh_contacts() const;
   // Grasp quality (GRASPING.md section 4b) of contacts_ with the held object's friction, else the
-  // rig's; recomputed only when the contacts or the object change.
+  // rig's; a hull is built only for wrenches unlike those of the last few hulls (quality_hulls()).
   GraspQuality contact_quality() const;
   // Exact closest pair between capsule `id`'s segment [a, b] (object frame) and the object's mesh:
   // the cached one while the capsule has not moved since, else searched within `reach` first (a
@@ -211,9 +226,13 @@ class HandController {
   mutable std::vector<double> contacts_key_;
   mutable std::optional<GraspMetrics> hold_metrics_;
   mutable std::vector<double> hold_metrics_key_;
-  mutable std::vector<QualityContact> quality_contacts_;  // what quality_ was computed from
-  mutable const ObjectModel* quality_model_ = nullptr;
-  mutable GraspQuality quality_;
+  // Qualities of the last distinct wrench sets (most recently used first), and hulls built.
+  struct QualityMemo {
+    Wrenches wrenches;
+    GraspQuality quality;
+  };
+  mutable std::vector<QualityMemo> quality_memo_;
+  mutable std::uint64_t quality_hulls_ = 0;
   // reach_[k][m]: bound on the distance from joint k to any point of capsule m's segment.
   std::vector<std::vector<double>> reach_;
   // Per phalanx, the triangle last found nearest to its capsule: a search hint (speed only).
