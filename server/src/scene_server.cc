@@ -283,19 +283,20 @@ bool SceneServer::is_operator(const std::string& client_id) const {
 void SceneServer::put_back_fallen() {
   for (auto& [id, o] : objects_) {
     const sim::ObjectId object(id);
-    if (world_->object_pose(object).translation().z() >= kFallenHeight) continue;
+    if (world_->object_pose(object).translation().z() >= kFallenHeight || world_->holder(object).valid()) continue;
     // Another object may have come to rest where this one was spawned: placed into it, Bullet
     // would push the two apart at metres per second. A spawn pose off the table stays as it is.
     Eigen::Isometry3d X_WorldObject = o.X_WorldSpawn;
     const Eigen::Vector3d spawn = o.X_WorldSpawn.translation();
     const bool on_table = spawn.head<2>().cwiseAbs().maxCoeff() <= kTableHalfExtent - kTableMargin;
-    if (const auto spot =
-            on_table ? free_spot(world_->object_model(object), spawn.x(), spawn.y(), object) : std::nullopt)
-      X_WorldObject.translation().head<2>() = *spot;
+    const auto spot = on_table ? free_spot(world_->object_model(object), spawn.x(), spawn.y(), object) : std::nullopt;
+    if (spot) X_WorldObject.translation().head<2>() = *spot;
     if (!world_->place_object(object, X_WorldObject)) continue;
     std::cerr << "telegrasp-server: " << o.name << " (object " << id << ") fell off the table: put back "
-              << (X_WorldObject.translation() == spawn ? "where it was spawned"
-                                                       : "at the free spot nearest to where it was spawned")
+              << (!on_table || (spot && *spot == spawn.head<2>()) ? "where it was spawned"
+                  : spot                                          ? "at the free spot nearest to where it was spawned"
+                         : "where it was spawned, though no spot within " + std::to_string(kFreeSpotSearch) +
+                               " m of it is free")
               << "\n";
   }
 }

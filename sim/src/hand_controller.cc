@@ -871,16 +871,21 @@ void HandController::refresh_contacts() const {
   }
 }
 
-GraspQuality HandController::contact_quality() const {
+std::vector<QualityContact> HandController::quality_contacts(std::span<const Contact> contacts) {
   std::vector<QualityContact> kept;
-  kept.reserve(contacts_.size());
-  for (const Contact& c : contacts_) {
+  kept.reserve(contacts.size());
+  for (const Contact& c : contacts) {
     if (!c.p_ObjectContact.allFinite() || !c.n_Object.allFinite() || !(c.n_Object.norm() > 0.5)) continue;
     const bool near_kept = std::any_of(kept.begin(), kept.end(), [&](const QualityContact& k) {
       return (k.p - c.p_ObjectContact).norm() < kQualityMergeDistance && k.n.dot(c.n_Object) > kQualityMergeCos;
     });
     if (!near_kept) kept.push_back({c.p_ObjectContact, c.n_Object});
   }
+  return kept;
+}
+
+GraspQuality HandController::contact_quality() const {
+  const std::vector<QualityContact> kept = quality_contacts(contacts_);
   const double mu = held_model_->friction.value_or(rig_->friction());
   Wrenches wrenches = contact_wrenches(kept, mu, held_model_->max_radius);
   // The quality is a pure function of the wrenches (friction and radius are in them), so a kept

@@ -75,19 +75,6 @@ void BM_GraspQualityHeld(benchmark::State& state, const std::string& object) {
   state.counters["epsilon"] = q.epsilon;
 }
 
-// The contacts the quality is taken of: those farther than 1 mm or 2.6 degrees from every one kept
-// before them (HandController::quality_hulls()).
-std::vector<QualityContact> merged_contacts(const HandController& hand) {
-  std::vector<QualityContact> kept;
-  for (const Contact& c : hand.contacts()) {
-    const bool near = std::any_of(kept.begin(), kept.end(), [&](const QualityContact& k) {
-      return (k.p - c.p_ObjectContact).norm() < 1e-3 && k.n.dot(c.n_Object) > 0.999;
-    });
-    if (!near) kept.push_back({c.p_ObjectContact, c.n_Object});
-  }
-  return kept;
-}
-
 bool same_contacts(const std::vector<QualityContact>& a, const std::vector<QualityContact>& b, double tolerance) {
   return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [&](const auto& x, const auto& y) {
            return (x.p - y.p).norm() <= tolerance && (x.n - y.n).norm() <= tolerance;
@@ -131,7 +118,7 @@ void BM_GraspQualityTrial(benchmark::State& state, const std::string& object) {
       hold_s += cpu_seconds() - t1;
       ++held;
       state.PauseTiming();
-      const std::vector<QualityContact> kept = merged_contacts(hand);
+      const std::vector<QualityContact> kept = HandController::quality_contacts(hand.contacts());
       if (std::none_of(seen.begin(), seen.end(), [&](const auto& s) { return same_contacts(s, kept, 0); })) {
         seen.push_back(kept);
       }

@@ -572,17 +572,8 @@ TEST(HandControllerTest, GraspQualityIsThatOfTheContacts) {
   }
 }
 
-// The contacts the grasp quality is taken of (hand_controller.h, quality_hulls()): each contact
-// farther than 1 mm or 2.6 degrees (normals' cosine 0.999) from every one kept before it.
 std::vector<QualityContact> quality_contacts(const HandController& hand) {
-  std::vector<QualityContact> kept;
-  for (const Contact& c : hand.contacts()) {
-    const bool near = std::any_of(kept.begin(), kept.end(), [&](const QualityContact& k) {
-      return (k.p - c.p_ObjectContact).norm() < 1e-3 && k.n.dot(c.n_Object) > 0.999;
-    });
-    if (!near) kept.push_back({c.p_ObjectContact, c.n_Object});
-  }
-  return kept;
+  return HandController::quality_contacts(hand.contacts());
 }
 
 bool bit_identical(const std::vector<QualityContact>& a, const std::vector<QualityContact>& b) {

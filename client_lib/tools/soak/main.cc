@@ -59,8 +59,8 @@ and the RSS by less than --max-rss-growth-pct over the samples after the warm-up
 two ways (last sample against the first after warm-up, and a least-squares line through them
 over the same span); all must stay under their limits. The RSS has the looser limit because it
 keeps the heap's high-water mark: a rare large grasp-quality hull raises it for good, with no
-leak. A server that reports no heap (a sanitizer build) is judged on its RSS with
---max-growth-pct.
+leak. A server that reports no heap (an older one, or a sanitizer build, whose RSS grows anyway
+as freed memory waits in quarantine) is judged on its RSS with --max-growth-pct.
 
 Options:
   --hands N           hands grasping at once, 1..1024 (required)
@@ -371,7 +371,8 @@ int main(int argc, char** argv) {
             << server_pid << ", " << opt.minutes << " min, a sample every " << opt.sample_s << " s\n";
 
   json samples = json::array();
-  std::vector<double> t_judged, rss_judged, heap_judged;  // heap_judged: while every status had it
+  std::vector<double> t_judged, rss_judged;
+  std::vector<double> t_heap, heap_judged;  // the samples whose period had a status with the heap
   const auto t0 = Clock::now();
   const auto end = t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(60 * opt.minutes));
   auto next_sample = t0;
@@ -427,8 +428,7 @@ int main(int argc, char** argv) {
       restarts = 0;
       std::cerr << "telegrasp-soak: " << s.dump() << "\n";
       if (t >= opt.warmup_s) {
-        if (heap_judged.size() == t_judged.size() && s["heap_kib"].is_number())
-          heap_judged.push_back(s["heap_kib"].get<double>());
+        if (s["heap_kib"].is_number()) t_heap.push_back(t), heap_judged.push_back(s["heap_kib"].get<double>());
         t_judged.push_back(t), rss_judged.push_back(static_cast<double>(*rss));
       }
       samples.push_back(std::move(s));
@@ -451,12 +451,14 @@ int main(int argc, char** argv) {
   if (rss_judged.size() >= 2) {
     // A leak shows in the heap in use. The resident set also keeps the heap's high-water mark
     // (pages the allocator cannot give back), so it is held to the looser --max-rss-growth-pct;
-    // it has the tighter limit only when the server does not report its heap.
-    const bool heap = heap_judged.size() == t_judged.size();
+    // it has the tighter limit only when the server does not report its heap. A sample whose
+    // period brought no status (a stalled server, lost samples) has no heap figure: skipped.
+    const bool heap = heap_judged.size() >= 2;
     verdict = {{"judged_samples", rss_judged.size()},
                {"judged_from_s", t_judged.front()},
-               {"judged_on", heap ? "heap and rss" : "rss (the server reports no heap)"},
-               {"heap", heap ? growth(t_judged, heap_judged, opt.max_growth_pct) : json(nullptr)},
+               {"judged_on", heap ? "heap and rss" : "rss (the server reported no heap)"},
+               {"heap_samples_missing", t_judged.size() - heap_judged.size()},
+               {"heap", heap ? growth(t_heap, heap_judged, opt.max_growth_pct) : json(nullptr)},
                {"rss", growth(t_judged, rss_judged, heap ? opt.max_rss_growth_pct : opt.max_growth_pct)}};
     flat = verdict["rss"]["flat"].get<bool>() && (!heap || verdict["heap"]["flat"].get<bool>());
     verdict["flat_memory"] = flat;

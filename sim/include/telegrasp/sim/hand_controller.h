@@ -167,6 +167,9 @@ class HandController {
   /// its flatness threshold gives all zero). A one-hand hold recomputes a contact set's wrenches
   /// bit-identically, so it reuses exact matches only; d absorbs the rounding of two-hand holds.
   std::uint64_t quality_hulls() const { return quality_hulls_; }
+  /// The contacts the grasp quality is taken of (object frame): `contacts` (those of contacts())
+  /// less any not finite and those within 1 mm and 2.6 degrees of one kept before them.
+  static std::vector<QualityContact> quality_contacts(std::span<const Contact> contacts);
   /// World pose of the grasped object, if any.
   std::optional<Eigen::Isometry3d> grasped_object_pose() const;
   /// Keeps holding the grasped object where it now is (the World moves an object two hands hold):
