@@ -177,6 +177,16 @@ now() { date +%s.%N; }
 since() { awk -v a="$1" -v b="$(now)" 'BEGIN { printf "%.2f", b - a }'; }
 diff_s() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", b - a }'; }
 say() { echo "$me: $*" >&2; }
+# poll_until SECONDS COMMAND...: runs COMMAND every 0.2 s until it succeeds (0) or SECONDS pass (1).
+poll_until() {
+  local deadline=$(($(date +%s) + $1))
+  shift
+  while [ "$(date +%s)" -lt "$deadline" ]; do
+    "$@" && return 0
+    sleep 0.2
+  done
+  return 1
+}
 check() {  # check PASS|FAIL "(x) what" "figures"
   printf '%s %s: %s\n' "$1" "$2" "$3"
   [ "$1" = PASS ] || passed=""
@@ -399,17 +409,16 @@ lines_of() { wc -l <"$(echo_file "$1")"; }
 # Time to join (the bot's first hand skeleton in its scene's echo: it found the server and the server
 # found it) and to its first grasp, of every bot at once.
 declare -A joined=() grasped=()
-deadline=$(($(date +%s) + 60))
-while [ "$(date +%s)" -lt "$deadline" ]; do
-  waiting=""
+every_bot_joined_and_grasped() {
+  local id waiting=""
   for id in "${bot_ids[@]}"; do
     [ -z "${joined[$id]:-}" ] && joined[$id]="$(wait_line "${bot_scene[$id]}" 0 "HandSkeleton $id " "${bot_start[$id]}" 0)"
     [ -z "${grasped[$id]:-}" ] && grasped[$id]="$(wait_line "${bot_scene[$id]}" 0 "GraspEvent $id grasp" "${bot_start[$id]}" 0)"
     [ -n "${joined[$id]}" ] && [ -n "${grasped[$id]}" ] || waiting=1
   done
-  [ -z "$waiting" ] && break
-  sleep 0.2
-done
+  [ -z "$waiting" ]
+}
+poll_until 60 every_bot_joined_and_grasped || true
 join_figures=""
 for id in "${bot_ids[@]}"; do join_figures+="$id joined ${joined[$id]:-never} s, first grasp ${grasped[$id]:-never} s; "; done
 say "after a bot starts: $join_figures"
@@ -456,9 +465,8 @@ say "killed srv1 ($(scene_name 1)); started it on host spare $(diff_s "$t_srv1_k
 # first skeleton from the new server), at once.
 declare -A rejoined=()
 late_joined=""
-deadline=$(($(date +%s) + 60))
-while [ "$(date +%s)" -lt "$deadline" ]; do
-  waiting=""
+late_joined_and_moved_scene_rejoined() {
+  local id waiting=""
   [ -z "$late_joined" ] && late_joined="$(wait_line "$late_scene" 0 "HandSkeleton $late_id " "${bot_start[$late_id]}" 0)"
   [ -n "$late_joined" ] || waiting=1
   for id in "${bot_ids[@]}"; do
@@ -466,9 +474,9 @@ while [ "$(date +%s)" -lt "$deadline" ]; do
     [ -z "${rejoined[$id]:-}" ] && rejoined[$id]="$(wait_line 1 "$t_moved" "HandSkeleton $id " "$t_moved" 0)"
     [ -n "${rejoined[$id]}" ] || waiting=1
   done
-  [ -z "$waiting" ] && break
-  sleep 0.2
-done
+  [ -z "$waiting" ]
+}
+poll_until 60 late_joined_and_moved_scene_rejoined || true
 rejoin=""
 for id in "${!rejoined[@]}"; do rejoin+="$id ${rejoined[$id]:-never} s after the new server started; "; done
 say "$late_id joined ${late_joined:-never} s after its start; time to rejoin after the move: $rejoin"

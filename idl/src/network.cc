@@ -63,8 +63,8 @@ std::string scene_name_error(const std::string& name) {
   if (name.size() > kMaxSceneNameLength)
     return "scene name '" + name + "' is longer than " + std::to_string(kMaxSceneNameLength) + " characters";
   for (const char c : name) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' ||
-                    c == '_' || c == '.';
+    const bool ok =
+        (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' || c == '_' || c == '.';
     if (!ok)
       return "scene name '" + name + "' has '" + std::string(1, c) +
              "': use letters, digits, '-', '_' and '.' (DDS partition wildcards would match other scenes)";
@@ -87,13 +87,11 @@ std::vector<std::string> split_discovery_servers(const std::string& list) {
 }
 
 Network resolve_network(Network given) {
-  if (given.scene.empty()) {
-    given.scene = env("TELEGRASP_SCENE");
-    if (given.scene.empty()) given.scene = kDefaultScene;
-    else if (const std::string e = scene_name_error(given.scene); !e.empty())
-      throw std::runtime_error("TELEGRASP_SCENE: " + e);
-  }
-  if (const std::string e = scene_name_error(given.scene); !e.empty()) throw std::runtime_error(e);
+  const bool scene_from_env = given.scene.empty();
+  if (scene_from_env) given.scene = env("TELEGRASP_SCENE");
+  if (given.scene.empty()) given.scene = kDefaultScene;
+  if (const std::string e = scene_name_error(given.scene); !e.empty())
+    throw std::runtime_error(scene_from_env ? "TELEGRASP_SCENE: " + e : e);
   const bool from_env = given.discovery_servers.empty();
   if (from_env) given.discovery_servers = split_discovery_servers(env("TELEGRASP_DISCOVERY_SERVERS"));
   for (const std::string& s : given.discovery_servers) {

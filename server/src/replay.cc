@@ -1,5 +1,6 @@
 #include "replay.h"
 
+#include "cli.h"
 #include "recorded_feed.h"
 #include "scene_server.h"
 #include "server_loop.h"
@@ -20,12 +21,6 @@ std::string join(const std::vector<std::string>& parts, const char* sep) {
   std::string out;
   for (const auto& p : parts) out += (out.empty() ? "" : sep) + p;
   return out;
-}
-
-std::string hex64(std::uint64_t v) {
-  char buffer[17];
-  std::snprintf(buffer, sizeof buffer, "%016llx", static_cast<unsigned long long>(v));
-  return buffer;
 }
 
 // A rig from its embedded text, never from the file it names: that file may have changed since.
@@ -59,8 +54,9 @@ void load_recorded_meshes(const proto::ModelSource& ms, const std::string& dir, 
       continue;
     }
     if (info.size != f.size() || info.fnv1a64 != f.fnv1a64()) {
-      problems.push_back(path + " changed (" + std::to_string(info.size) + " bytes, FNV-1a " + hex64(info.fnv1a64) +
-                         "; recorded " + std::to_string(f.size()) + " bytes, " + hex64(f.fnv1a64()) + ")");
+      problems.push_back(path + " changed (" + std::to_string(info.size) + " bytes, FNV-1a " +
+                         cli::format_hex64(info.fnv1a64) + "; recorded " + std::to_string(f.size()) + " bytes, " +
+                         cli::format_hex64(f.fnv1a64()) + ")");
       continue;
     }
     a.model_source.files.push_back(info);

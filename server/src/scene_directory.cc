@@ -1,5 +1,7 @@
 #include "scene_directory.h"
 
+#include "cli.h"
+
 #include <cstdio>
 #include <sstream>
 
@@ -50,10 +52,8 @@ std::optional<msg::SceneAnnouncement> older_claim(const msg::SceneAnnouncement& 
 
 std::string describe_run(const msg::SceneAnnouncement& run) {
   std::ostringstream out;
-  char incarnation[17];
-  std::snprintf(incarnation, sizeof incarnation, "%016llx", static_cast<unsigned long long>(run.incarnation()));
-  out << run.host().to_string() << " (run " << incarnation << ", telegrasp " << run.version().to_string() << ", "
-      << run.hands() << " hands)";
+  out << run.host().to_string() << " (run " << cli::format_hex64(run.incarnation()) << ", telegrasp "
+      << run.version().to_string() << ", " << run.hands() << " hands)";
   return out.str();
 }
 

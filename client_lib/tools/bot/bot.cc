@@ -1,6 +1,7 @@
 // The bot's object choice, trials and records (bot.h).
 #include "bot.h"
 
+#include "cli.h"
 #include "grasp_event_record.h"
 #include "telegrasp/sim/mesh_loading.h"
 #include "telegrasp/sim/standin_objects.h"
@@ -35,7 +36,7 @@ constexpr double kStillTurn = 0.02;  // rad: ... and this angle of where it was 
 constexpr double kOnTableZ = -0.05;  // m: an object below this fell off the table
 constexpr double kNearObject = 0.15;  // m: a palm this close to an object's centre is working on it
 constexpr double kFrameTolerance = 0.002;  // m: a received mesh's centre of mass this far from its origin is off
-constexpr double kSameTime = 0.05;
+constexpr double kSameTime = 0.05;  // s of server time: two hands arriving this close together tie
 constexpr double kReplanMove = 0.02;  // m: an object moved this far since its plan is planned again ...
 constexpr double kReplanTurn = 0.25;  // rad: ... or turned this far
 constexpr int kMaxReplans = 3;  // re-plans per trial of an object that moved
@@ -45,14 +46,7 @@ constexpr int kMaxReplans = 3;  // re-plans per trial of an object that moved
 constexpr int kRounds = 2;
 constexpr int kAttemptBudget = kRounds * sim::ScriptedOperator::kMaxAttempts;
 constexpr double kFollowSpeed = 0.2;  // m/s: how fast the correction follows the object ...
-constexpr double kFollowTurnSpeed =
-    1.0;  // rad/s: ... and its turn  // s of server time: two hands arriving this close together tie
-
-std::string hex64(std::uint64_t h) {
-  char text[19];
-  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(h));
-  return text;
-}
+constexpr double kFollowTurnSpeed = 1.0;  // rad/s: ... and its turn
 
 // A closed box between two corners, counter-clockwise seen from outside.
 sim::TriangleMesh box_mesh(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
@@ -143,7 +137,7 @@ bool geometry_complete(const client::Client& c, const client::SceneState& scene,
 }
 
 sim::ObjectModelPtr model_from_geometry(const client::ObjectGeometry& g) {
-  const std::string source = "ObjectGeometry " + g.model + " (hash " + hex64(g.content_hash) + ")";
+  const std::string source = "ObjectGeometry " + g.model + " (hash " + cli::format_hex64(g.content_hash) + ")";
   sim::TriangleMesh mesh;
   if (g.mesh_omitted) {
     // Over the server's size limit: plan on the box of its bounds (model frame), the best the wire
@@ -292,8 +286,9 @@ void Bot::server_restarted(const client::SceneState& scene) {
     t.X_WorldObject_anchor.reset();
     t.unavailable_since.reset();
   }
-  std::cerr << "telegrasp-bot: the server restarted (incarnation " << hex64(incarnation_) << " -> "
-            << hex64(scene.incarnation) << "): " << interrupted << " trial(s) in progress interrupted, recorded as such"
+  std::cerr << "telegrasp-bot: the server restarted (incarnation " << cli::format_hex64(incarnation_) << " -> "
+            << cli::format_hex64(scene.incarnation) << "): " << interrupted
+            << " trial(s) in progress interrupted, recorded as such"
             << " and run again; " << targets_.size() - missing << " of " << targets_.size()
             << " objects found in the new scene\n";
   incarnation_ = scene.incarnation;

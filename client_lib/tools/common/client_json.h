@@ -5,6 +5,7 @@
 // one, to print "topic" first).
 #pragma once
 
+#include "cli.h"
 #include "telegrasp/client/types.h"
 
 #include <Eigen/Geometry>
@@ -191,10 +192,8 @@ Json server_status(const client::ServerStatus& s) {
 /// A summary: the mesh itself is too large for a line.
 template <class Json>
 Json object_geometry(const client::ObjectGeometry& g) {
-  char hash[19];
-  std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(g.content_hash));
   return Json{{"model", g.model},
-              {"content_hash", hash},
+              {"content_hash", cli::format_hex64(g.content_hash)},
               {"vertex_count", g.vertex_count},
               {"triangle_count", g.triangle_count},
               {"mesh_omitted", g.mesh_omitted},

@@ -144,21 +144,15 @@ Json to_json(const tc::HandSkeleton& s) { return with_topic("HandSkeleton", form
 Json to_json(const tc::GraspState& s) { return with_topic("GraspState", form::grasp_state<Json>(s)); }
 Json to_json(const tc::ContactSet& s) { return with_topic("ContactSet", form::contact_set<Json>(s)); }
 Json to_json(const tc::GraspEvent& e) { return with_topic("GraspEvent", form::grasp_event<Json>(e)); }
-// The server run, as 16 hex digits (a JSON number would lose digits past 2^53).
-std::string incarnation_hex(std::uint64_t incarnation) {
-  char text[17];
-  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(incarnation));
-  return text;
-}
 
 Json to_json(const tc::SceneState& s) {
   Json j = with_topic("SceneState", form::scene_state<Json>(s));
-  j["incarnation"] = incarnation_hex(s.incarnation);
+  j["incarnation"] = telegrasp::cli::format_hex64(s.incarnation);
   return j;
 }
 Json to_json(const tc::ServerStatus& s) {
   Json j = with_topic("ServerStatus", form::server_status<Json>(s));
-  j["incarnation"] = incarnation_hex(s.incarnation);
+  j["incarnation"] = telegrasp::cli::format_hex64(s.incarnation);
   return j;
 }
 Json to_json(const tc::ObjectGeometry& g) { return with_topic("ObjectGeometry", form::object_geometry<Json>(g)); }
@@ -230,7 +224,7 @@ Json scene_json(const tc::SceneInfo& s) {
   return {{"scene", s.scene},
           {"host", s.host},
           {"version", s.version},
-          {"incarnation", incarnation_hex(s.incarnation)},
+          {"incarnation", telegrasp::cli::format_hex64(s.incarnation)},
           {"started_unix_s", s.started},
           {"serving", s.serving},
           {"clients", s.clients},

@@ -8,6 +8,8 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <stdexcept>
@@ -40,6 +42,14 @@ using Fail = void (*)(const std::string& what);
   const auto [end, error] = whole ? std::to_chars(text, text + sizeof text, static_cast<long long>(x))
                                   : std::to_chars(text, text + sizeof text, x);
   return error == std::errc() ? std::string(text, end) : std::string("?");
+}
+
+/// A 64-bit id (a server run's incarnation, a content hash) as 16 hex digits: JSON numbers lose
+/// digits past 2^53, and a fixed width lines the ids up.
+[[nodiscard]] inline std::string format_hex64(std::uint64_t v) {
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(v));
+  return text;
 }
 
 /// The whole number `v` given to option `flag`, if it lies in [lo, hi]; otherwise calls
