@@ -43,11 +43,12 @@ constexpr const char* kUsage = R"(Usage: telegrasp-soak --hands N --minutes M [o
 
 Soak test: N hands grasp continuously for M minutes against one telegrasp server while the
 server's resident memory (VmRSS from /proc/PID/status), heap in use, tick time and missed ticks
-(from its ServerStatus) are sampled every --sample-s seconds. The hands are telegrasp-bot processes with
-two hands each (one right hand for an odd N), each grasping every object of the scene over and
-over (--trials 10000) and restarted with a new seed and client id when it ends (a bot gives an
-object up after 10 s without a chance at it, and may then finish). By default the soak starts
-its own telegrasp-server (the 30 stand-ins, or --server-config) and stops it at the end.
+(from its ServerStatus) are sampled every --sample-s seconds. The hands are telegrasp-bot
+processes with two hands each (one right hand for an odd N), each grasping every object of the
+scene over and over (--trials 10000) and restarted with a new seed and client id when it ends (a
+bot gives an object up after 10 s without a chance at it, and may then finish). By default the
+soak starts its own telegrasp-server (the 30 stand-ins, or --server-config) and stops it at the
+end.
 
 At the end it prints one JSON object on stdout: the settings, every sample
   {"t_s", "rss_kib", "heap_kib" (the lowest of the period's statuses: what stays allocated),
