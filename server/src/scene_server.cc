@@ -51,6 +51,7 @@ SceneServer::SceneServer(const ServerSettings& settings, std::vector<sim::Object
   sim::WorldSettings ws;
   ws.dt = 1.0 / settings.tick_hz;
   ws.grasp.mode = settings.closing_mode;
+  ws.grasp.quality_volume = settings.quality_volume ? sim::QualityVolume::kCompute : sim::QualityVolume::kSkip;
   ws.two_hand_mode = settings.two_hand_mode;
   ws.table_half_extent = kTableHalfExtent;
   world_ = std::make_unique<sim::World>(ws);

@@ -47,6 +47,7 @@ void apply_config(const proto::ServerConfig& c, ServerSettings& s, const std::st
     if (o.has_friction()) s.objects.back().friction = o.friction();
   }
   if (has("empty_scene")) s.empty_scene = c.empty_scene();
+  if (has("quality_volume")) s.quality_volume = c.quality_volume();
   if (has("right_rig")) s.right_rig = c.right_rig();
   if (has("left_rig")) s.left_rig = c.left_rig();
   if (has("closing_mode")) {
@@ -154,6 +155,7 @@ proto::ServerConfig to_proto(const ServerSettings& s) {
   c.set_freeze_after_s(s.freeze_after_s);
   c.set_remove_after_s(s.remove_after_s);
   c.set_late_latch(s.late_latch);
+  c.set_quality_volume(s.quality_volume);
   c.set_status_period_s(s.status_period_s);
   c.set_max_hands(s.max_hands);
   c.set_lockstep(s.lockstep);

@@ -63,6 +63,8 @@ struct ServerSettings {
   double freeze_after_s = 0.25;
   double remove_after_s = 0.5;
   bool late_latch = true;
+  /// Grasp qualities include the wrench hull's volume (sim::GraspSettings::quality_volume).
+  bool quality_volume = false;
   double status_period_s = 1.0;
   int max_hands = 256;
   /// Tick as soon as every hand has answered the last tick (ControllerState.lockstep_tick) instead

@@ -77,6 +77,9 @@ Options (override the --config file):
   --two-hand-mode M   a grasp on an object another hand holds: share (default: both hold it, the
                       object follows both hands) | takeover (the newest grasp takes it)
   --no-late-latch     publish skeletons only at ticks, not also on each sample's arrival
+  --quality-volume    grasp qualities also carry the wrench hull's volume (Qhull's full 6-D hull:
+                      milliseconds per grasp on the simulation thread; default off: volume -1,
+                      "not computed"; epsilon and force closure are always computed)
   --lockstep          tick as soon as every hand has answered the last tick (ControllerState.
                       lockstep_tick) and its commands have arrived, not on the clock: runs are
                       deterministic and faster than real time. With no hands the scene waits; a
@@ -154,6 +157,8 @@ void apply_flags(int argc, char** argv, Flags& f, std::vector<std::string>& conf
       s.late_latch = false;
     else if (a == "--lockstep")
       s.lockstep = true;
+    else if (a == "--quality-volume")
+      s.quality_volume = true;
     else if (a == "--list-models")
       f.list_models = true;
     else if (a == "--fill-standins")

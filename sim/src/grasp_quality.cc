@@ -1,4 +1,7 @@
-// Ferrari-Canny grasp quality with Qhull's reentrant API (GRASPING.md section 4b).
+// Grasp quality (GRASPING.md section 4b): the wrenches of the contacts' friction cones, epsilon by
+// the expanding polytope (wrench_epsilon.cc), and the full hull with Qhull's reentrant API (the
+// volume, and the reference the tests hold the expanding polytope to).
+#include "grasp_quality_internal.h"
 #include "telegrasp/sim/grasp_quality.h"
 
 #include <Eigen/Geometry>
@@ -24,8 +27,6 @@ constexpr int kDim = 6;
 // (epsilon 0) and no 6-D volume. Wrench coordinates are of order 1 (unit normal force, torques
 // divided by the object's radius), so rounding leaves ~1e-16 where the exact value is 0.
 constexpr double kFlatRatio = 1e-10;
-// The origin counts as strictly inside only when every facet is farther than this (wrench units).
-constexpr double kMinEpsilon = 1e-12;
 
 // Where Qhull writes its messages: nowhere. Qhull takes a FILE* and falls back to stderr on null.
 FILE* qhull_err_file() {
@@ -48,7 +49,8 @@ void tangents(const Eigen::Vector3d& n, Eigen::Vector3d& t1, Eigen::Vector3d& t2
   t2 = n.cross(t1);
 }
 
-// Affine dimension of the points is 6 (the columns of w, one wrench each).
+}  // namespace
+
 bool full_dimensional(const Wrenches& w) {
   if (w.cols() <= kDim) return false;  // 6 points span at most 5 dimensions
   const Eigen::Matrix<double, kDim, 1> centroid = w.rowwise().mean();
@@ -61,8 +63,6 @@ bool full_dimensional(const Wrenches& w) {
   const auto& s = svd.singularValues();  // decreasing
   return s[0] > 0 && s[kDim - 1] > kFlatRatio * s[0];
 }
-
-}  // namespace
 
 Wrenches contact_wrenches(std::span<const QualityContact> contacts, double mu, double torque_scale, int cone_edges) {
   if (!(mu >= 0) || !std::isfinite(mu) || !(torque_scale > 0) || !std::isfinite(torque_scale) || cone_edges < 1)
@@ -90,11 +90,21 @@ Wrenches contact_wrenches(std::span<const QualityContact> contacts, double mu, d
   return w;
 }
 
-GraspQuality grasp_quality(std::span<const QualityContact> contacts, double mu, double torque_scale, int cone_edges) {
-  return wrench_quality(contact_wrenches(contacts, mu, torque_scale, cone_edges));
+GraspQuality grasp_quality(std::span<const QualityContact> contacts, double mu, double torque_scale, int cone_edges,
+                           QualityVolume volume) {
+  return wrench_quality(contact_wrenches(contacts, mu, torque_scale, cone_edges), volume);
 }
 
-GraspQuality wrench_quality(const Wrenches& w) {
+GraspQuality wrench_quality(const Wrenches& w, QualityVolume volume) {
+  const EpsilonResult e = wrench_epsilon(w);
+  GraspQuality out;
+  out.epsilon = e.epsilon;
+  out.force_closure = e.force_closure;
+  out.volume = volume == QualityVolume::kCompute ? qhull_wrench_quality(w).volume : kVolumeNotComputed;
+  return out;
+}
+
+GraspQuality qhull_wrench_quality(const Wrenches& w) {
   GraspQuality out;
   if (!w.allFinite() || !full_dimensional(w)) return out;
 

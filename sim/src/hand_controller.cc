@@ -895,7 +895,7 @@ GraspQuality HandController::contact_quality() const {
   });
   if (it == quality_memo_.end()) {
     ++quality_hulls_;
-    const GraspQuality q = wrench_quality(wrenches);
+    const GraspQuality q = wrench_quality(wrenches, settings_.quality_volume);
     if (quality_memo_.size() == kQualityMemo) quality_memo_.pop_back();
     quality_memo_.insert(quality_memo_.begin(), QualityMemo{std::move(wrenches), q});
   } else {

@@ -18,6 +18,7 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <ctime>
 #include <random>
@@ -50,6 +51,57 @@ void BM_GraspQuality(benchmark::State& state) {
   state.counters["closure_share"] = static_cast<double>(closure) / static_cast<double>(state.iterations());
 }
 BENCHMARK(BM_GraspQuality)->Arg(5)->Arg(10)->Arg(16)->Unit(benchmark::kMicrosecond);
+
+// BM_Epsilon/<n>: Ferrari-Canny epsilon of n contacts (8-edge cones, mu 0.5, a 4 cm sphere with
+// radial normals tilted at random; 16 seeded sets cycled) two ways in one run: wrench_epsilon()
+// (the expanding polytope, timed by the benchmark) and Qhull's full hull (qhull_wrench_quality(),
+// timed over the same sets before the loop). Counters: incremental_us and qhull_us (mean per
+// grasp), ratio (qhull_us / incremental_us), facets (built by the polytope, mean), closure_share
+// and max_delta (largest |epsilon difference| between the two on these sets).
+void BM_Epsilon(benchmark::State& state) {
+  using Clock = std::chrono::steady_clock;
+  const int n = static_cast<int>(state.range(0));
+  std::mt19937 rng(21);
+  std::normal_distribution<double> gauss;
+  std::vector<Wrenches> sets(16);
+  for (auto& set : sets) {
+    std::vector<QualityContact> contacts;
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector3d d = Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)).normalized();
+      const Eigen::Vector3d tilt = 0.3 * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
+      contacts.push_back({0.04 * d, (d + tilt).normalized()});
+    }
+    set = contact_wrenches(contacts, 0.5, 0.04);
+  }
+  std::vector<double> reference(sets.size());
+  const auto q0 = Clock::now();
+  for (int rep = 0; rep < 2; ++rep)
+    for (std::size_t k = 0; k < sets.size(); ++k) reference[k] = qhull_wrench_quality(sets[k]).epsilon;
+  const double qhull_us =
+      std::chrono::duration<double, std::micro>(Clock::now() - q0).count() / (2.0 * static_cast<double>(sets.size()));
+  double max_delta = 0, facets = 0;
+  int closure = 0;
+  for (std::size_t k = 0; k < sets.size(); ++k) {
+    const EpsilonResult e = wrench_epsilon(sets[k]);
+    max_delta = std::max(max_delta, std::abs(e.epsilon - reference[k]));
+    facets += e.facets;
+    closure += e.force_closure;
+  }
+  std::size_t k = 0;
+  const auto e0 = Clock::now();
+  for (auto _ : state) benchmark::DoNotOptimize(wrench_epsilon(sets[k++ % sets.size()]));
+  const double incremental_us =
+      std::chrono::duration<double, std::micro>(Clock::now() - e0).count() / static_cast<double>(state.iterations());
+  const double count = static_cast<double>(sets.size());
+  state.counters["contacts"] = n;
+  state.counters["incremental_us"] = incremental_us;
+  state.counters["qhull_us"] = qhull_us;
+  state.counters["ratio"] = qhull_us / incremental_us;
+  state.counters["facets"] = facets / count;
+  state.counters["closure_share"] = closure / count;
+  state.counters["max_delta"] = max_delta;
+}
+BENCHMARK(BM_Epsilon)->Arg(3)->Arg(5)->Arg(10)->Arg(16)->Arg(20)->Unit(benchmark::kMicrosecond);
 
 void BM_GraspQualityHeld(benchmark::State& state, const std::string& object) {
   static const auto rig = std::make_shared<const HandRig>(HandRig::load(HandRig::builtin_path("human_right")));

@@ -24,11 +24,11 @@ void expect_zero(const GraspQuality& q) {
   EXPECT_FALSE(q.force_closure);
 }
 
-// Runs grasp_quality and checks that it printed nothing.
+// Runs grasp_quality (with the volume) and checks that it printed nothing.
 GraspQuality quiet_quality(const Contacts& c, double mu, double torque_scale) {
   testing::internal::CaptureStderr();
   testing::internal::CaptureStdout();
-  const GraspQuality q = grasp_quality(c, mu, torque_scale);
+  const GraspQuality q = grasp_quality(c, mu, torque_scale, 8, QualityVolume::kCompute);
   EXPECT_EQ(testing::internal::GetCapturedStdout(), "");
   EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
   return q;
@@ -304,12 +304,13 @@ TEST(GraspQuality, IsTheQualityOfTheContactWrenches) {
       EXPECT_NEAR((f + k.n).norm(), mu, 1e-12);
       EXPECT_NEAR((w.col(col).tail<3>() - k.p.cross(f) / 0.04).norm(), 0.0, 1e-12);
     }
-    const GraspQuality direct = grasp_quality(c, mu, 0.04), hull = wrench_quality(w);
+    const GraspQuality direct = grasp_quality(c, mu, 0.04, 8, QualityVolume::kCompute),
+                       hull = wrench_quality(w, QualityVolume::kCompute);
     EXPECT_EQ(direct.epsilon, hull.epsilon);
     EXPECT_EQ(direct.volume, hull.volume);
     EXPECT_EQ(direct.force_closure, hull.force_closure);
   }
-  EXPECT_GT(wrench_quality(contact_wrenches(c, 0.5, 0.04)).volume, 0.0);
+  EXPECT_GT(wrench_quality(contact_wrenches(c, 0.5, 0.04), QualityVolume::kCompute).volume, 0.0);
   // Degenerate inputs have no wrenches, and no wrenches no quality.
   EXPECT_EQ(contact_wrenches({}, 0.5, 0.1).cols(), 0);
   Contacts bad = c;
@@ -317,7 +318,7 @@ TEST(GraspQuality, IsTheQualityOfTheContactWrenches) {
   EXPECT_EQ(contact_wrenches(bad, 0.5, 0.1).cols(), 0);
   EXPECT_EQ(contact_wrenches(c, -0.5, 0.1).cols(), 0);
   EXPECT_EQ(contact_wrenches(c, 0.5, 0.0).cols(), 0);
-  expect_zero(wrench_quality(Wrenches(6, 0)));
+  expect_zero(wrench_quality(Wrenches(6, 0), QualityVolume::kCompute));
 }
 
 // The bound under which HandController reuses a hull's quality (hand_controller.h,
@@ -331,7 +332,7 @@ TEST(GraspQuality, MovingTheWrenchesByDMovesTheQualityWithinTheBound) {
   int closures = 0, moved_epsilons = 0;
   for (int trial = 0; trial < 12; ++trial) {
     const Wrenches w = contact_wrenches(on_sphere(5 + trial % 4, 0.04, 100 + trial), 0.5, 0.04);
-    const GraspQuality q = wrench_quality(w);
+    const GraspQuality q = wrench_quality(w, QualityVolume::kCompute);
     closures += q.force_closure;
     for (double d : {1e-11, 1e-6, 1e-3}) {
       Wrenches moved = w;
@@ -340,7 +341,7 @@ TEST(GraspQuality, MovingTheWrenchesByDMovesTheQualityWithinTheBound) {
         for (int r = 0; r < 6; ++r) dir[r] = gauss(rng);
         moved.col(j) += d * dir.normalized();
       }
-      const GraspQuality m = wrench_quality(moved);
+      const GraspQuality m = wrench_quality(moved, QualityVolume::kCompute);
       const double R = std::max(w.colwise().norm().maxCoeff(), moved.colwise().norm().maxCoeff());
       EXPECT_LE(std::abs(m.epsilon - q.epsilon), d + 1e-12 + kRounding) << trial << " " << d;
       EXPECT_LE(std::abs(m.volume - q.volume), kappa6 * (std::pow(R + d, 6) - std::pow(R, 6)) + kRounding)

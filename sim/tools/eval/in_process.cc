@@ -157,6 +157,7 @@ Trial run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRig
   ws.grasp.mode = cfg.mode;
   ws.grasp.speed_scale = cfg.speed;
   ws.grasp.selection = opt.selection;
+  ws.grasp.quality_volume = QualityVolume::kCompute;  // offline: the records keep the volume
   World world(ws);
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> ux(0.40, 0.50), uy(-0.08, 0.08), uyaw(0.0, 2.0 * std::numbers::pi);

@@ -50,6 +50,9 @@ struct GraspSettings {
   double table_half_extent = 0;  ///< > 0: the table top z = 0 over [-this, this]^2 is an obstacle (m).
   double rejoin_speed = 1.0;  ///< The resolved pose closes its offset to the tracked one at most this fast (m/s).
   double rejoin_turn = 6.283185307179586;  ///< ... and its turn at most this fast (rad/s).
+  /// Whether grasp qualities include the wrench hull's volume (the full Qhull hull: milliseconds
+  /// per contact set); kSkip: GraspQuality::volume is kVolumeNotComputed.
+  QualityVolume quality_volume = QualityVolume::kSkip;
 };
 
 /// One controller sample for one hand.
