@@ -1,11 +1,11 @@
-// BM_GraspQuality/<n>: grasp_quality() (sim/grasp_quality.h: 8-edge cones, Qhull hull of the 6-D
-// wrenches, epsilon and volume) for n contacts spread over a 4 cm sphere with radial normals
+// BM_GraspQuality/<n>: grasp_quality() (sim/grasp_quality.h: 8-edge cones, epsilon by the
+// expanding polytope, no volume) for n contacts spread over a 4 cm sphere with radial normals
 // (seeded, 8 different sets cycled). BM_GraspQuality/held/<object>: the contacts of the human
 // hand holding a built-in stand-in after a full squeeze (as BM_HandTick's holding tick).
 // BM_GraspQualityTrial/<object>: one scripted trial of the human hand on a built-in stand-in in a
 // World (react, reach, squeeze, lift, hold 1 s, release; "experienced" operator, seed 3), asking
 // hold_metrics() on every held tick as the server does. Counters per trial: held_ticks, hulls
-// (HandController::quality_hulls(): the Qhull runs), hulls_per_held_tick, distinct_sets (the
+// (HandController::quality_hulls(): the qualities computed), hulls_per_held_tick, distinct_sets (the
 // distinct contact sets held, the least any cache can do), last_only_hulls (what reusing only
 // the last hull's quality, for contacts within 1e-6 m and 1e-6 of it, would build: the rule before
 // the hand kept several) and hold_ms (CPU time in hold_metrics(): every hull but the grasp tick's).

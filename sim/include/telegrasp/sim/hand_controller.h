@@ -155,8 +155,8 @@ class HandController {
   /// ND and signed distances of the hand as it is now while holding (the statistics kept while
   /// the object is held; the grasp tick's are in grasp_metrics()); empty when not holding.
   std::optional<GraspMetrics> hold_metrics() const;
-  /// How many grasp-quality hulls (wrench_quality(): a Qhull run of milliseconds) this hand has
-  /// built. The quality of the grasp tick and of hold_metrics() is that of the current contacts'
+  /// How many grasp qualities (wrench_quality(): the expanding polytope, tens to hundreds of
+  /// microseconds; with the volume, Qhull's full hull: milliseconds) this hand has computed. The quality of the grasp tick and of hold_metrics() is that of the current contacts'
   /// wrenches W (contact_wrenches() of the contacts, less those within 1 mm and 2.6 degrees of one
   /// kept before them); a hull is built only when W is farther than d = 1e-11 from each of the 8
   /// wrench sets used last (distance: same column count, largest distance between corresponding
