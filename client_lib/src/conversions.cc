@@ -417,6 +417,7 @@ msg::ServerStatus to_msg(const client::ServerStatus& s) {
   m.tick_us_p99(s.tick_us_p99);
   m.rss_kib(s.rss_kib);
   m.heap_kib(s.heap_kib);
+  m.quality_late(s.quality_late);
   m.missed_ticks(s.missed_ticks);
   m.inputs_accepted(s.inputs_accepted);
   m.inputs_rejected(s.inputs_rejected);
@@ -443,6 +444,7 @@ client::ServerStatus from_msg(const msg::ServerStatus& m) {
   s.tick_us_p99 = m.tick_us_p99();
   s.rss_kib = m.rss_kib();
   s.heap_kib = m.heap_kib();
+  s.quality_late = m.quality_late();
   s.missed_ticks = m.missed_ticks();
   s.inputs_accepted = m.inputs_accepted();
   s.inputs_rejected = m.inputs_rejected();

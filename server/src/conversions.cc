@@ -124,6 +124,12 @@ msg::ContactSet make_contact_set(const HandAddress& address, const sim::HandCont
   return m;
 }
 
+void set_quality(msg::GraspEvent& m, const sim::GraspQuality& q) {
+  m.epsilon(q.epsilon);
+  m.volume(q.volume);
+  m.force_closure(q.force_closure);
+}
+
 msg::GraspEvent make_grasp_event(const sim::GraspEvent& e, const sim::HandRig& rig, const EventContext& ctx) {
   msg::GraspEvent m;
   m.event_id(ctx.event_id);
@@ -153,9 +159,7 @@ msg::GraspEvent make_grasp_event(const sim::GraspEvent& e, const sim::HandRig& r
       m.capsules().push_back(std::move(r));
     }
     m.palm_signed_distance(e.metrics->palm_signed_distance);
-    m.epsilon(e.metrics->quality.epsilon);
-    m.volume(e.metrics->quality.volume);
-    m.force_closure(e.metrics->quality.force_closure);
+    set_quality(m, e.metrics->quality);
   }
   for (const sim::Contact& c : e.contacts) m.contacts().push_back(to_msg(c));
   m.release_velocity(to_msg(e.v_WorldObject));

@@ -42,7 +42,8 @@ struct InputStamp {
 msg::HandSkeleton make_hand_skeleton(const HandAddress& address, const sim::HandController& hand, std::uint64_t tick,
                                      double time, const InputStamp& input, bool frozen,
                                      const Eigen::Isometry3d* X_WorldPalm_override = nullptr);
-/// The hand's grasp state; while holding, with the grasp quality of the hand's current shape.
+/// The hand's grasp state; while holding, with the last grasp quality the World delivered for
+/// this grasp (that of its contacts quality_delay_ticks ticks ago; -1, -1, false until the first).
 msg::GraspState make_grasp_state(const HandAddress& address, const sim::HandController& hand, std::uint64_t tick,
                                  double time);
 /// Who holds an object, on the wire: `held`, the first holder in holder_client/holder_hand (the
@@ -71,6 +72,8 @@ struct EventContext {
   std::uint64_t input_sequence = 0;
 };
 msg::GraspEvent make_grasp_event(const sim::GraspEvent& event, const sim::HandRig& rig, const EventContext& context);
+/// A grasp event's epsilon, volume and force closure.
+void set_quality(msg::GraspEvent& message, const sim::GraspQuality& quality);
 
 /// A model's shape and mass as published on the ObjectGeometry topic: its mesh in the model frame
 /// (origin at the centre of mass) with vertices rounded to float32, the content hash of that

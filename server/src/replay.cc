@@ -112,7 +112,10 @@ std::vector<std::string> version_warnings(const proto::RecordingHeader& header) 
 
 ServerSettings recorded_settings(const proto::RecordingHeader& header, const std::string& path) {
   try {
-    return settings_from_proto(header.config(), "recording " + path + ": header.config");
+    ServerSettings s = settings_from_proto(header.config(), "recording " + path + ": header.config");
+    // Recordings from before the quality worker computed it within the tick.
+    if (!header.config().has_quality_delay_ticks()) s.quality_delay_ticks = 0;
+    return s;
   } catch (const std::runtime_error& e) {
     throw RecordingError(e.what());
   }

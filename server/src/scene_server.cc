@@ -52,6 +52,7 @@ SceneServer::SceneServer(const ServerSettings& settings, std::vector<sim::Object
   ws.dt = 1.0 / settings.tick_hz;
   ws.grasp.mode = settings.closing_mode;
   ws.grasp.quality_volume = settings.quality_volume ? sim::QualityVolume::kCompute : sim::QualityVolume::kSkip;
+  ws.quality_delay_ticks = settings.quality_delay_ticks;
   ws.two_hand_mode = settings.two_hand_mode;
   ws.table_half_extent = kTableHalfExtent;
   world_ = std::make_unique<sim::World>(ws);
@@ -240,7 +241,18 @@ void SceneServer::publish_events() {
     if (std::find(objects.begin(), objects.end(), e.object) != objects.end())
       ctx.X_WorldObject = world_->object_pose(e.object);
     if (auto h = hands_.find(ctx.hand); h != hands_.end()) ctx.input_sequence = h->second.stamp.sequence;
-    sink_.publish(make_grasp_event(e, *rigs_[ctx.hand.side], ctx));
+    const std::uint64_t due = world_->tick() + static_cast<std::uint64_t>(settings_.quality_delay_ticks);
+    held_events_.push_back({due, e.quality_job, make_grasp_event(e, *rigs_[ctx.hand.side], ctx)});
+  }
+  for (const sim::QualityResult& r : world_->quality_results()) {
+    if (!r.job.grasp_tick) continue;
+    auto held = std::find_if(held_events_.begin(), held_events_.end(),
+                             [&](const HeldEvent& h) { return h.quality_job == r.job.id; });
+    if (held != held_events_.end()) set_quality(held->message, r.quality);
+  }
+  while (!held_events_.empty() && held_events_.front().due_tick <= world_->tick()) {
+    sink_.publish(held_events_.front().message);
+    held_events_.pop_front();
   }
 }
 
@@ -471,6 +483,7 @@ msg::ServerStatus SceneServer::status(const LoopStats& loop) const {
   m.notices_sent(notices_ + mailbox_.notices());
   for (const auto& n : model_names_) m.models().push_back(n);
   m.incarnation(settings_.incarnation);
+  m.quality_late(world_->quality_late());
   return m;
 }
 

@@ -9,6 +9,7 @@
 #include "telegrasp/sim/world.h"
 
 #include <cstdint>
+#include <deque>
 #include <map>
 #include <memory>
 #include <optional>
@@ -55,6 +56,9 @@ class SceneServer {
   bool lockstep_ready() const;
   /// The status message for the current state.
   msg::ServerStatus status(const LoopStats& loop) const;
+  /// GraspEvents held for their grasp quality (at most quality_delay_ticks ticks' worth); a stop
+  /// does not publish them.
+  std::size_t held_events() const { return held_events_.size(); }
 
   const sim::World& world() const { return *world_; }
   std::size_t hand_count() const { return hands_.size(); }
@@ -101,8 +105,17 @@ class SceneServer {
   bool is_operator(const std::string& client_id) const;
   void remove_hand(std::map<HandAddress, Hand>::iterator it);
   void remove_object(sim::ObjectId id);
+  // Builds the GraspEvents of the World's last step and holds them quality_delay_ticks ticks,
+  // fills in each grasp's quality when the World delivers it, and publishes those due, in order.
   void publish_events();
   msg::SceneState scene_state() const;
+
+  struct HeldEvent {
+    std::uint64_t due_tick = 0;  // published on this tick
+    std::uint64_t quality_job = 0;  // grasp events: sim::GraspEvent::quality_job
+    msg::GraspEvent message;
+  };
+  std::deque<HeldEvent> held_events_;
 
   ServerSettings settings_;
   std::map<std::string, sim::ObjectModelPtr> models_;

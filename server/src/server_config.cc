@@ -48,6 +48,7 @@ void apply_config(const proto::ServerConfig& c, ServerSettings& s, const std::st
   }
   if (has("empty_scene")) s.empty_scene = c.empty_scene();
   if (has("quality_volume")) s.quality_volume = c.quality_volume();
+  if (has("quality_delay_ticks")) s.quality_delay_ticks = c.quality_delay_ticks();
   if (has("right_rig")) s.right_rig = c.right_rig();
   if (has("left_rig")) s.left_rig = c.left_rig();
   if (has("closing_mode")) {
@@ -109,6 +110,7 @@ void validate_settings(const ServerSettings& s, const std::string& origin) {
     fail("remove_after_s must be <= 0.9 (a silent client's object is released within 1 s)");
   if (!(s.status_period_s > 0)) fail("status_period_s must be > 0");
   if (s.max_hands < 1 || s.max_hands > 4096) fail("max_hands must be in [1, 4096]");
+  if (s.quality_delay_ticks < 0 || s.quality_delay_ticks > 90) fail("quality_delay_ticks must be in [0, 90]");
   for (const auto& o : s.objects)
     if (!std::isfinite(o.x) || !std::isfinite(o.y) || !std::isfinite(o.yaw))
       fail("objects '" + o.model + "': x, y, yaw must be finite");
@@ -156,6 +158,7 @@ proto::ServerConfig to_proto(const ServerSettings& s) {
   c.set_remove_after_s(s.remove_after_s);
   c.set_late_latch(s.late_latch);
   c.set_quality_volume(s.quality_volume);
+  c.set_quality_delay_ticks(s.quality_delay_ticks);
   c.set_status_period_s(s.status_period_s);
   c.set_max_hands(s.max_hands);
   c.set_lockstep(s.lockstep);

@@ -65,6 +65,10 @@ struct ServerSettings {
   bool late_latch = true;
   /// Grasp qualities include the wrench hull's volume (sim::GraspSettings::quality_volume).
   bool quality_volume = false;
+  /// The grasp quality of the contacts of tick t is computed on a worker thread and published at
+  /// tick t + this (GraspEvents wait as long, all of them, so their order is kept); 0: computed
+  /// within the tick on the simulation thread (sim::WorldSettings::quality_delay_ticks).
+  int quality_delay_ticks = 2;
   double status_period_s = 1.0;
   int max_hands = 256;
   /// Tick as soon as every hand has answered the last tick (ControllerState.lockstep_tick) instead

@@ -77,6 +77,10 @@ Options (override the --config file):
   --two-hand-mode M   a grasp on an object another hand holds: share (default: both hold it, the
                       object follows both hands) | takeover (the newest grasp takes it)
   --no-late-latch     publish skeletons only at ticks, not also on each sample's arrival
+  --quality-delay-ticks K
+                      the grasp quality of tick t's contacts is computed on a worker thread and
+                      published at tick t + K; GraspEvents wait as long, so they carry it and keep
+                      their order (default 2, 0..90; 0: within the tick, on the simulation thread)
   --quality-volume    grasp qualities also carry the wrench hull's volume (Qhull's full 6-D hull:
                       milliseconds per grasp on the simulation thread; default off: volume -1,
                       "not computed"; epsilon and force closure are always computed)
@@ -159,6 +163,8 @@ void apply_flags(int argc, char** argv, Flags& f, std::vector<std::string>& conf
       s.lockstep = true;
     else if (a == "--quality-volume")
       s.quality_volume = true;
+    else if (a == "--quality-delay-ticks")
+      s.quality_delay_ticks = static_cast<int>(cli::parse_number(a, value(), 0, 90, usage_error));
     else if (a == "--list-models")
       f.list_models = true;
     else if (a == "--fill-standins")
@@ -351,7 +357,12 @@ int main(int argc, char** argv) {
               << ", incarnation " << std::hex << settings.incarnation << std::dec << "; Ctrl-C to stop\n";
     loop.run();
     std::cerr << "telegrasp-server: stopping after " << scene.world().tick() << " ticks, " << mailbox.accepted()
-              << " inputs accepted, " << loop.missed_ticks() << " ticks missed\n";
+              << " inputs accepted, " << loop.missed_ticks() << " ticks missed, " << scene.world().quality_late()
+              << " ticks waited for the grasp quality";
+    if (scene.held_events() > 0)
+      std::cerr << "; " << scene.held_events() << " grasp event(s) of the last " << settings.quality_delay_ticks
+                << " ticks, still waiting for their quality, not published";
+    std::cerr << "\n";
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-server: " << e.what() << "\n";
     return cli::kExitFailure;

@@ -30,24 +30,9 @@ double distance_to_bounds(const ObjectModel& model, const Eigen::Vector3d& p) {
 
 // Contacts nearer than this to one already kept, with normals within ~2.6 degrees of its
 // normal, are left out of the grasp quality: their wrenches nearly coincide, so the hull barely
-// changes, and every contact left out saves a tenth to a half of Qhull's time. (Speed only.)
+// changes, and every contact left out saves time. (Speed only.)
 constexpr double kQualityMergeDistance = 1e-3;
 constexpr double kQualityMergeCos = 0.999;
-// The qualities of the last few distinct wrench sets are kept: a Qhull hull costs milliseconds,
-// and a hold comes back to earlier contact sets (the fingers that blocked one by one as the
-// squeeze completed unblock in reverse order as the trigger is released). A set whose every
-// wrench lies within kQualitySameWrench of the same column of a kept set takes that set's
-// quality, so that rounding (a two-hand hold re-attaching each tick moves the contacts by
-// ~1e-17 m) does not rebuild the hull. Error bound: hand_controller.h, quality_hulls().
-constexpr std::size_t kQualityMemo = 8;
-constexpr double kQualitySameWrench = 1e-11;  // wrench units (forces per unit normal force)
-
-// Largest distance between corresponding wrenches; infinite when the sets differ in size.
-double wrench_distance(const Wrenches& a, const Wrenches& b) {
-  if (a.cols() != b.cols()) return kInf;
-  if (a.cols() == 0) return 0;
-  return (a - b).colwise().norm().maxCoeff();
-}
 
 // Blocked capsules lie within the contact tolerance (plus hysteresis) of the surface; searches
 // for their closest point need look no farther than this beyond the radius.
@@ -634,7 +619,8 @@ void HandController::apply_grasp_rule(const ObjectView* object, const Eigen::Iso
     hold_metrics_ = metrics_;
     hold_metrics_key_ = shape_key();
     refresh_contacts();
-    metrics_->quality = hold_metrics_->quality = contact_quality();
+    ++grasp_serial_;
+    hold_quality_ = metrics_->quality = hold_metrics_->quality = kPendingQuality;
     events.grasped = true;
   } else if (!rule && state_.grasped.valid()) {
     events.released = true;
@@ -699,7 +685,7 @@ std::optional<GraspMetrics> HandController::hold_metrics() const {
     hold_metrics_ = measure({state_.grasped, *X_WorldObject, held_model_});
     hold_metrics_key_ = shape_key();
     if (contacts_key_ != shape_key()) refresh_contacts();  // its own hold_metrics() call finds these
-    hold_metrics_->quality = contact_quality();
+    hold_metrics_->quality = hold_quality_;
   }
   return hold_metrics_;
 }
@@ -884,24 +870,22 @@ std::vector<QualityContact> HandController::quality_contacts(std::span<const Con
   return kept;
 }
 
-GraspQuality HandController::contact_quality() const {
-  const std::vector<QualityContact> kept = quality_contacts(contacts_);
-  const double mu = held_model_->friction.value_or(rig_->friction());
-  Wrenches wrenches = contact_wrenches(kept, mu, held_model_->max_radius);
-  // The quality is a pure function of the wrenches (friction and radius are in them), so a kept
-  // entry serves any object. Most recently used first.
-  auto it = std::find_if(quality_memo_.begin(), quality_memo_.end(), [&](const QualityMemo& m) {
-    return wrench_distance(m.wrenches, wrenches) <= kQualitySameWrench;
-  });
-  if (it == quality_memo_.end()) {
-    ++quality_hulls_;
-    const GraspQuality q = wrench_quality(wrenches, settings_.quality_volume);
-    if (quality_memo_.size() == kQualityMemo) quality_memo_.pop_back();
-    quality_memo_.insert(quality_memo_.begin(), QualityMemo{std::move(wrenches), q});
-  } else {
-    std::rotate(quality_memo_.begin(), it, it + 1);
-  }
-  return quality_memo_.front().quality;
+std::optional<QualityJob> HandController::quality_inputs() const {
+  if (!state_.grasped.valid()) return std::nullopt;
+  if (contacts_key_ != shape_key()) refresh_contacts();
+  QualityJob job;
+  job.contacts = quality_contacts(contacts_);
+  job.mu = held_model_->friction.value_or(rig_->friction());
+  job.torque_scale = held_model_->max_radius;
+  job.volume = settings_.quality_volume;
+  return job;
+}
+
+void HandController::set_quality(std::uint64_t grasp, const GraspQuality& quality, bool grasp_tick) {
+  if (grasp != grasp_serial_ || !state_.grasped.valid()) return;
+  hold_quality_ = quality;
+  if (hold_metrics_) hold_metrics_->quality = quality;
+  if (grasp_tick && metrics_) metrics_->quality = quality;
 }
 
 std::vector<Contact> HandController::contacts() const {

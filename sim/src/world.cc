@@ -8,7 +8,9 @@
 
 #include <algorithm>
 #include <cassert>
+#include <deque>
 #include <map>
+#include <optional>
 #include <stdexcept>
 
 namespace telegrasp::sim {
@@ -76,6 +78,19 @@ struct World::Impl {
   std::map<int, Hand> hands;  // ordered by id: hands tick in id order
   std::vector<GraspEvent> events;
   std::vector<GraspEvent> pending;  // from calls between steps, delivered with the next step's
+  // Grasp qualities: the worker, the last job id of each step still to deliver, what each hand
+  // last asked for (its grasp and contacts), this step's deliveries and the counts.
+  std::unique_ptr<QualityWorker> quality;
+  std::deque<std::pair<std::uint64_t, std::uint64_t>> quality_due;  // (tick, last job id through it)
+  struct Asked {
+    std::uint64_t grasp = 0;
+    std::vector<QualityContact> contacts;
+  };
+  std::map<int, Asked> quality_asked;
+  std::vector<QualityResult> quality_results;
+  std::map<int, std::uint64_t> quality_computed;
+  std::uint64_t next_job = 1;
+  std::uint64_t quality_late = 0;
   int next_object = 0;
   int next_hand = 0;
   std::uint64_t tick = 0;
@@ -171,6 +186,62 @@ struct World::Impl {
     events.push_back(std::move(e));
   }
 
+  // Hands the worker the contacts of every holding hand whose grasp or contacts changed this step
+  // (the step numbered `now`).
+  void ask_qualities(std::uint64_t now) {
+    const std::uint64_t first = next_job;
+    for (auto& [h, hand_entry] : hands) {
+      const HandController& hand = *hand_entry.controller;
+      std::optional<QualityJob> job = hand.quality_inputs();
+      if (!job) continue;
+      Asked& asked = quality_asked[h];
+      const bool new_grasp = asked.grasp != hand.grasp_serial();
+      if (!new_grasp && same_contacts(asked.contacts, job->contacts)) continue;
+      asked.grasp = hand.grasp_serial();
+      asked.contacts = job->contacts;
+      job->id = next_job++;
+      job->hand = HandId(h);
+      job->grasp = hand.grasp_serial();
+      job->tick = now;
+      job->grasp_tick = new_grasp;
+      if (new_grasp)
+        for (GraspEvent& e : events)
+          if (e.kind == GraspEvent::Kind::kGrasp && e.hand == HandId(h)) e.quality_job = job->id;
+      quality->submit(std::move(*job));
+    }
+    if (next_job > first) quality_due.emplace_back(now, next_job - 1);
+  }
+
+  static bool same_contacts(const std::vector<QualityContact>& a, const std::vector<QualityContact>& b) {
+    return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](const auto& x, const auto& y) {
+             return x.p == y.p && x.n == y.n;
+           });
+  }
+
+  // Delivers the qualities of the contact sets of step `now - quality_delay_ticks` and before.
+  void deliver_qualities(std::uint64_t now) {
+    quality_results.clear();
+    const std::uint64_t k = static_cast<std::uint64_t>(settings.quality_delay_ticks);
+    std::uint64_t last = 0;
+    while (!quality_due.empty() && quality_due.front().first + k <= now) {
+      last = quality_due.front().second;
+      quality_due.pop_front();
+    }
+    if (last == 0) return;
+    bool waited = false;
+    quality_results = quality->take(last, waited);
+    quality_late += waited;
+    for (const QualityResult& r : quality_results) {
+      if (r.job.forget) continue;
+      quality_computed[r.job.hand.value] = r.computed;
+      auto it = hands.find(r.job.hand.value);
+      if (it != hands.end()) it->second.controller->set_quality(r.job.grasp, r.quality, r.job.grasp_tick);
+      if (r.job.grasp_tick)  // this step's own grasp event (quality_delay_ticks 0)
+        for (GraspEvent& e : events)
+          if (e.quality_job == r.job.id && e.metrics) e.metrics->quality = r.quality;
+    }
+  }
+
   // A held object follows its holder exactly, or both holders (two_hand_hold.h), who then hold it
   // where it is.
   void follow_holders(Object& o) {
@@ -196,7 +267,9 @@ struct World::Impl {
 
 World::World(WorldSettings settings) : impl_(std::make_unique<Impl>()) {
   if (!(settings.dt > 0)) throw std::invalid_argument("WorldSettings.dt must be > 0");
+  if (settings.quality_delay_ticks < 0) throw std::invalid_argument("WorldSettings.quality_delay_ticks must be >= 0");
   impl_->settings = settings;
+  impl_->quality = std::make_unique<QualityWorker>(settings.quality_delay_ticks > 0);
   // The hands keep out of the table too (unless the caller gave them a table of their own).
   if (!(settings.grasp.table_half_extent > 0)) impl_->settings.grasp.table_half_extent = settings.table_half_extent;
   impl_->dynamics.setGravity(to_bt(settings.gravity));
@@ -297,6 +370,18 @@ void World::remove_hand(HandId id) {
     }
   }
   impl_->hands.erase(it);
+  // The worker forgets the hand's memo in order with its jobs; what it still computes for the
+  // hand is delivered to nobody.
+  if (impl_->quality_asked.erase(id.value) > 0) {
+    QualityJob forget;
+    forget.id = impl_->next_job++;
+    forget.hand = id;
+    forget.tick = impl_->tick;
+    forget.forget = true;
+    impl_->quality->submit(std::move(forget));
+    impl_->quality_due.emplace_back(impl_->tick, forget.id);
+  }
+  impl_->quality_computed.erase(id.value);
 }
 
 std::string World::set_input(HandId hand, const ControllerInput& input) {
@@ -323,8 +408,10 @@ void World::step() {
   }
   for (auto& [id, o] : w.objects)
     if (!o.holders.empty()) w.follow_holders(o);
+  w.ask_qualities(w.tick + 1);
   w.dynamics.stepSimulation(btScalar(dt), 1, btScalar(dt));
   ++w.tick;
+  w.deliver_qualities(w.tick);
 }
 
 double World::dt() const { return impl_->settings.dt; }
@@ -359,5 +446,11 @@ HandId World::holder(ObjectId id) const {
 std::vector<HandId> World::holders(ObjectId id) const { return impl_->object(id).holders; }
 const HandController& World::hand(HandId id) const { return *impl_->hand(id).controller; }
 const std::vector<GraspEvent>& World::events() const { return impl_->events; }
+const std::vector<QualityResult>& World::quality_results() const { return impl_->quality_results; }
+std::uint64_t World::quality_late() const { return impl_->quality_late; }
+std::uint64_t World::quality_computations(HandId hand) const {
+  auto it = impl_->quality_computed.find(hand.value);
+  return it == impl_->quality_computed.end() ? 0 : it->second;
+}
 
 }  // namespace telegrasp::sim

@@ -182,7 +182,7 @@ void BM_GraspQualityTrial(benchmark::State& state, const std::string& object) {
       state.ResumeTiming();
     }
     distinct = static_cast<int>(seen.size());
-    hulls = world.hand(hand_id).quality_hulls();
+    hulls = world.quality_computations(hand_id);
   }
   state.counters["held_ticks"] = held;
   state.counters["hulls"] = static_cast<double>(hulls);

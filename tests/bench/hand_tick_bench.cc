@@ -2,7 +2,9 @@
 // interaction manager, finger movement, grasping logic, metrics and contacts) against a mesh:
 // closing = the ticks of the squeeze before the grasp (averaged), grasp = the one tick the grasp
 // rule turns true (metrics and contacts taken), holding = a tick while holding. Counters:
-// tick_us and the same figure named after the kind (closing_us, grasp_us, holding_us).
+// tick_us and the same figure named after the kind (closing_us, grasp_us, holding_us); the
+// grasp tick also has quality_us (the grasp's quality, which the World computes on its
+// QualityWorker thread, not in this tick: wrench_epsilon() of the grasp's contacts) and contacts.
 // Two sets: "ycb", the meshes of $TELEGRASP_OBJECTS_DIR (default ../shared/data/ycb; the
 // built-in stand-ins when missing), and "unseen", generated stand-ins for meshes nobody tuned
 // for (tests/bench/unseen_meshes.h: those YCB meshes under random rotations, and procedural
@@ -18,6 +20,7 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
@@ -115,6 +118,19 @@ void BM_GraspTick(benchmark::State& state, const std::string& name, const ModelM
   }
   set_tick_counters(state, "grasp_us", 1);
   state.counters["grasped"] = grasped;
+  // The other path: the grasp's quality, which the World's QualityWorker computes off the
+  // simulation thread (no memo: a new grasp's contact set), timed here outside the loop.
+  HandController hand = before;
+  hand.tick(squeeze(f.plan, f.grasp_tick), kDt, {&view, 1});
+  if (const std::optional<QualityJob> job = hand.quality_inputs()) {
+    const Wrenches w = contact_wrenches(job->contacts, job->mu, job->torque_scale);
+    constexpr int kRepetitions = 20;
+    const auto t0 = std::chrono::steady_clock::now();
+    for (int i = 0; i < kRepetitions; ++i) benchmark::DoNotOptimize(wrench_quality(w));
+    state.counters["quality_us"] =
+        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() / kRepetitions;
+    state.counters["contacts"] = static_cast<double>(job->contacts.size());
+  }
 }
 
 // Ticks while holding the grasped object (trigger held at 1, hand still).

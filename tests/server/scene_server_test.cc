@@ -195,7 +195,8 @@ TEST_F(SceneServerTest, ASilentHandIsFrozenThenRemovedAndDropsItsObject) {
   const double silent_s = static_cast<double>(now - last_input) * 1e-9;
   EXPECT_GT(silent_s, settings.remove_after_s);
   EXPECT_LT(silent_s, 1.0);
-  tick();  // the release is published with the next step
+  // The release happens with the next step and is published quality_delay_ticks later.
+  for (int i = 0; i <= settings.quality_delay_ticks; ++i) tick();
   ASSERT_EQ(sink.events.size(), 2u);
   EXPECT_EQ(sink.events[1].kind(), msg::GRASP_EVENT_RELEASE);
   EXPECT_EQ(sink.events[1].object_id(), can);
@@ -205,6 +206,104 @@ TEST_F(SceneServerTest, ASilentHandIsFrozenThenRemovedAndDropsItsObject) {
   const double z_dropped = scene->world().object_pose(sim::ObjectId(can)).translation().z();
   for (int i = 0; i < 90; ++i) tick();
   EXPECT_LT(scene->world().object_pose(sim::ObjectId(can)).translation().z(), z_dropped - 0.03);  // it fell
+}
+
+// Alice's right hand, driven by the scripted operator, closes on `object` until the World's step
+// reports the grasp; returns that event (tick, contacts) and leaves the input at `in`.
+sim::GraspEvent grasp_until_event(SceneServerTest& t, int object, sim::ControllerInput& in) {
+  const sim::ObjectModel& model = t.scene->world().object_model(sim::ObjectId(object));
+  sim::ScriptedOperator op(t.right, sim::skill_profile("perfect"), 7);
+  Eigen::Isometry3d start = Eigen::Isometry3d::Identity();
+  const Eigen::Isometry3d X_WorldObject = t.scene->world().object_pose(sim::ObjectId(object));
+  start.translation() = X_WorldObject.translation() + Eigen::Vector3d(-0.3, -0.2, 0.3);
+  op.begin(model, X_WorldObject, start, t.scene->world().time());
+  while (t.scene->world().time() < 20) {
+    in = op.next(t.scene->world().time(), false);
+    t.send("alice", 1, in);
+    t.tick();
+    for (const sim::GraspEvent& e : t.scene->world().events())
+      if (e.kind == sim::GraspEvent::Kind::kGrasp) return e;
+  }
+  ADD_FAILURE() << "no grasp";
+  return {};
+}
+
+void remove_object(SceneServerTest& t, int object) {
+  msg::SceneCommand c;
+  c.client_id("alice");
+  c.kind(msg::SCENE_REMOVE);
+  c.object_id(object);
+  EXPECT_EQ(t.scene->apply_command(c), "");
+}
+
+// The grasp quality leaves the simulation thread: a GraspEvent goes out exactly
+// quality_delay_ticks (default 2) after its tick, carrying the quality of the grasp tick's
+// contacts (equal to a fresh computation of them, never the pending -1); GraspState shows -1
+// (pending) from the grasp until then, then that quality. Releases wait as long.
+TEST_F(SceneServerTest, GraspQualityIsPublishedAFixedNumberOfTicksLaterWithItsEvent) {
+  ASSERT_EQ(settings.quality_delay_ticks, 2);
+  const int ball = spawn("056_tennis_ball", 0.45, 0.0);  // grasped in force closure
+  for (int i = 0; i < 30; ++i) tick();
+  sim::ControllerInput in;
+  const sim::GraspEvent grasp = grasp_until_event(*this, ball, in);
+  ASSERT_NE(grasp.tick, 0u);
+  const sim::GraspQuality fresh =
+      sim::grasp_quality(sim::HandController::quality_contacts(grasp.contacts), right->friction(),
+                         scene->world().object_model(sim::ObjectId(ball)).max_radius);
+  EXPECT_GT(fresh.epsilon, 0.0);
+  EXPECT_TRUE(sink.events.empty()) << "held for its quality";
+  EXPECT_EQ(sink.states.back().grasped_object(), ball);
+  EXPECT_EQ(sink.states.back().epsilon(), -1.0);  // pending
+  EXPECT_EQ(sink.states.back().volume(), -1.0);
+  send("alice", 1, in);
+  tick();
+  EXPECT_TRUE(sink.events.empty());
+  EXPECT_EQ(sink.states.back().epsilon(), -1.0);
+  send("alice", 1, in);
+  tick();
+  ASSERT_EQ(scene->world().tick(), grasp.tick + 2);
+  ASSERT_EQ(sink.events.size(), 1u);
+  EXPECT_EQ(sink.events[0].kind(), msg::GRASP_EVENT_GRASP);
+  EXPECT_EQ(sink.events[0].tick(), grasp.tick);
+  EXPECT_EQ(sink.events[0].epsilon(), fresh.epsilon);
+  EXPECT_EQ(sink.events[0].force_closure(), fresh.force_closure);
+  EXPECT_EQ(sink.events[0].volume(), sim::kVolumeNotComputed);
+  EXPECT_EQ(sink.states.back().epsilon(), fresh.epsilon);
+  EXPECT_EQ(sink.states.back().tick(), grasp.tick + 2);
+  // A release goes out 2 ticks after its own.
+  remove_object(*this, ball);
+  const std::uint64_t release_tick = scene->world().tick();  // reported with the next step
+  for (int i = 0; i < 2; ++i) {
+    tick();
+    EXPECT_EQ(sink.events.size(), 1u);
+  }
+  tick();
+  ASSERT_EQ(sink.events.size(), 2u);
+  EXPECT_EQ(sink.events[1].kind(), msg::GRASP_EVENT_RELEASE);
+  EXPECT_EQ(sink.events[1].tick(), release_tick);
+  EXPECT_EQ(scene->status({}).quality_late(), scene->world().quality_late());
+}
+
+// A grasp whose object goes away before its quality is out: the grasp event still carries the
+// quality, and goes out before the release.
+TEST_F(SceneServerTest, AGraspReleasedBeforeItsQualityIsPublishedStillGetsIt) {
+  const int ball = spawn("056_tennis_ball", 0.45, 0.0);  // grasped in force closure
+  for (int i = 0; i < 30; ++i) tick();
+  sim::ControllerInput in;
+  const sim::GraspEvent grasp = grasp_until_event(*this, ball, in);
+  ASSERT_NE(grasp.tick, 0u);
+  const sim::GraspQuality fresh =
+      sim::grasp_quality(sim::HandController::quality_contacts(grasp.contacts), right->friction(),
+                         scene->world().object_model(sim::ObjectId(ball)).max_radius);
+  EXPECT_GT(fresh.epsilon, 0.0);
+  remove_object(*this, ball);
+  for (int i = 0; i < 4; ++i) tick();
+  ASSERT_EQ(sink.events.size(), 2u);
+  EXPECT_EQ(sink.events[0].kind(), msg::GRASP_EVENT_GRASP);
+  EXPECT_EQ(sink.events[0].epsilon(), fresh.epsilon);
+  EXPECT_EQ(sink.events[1].kind(), msg::GRASP_EVENT_RELEASE);
+  EXPECT_EQ(sink.events[1].tick(), grasp.tick);  // removed before the next step
+  EXPECT_GT(sink.events[1].event_id(), sink.events[0].event_id());
 }
 
 // A server (with `settings`) whose scene is a 0.6 m long box; alice's right hand squeezes one end

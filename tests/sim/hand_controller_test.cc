@@ -539,29 +539,37 @@ TEST(HandControllerTest, GraspQualityIsThatOfTheContacts) {
     return grasp_quality(qc, mu, model.max_radius, 8, QualityVolume::kCompute);
   };
   for (const ObjectModelPtr& model : {bottle, ObjectModelPtr(slippery)}) {
-    const Eigen::Isometry3d X_WorldObject = World::resting_pose(*model, 0.45, 0.0, 0.4);
-    const GraspPlan plan = plan_grasp(rig, {}, *model, X_WorldObject, kDt);
-    const ObjectView view{ObjectId(1), X_WorldObject, model.get()};
-    GraspSettings with_volume;
-    with_volume.quality_volume = QualityVolume::kCompute;
-    HandController hand(rig, with_volume);
+    // A World computes the qualities (within the step: quality_delay_ticks 0) and gives them to
+    // the hand; a HandController alone has none.
+    WorldSettings ws;
+    ws.grasp.quality_volume = QualityVolume::kCompute;
+    World world(ws);
+    const ObjectId id = world.add_object(model, World::resting_pose(*model, 0.45, 0.0, 0.4));
+    const GraspPlan plan = plan_grasp(rig, {}, *model, world.object_pose(id), kDt);
+    const HandId hand_id = world.add_hand(rig);
     ControllerInput in;
     in.X_WorldPalm = plan.X_WorldPalm;
-    bool grasped = false;
-    for (int t = 0; t < 90 && !grasped; ++t) {
+    std::optional<GraspEvent> grasp;
+    for (int t = 0; t < 90 && !grasp; ++t) {
       in.trigger = std::min(1.0, t * kDt / 0.35);
-      grasped = hand.tick(in, kDt, {&view, 1}).grasped;
+      ASSERT_EQ(world.set_input(hand_id, in), "");
+      world.step();
+      for (const GraspEvent& e : world.events())
+        if (e.kind == GraspEvent::Kind::kGrasp) grasp = e;
     }
-    ASSERT_TRUE(grasped) << model->name;
+    ASSERT_TRUE(grasp) << model->name;
+    const HandController& hand = world.hand(hand_id);
     const double mu = model->friction.value_or(0.5);
     const GraspQuality expected = quality_of(hand, *model, mu);
-    const GraspQuality& q = hand.grasp_metrics()->quality;
-    EXPECT_EQ(q.epsilon, expected.epsilon);
-    EXPECT_EQ(q.volume, expected.volume);
-    EXPECT_EQ(q.force_closure, expected.force_closure);
+    for (const GraspQuality& q : {hand.grasp_metrics()->quality, grasp->metrics->quality}) {
+      EXPECT_EQ(q.epsilon, expected.epsilon);
+      EXPECT_EQ(q.volume, expected.volume);
+      EXPECT_EQ(q.force_closure, expected.force_closure);
+    }
     // Squeezing on, new phalanges block: hold_metrics() follows the contacts.
     in.trigger = 1.0;
-    for (int t = 0; t < 30; ++t) hand.tick(in, kDt, {&view, 1});
+    ASSERT_EQ(world.set_input(hand_id, in), "");
+    for (int t = 0; t < 30; ++t) world.step();
     ASSERT_TRUE(hand.state().grasped.valid());
     const GraspQuality held = quality_of(hand, *model, mu);
     EXPECT_EQ(hand.hold_metrics()->quality.epsilon, held.epsilon);
@@ -572,6 +580,27 @@ TEST(HandControllerTest, GraspQualityIsThatOfTheContacts) {
       EXPECT_EQ(held.volume, 0.0);  // frictionless: one wrench per contact, 7 needed to span 6-D
     }
   }
+  // A HandController alone grasps with its quality pending.
+  const Eigen::Isometry3d X_WorldObject = World::resting_pose(*bottle, 0.45, 0.0, 0.4);
+  const GraspPlan plan = plan_grasp(rig, {}, *bottle, X_WorldObject, kDt);
+  const ObjectView view{ObjectId(1), X_WorldObject, bottle.get()};
+  HandController alone(rig, {});
+  ControllerInput in;
+  in.X_WorldPalm = plan.X_WorldPalm;
+  bool grasped = false;
+  for (int t = 0; t < 90 && !grasped; ++t) {
+    in.trigger = std::min(1.0, t * kDt / 0.35);
+    grasped = alone.tick(in, kDt, {&view, 1}).grasped;
+  }
+  ASSERT_TRUE(grasped);
+  EXPECT_EQ(alone.grasp_metrics()->quality.epsilon, kPendingQuality.epsilon);
+  EXPECT_EQ(alone.hold_metrics()->quality.epsilon, kPendingQuality.epsilon);
+  // set_quality() delivers one, to this grasp only.
+  alone.set_quality(alone.grasp_serial() + 1, {0.5, 1, true}, true);
+  EXPECT_EQ(alone.grasp_metrics()->quality.epsilon, kPendingQuality.epsilon);
+  alone.set_quality(alone.grasp_serial(), {0.25, 1, true}, true);
+  EXPECT_EQ(alone.grasp_metrics()->quality.epsilon, 0.25);
+  EXPECT_EQ(alone.hold_metrics()->quality.epsilon, 0.25);
 }
 
 std::vector<QualityContact> quality_contacts(const HandController& hand) {
@@ -619,20 +648,20 @@ TEST(HandControllerTest, HoldQualityIsAFreshHullOfTheContactsAndOneHullPerContac
     set_changes += !bit_identical(kept, previous);
     previous = kept;
     if (op.phase() == OperatorPhase::kHold) {
-      if (!hulls_at_hold) hulls_at_hold = hand.quality_hulls();
-      EXPECT_EQ(hand.quality_hulls(), *hulls_at_hold) << "a steady hold builds no hull";
+      if (!hulls_at_hold) hulls_at_hold = world.quality_computations(hand_id);
+      EXPECT_EQ(world.quality_computations(hand_id), *hulls_at_hold) << "a steady hold builds no hull";
     }
   }
   EXPECT_TRUE(op.held_after_lift());
   EXPECT_GT(held, 100);
   ASSERT_TRUE(hulls_at_hold.has_value());
-  EXPECT_EQ(world.hand(hand_id).quality_hulls(), distinct.size());
+  EXPECT_EQ(world.quality_computations(hand_id), distinct.size());
   EXPECT_GT(set_changes, static_cast<int>(distinct.size())) << "the release comes back to earlier contact sets";
 }
 
 // Two hands holding a long box re-attach to it every tick. While they rise together their
 // contacts move by rounding only: no hull is rebuilt, and the quality stays within the bound of
-// hand_controller.h (quality_hulls()) of a fresh hull. Pulled apart, the hands slide along the
+// hand_controller.h (quality_contacts()) of a fresh hull. Pulled apart, the hands slide along the
 // box: the contacts really move, and each tick builds a hull per hand.
 TEST(HandControllerTest, TwoHandHoldRebuildsTheHullOnlyWhenTheContactsMove) {
   auto rig = std::make_shared<const HandRig>(HandRig::load(HandRig::builtin_path("human_right")));
@@ -657,7 +686,7 @@ TEST(HandControllerTest, TwoHandHoldRebuildsTheHullOnlyWhenTheContactsMove) {
   for (int t = 1; t <= 60; ++t) step({0, 0, 0}, 0, std::min(1.0, t / 30.0));
   ASSERT_EQ(world.holders(box).size(), 2u);
   const double mu = model->friction.value_or(rig->friction());
-  const std::uint64_t hulls_a = world.hand(a).quality_hulls(), hulls_b = world.hand(b).quality_hulls();
+  const std::uint64_t hulls_a = world.quality_computations(a), hulls_b = world.quality_computations(b);
   const std::vector<QualityContact> before_a = quality_contacts(world.hand(a)),
                                     before_b = quality_contacts(world.hand(b));
   int rounded = 0;  // ticks on which rounding moved some contact
@@ -667,8 +696,8 @@ TEST(HandControllerTest, TwoHandHoldRebuildsTheHullOnlyWhenTheContactsMove) {
                !bit_identical(quality_contacts(world.hand(b)), before_b);
   }
   ASSERT_EQ(world.holders(box).size(), 2u);
-  EXPECT_EQ(world.hand(a).quality_hulls(), hulls_a);
-  EXPECT_EQ(world.hand(b).quality_hulls(), hulls_b);
+  EXPECT_EQ(world.quality_computations(a), hulls_a);
+  EXPECT_EQ(world.quality_computations(b), hulls_b);
   EXPECT_GT(rounded, 0) << "rounding did move the contacts";
   for (HandId h : {a, b}) {
     const std::vector<QualityContact> kept = quality_contacts(world.hand(h));
@@ -681,8 +710,8 @@ TEST(HandControllerTest, TwoHandHoldRebuildsTheHullOnlyWhenTheContactsMove) {
   }
   for (int t = 1; t <= 30; ++t) step({0, 0, 0.1}, 0.02 * t / 30, 1);
   ASSERT_EQ(world.holders(box).size(), 2u);
-  EXPECT_GE(world.hand(a).quality_hulls(), hulls_a + 25);
-  EXPECT_GE(world.hand(b).quality_hulls(), hulls_b + 25);
+  EXPECT_GE(world.quality_computations(a), hulls_a + 25);
+  EXPECT_GE(world.quality_computations(b), hulls_b + 25);
 }
 
 // The closing modes' names, as flags, configuration files and records write them, read back.

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <utility>
 
 namespace telegrasp::sim {
 namespace {
@@ -241,6 +242,118 @@ TEST(WorldTest, EqualInputsGiveBitIdenticalRuns) {
   ASSERT_EQ(a.size(), b.size());
   ASSERT_GT(a.size(), 1000u);
   EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)), 0);
+}
+
+// Grasp qualities on a worker (quality_delay_ticks 2) are those computed within the step (0),
+// bit for bit, delivered exactly 2 steps later; grasp events of the delayed world carry the
+// pending quality, the result of their quality_job is the other world's event quality.
+TEST(WorldTest, DelayedQualitiesAreTheSameQualitiesDeliveredKStepsLater) {
+  WorldSettings inline_settings, delayed_settings;
+  delayed_settings.quality_delay_ticks = 2;
+  World now(inline_settings), later(delayed_settings);
+  const ObjectModelPtr ball = standin("056_tennis_ball");  // its grasps are in force closure
+  for (World* w : {&now, &later}) w->add_object(ball, World::resting_pose(*ball, 0.45, 0.02, 0.5));
+  const HandId hand = now.add_hand(human_right());
+  ASSERT_EQ(later.add_hand(human_right()), hand);
+  for (int i = 0; i < 30; ++i) now.step(), later.step();
+  ScriptedOperator op(human_right(), skill_profile("experienced"), 3);
+  op.begin(*ball, now.object_pose(ObjectId(0)), Eigen::Isometry3d(Eigen::Translation3d(0.15, -0.2, 0.3)), now.time());
+  std::vector<QualityResult> from_now, from_later;
+  std::vector<GraspQuality> event_quality_now;
+  std::vector<std::uint64_t> event_jobs_later;
+  while (!op.done() && now.time() < 20) {
+    const ControllerInput in = op.next(now.time(), now.holder(ObjectId(0)) == hand);
+    ASSERT_EQ(now.set_input(hand, in), "");
+    ASSERT_EQ(later.set_input(hand, in), "");
+    now.step();
+    later.step();
+    for (const QualityResult& r : now.quality_results()) {
+      EXPECT_EQ(r.job.tick, now.tick());
+      from_now.push_back(r);
+    }
+    for (const QualityResult& r : later.quality_results()) {
+      EXPECT_EQ(r.job.tick + 2, later.tick());
+      from_later.push_back(r);
+    }
+    for (const GraspEvent& e : now.events())
+      if (e.kind == GraspEvent::Kind::kGrasp) event_quality_now.push_back(e.metrics->quality);
+    for (const GraspEvent& e : later.events())
+      if (e.kind == GraspEvent::Kind::kGrasp) {
+        EXPECT_EQ(e.metrics->quality.epsilon, kPendingQuality.epsilon);
+        event_jobs_later.push_back(e.quality_job);
+      }
+  }
+  for (int i = 0; i < 2; ++i) {  // the last results still due
+    now.step(), later.step();
+    from_now.insert(from_now.end(), now.quality_results().begin(), now.quality_results().end());
+    from_later.insert(from_later.end(), later.quality_results().begin(), later.quality_results().end());
+  }
+  EXPECT_TRUE(op.held_after_lift());
+  ASSERT_GT(from_now.size(), 2u);
+  ASSERT_EQ(from_now.size(), from_later.size());
+  for (std::size_t i = 0; i < from_now.size(); ++i) {
+    EXPECT_EQ(from_now[i].job.id, from_later[i].job.id);
+    EXPECT_EQ(from_now[i].job.tick, from_later[i].job.tick);
+    EXPECT_EQ(from_now[i].quality.epsilon, from_later[i].quality.epsilon);
+    EXPECT_EQ(from_now[i].quality.force_closure, from_later[i].quality.force_closure);
+    EXPECT_EQ(from_now[i].computed, from_later[i].computed);
+  }
+  ASSERT_EQ(event_quality_now.size(), event_jobs_later.size());
+  ASSERT_FALSE(event_jobs_later.empty());
+  for (std::size_t i = 0; i < event_jobs_later.size(); ++i) {
+    auto r = std::find_if(from_later.begin(), from_later.end(),
+                          [&](const QualityResult& q) { return q.job.id == event_jobs_later[i]; });
+    ASSERT_NE(r, from_later.end());
+    EXPECT_TRUE(r->job.grasp_tick);
+    EXPECT_EQ(r->quality.epsilon, event_quality_now[i].epsilon);
+    EXPECT_GT(r->quality.epsilon, 0.0);
+  }
+  EXPECT_TRUE(std::any_of(from_later.begin(), from_later.end(), [](const QualityResult& r) {
+    return r.quality.epsilon > 0;
+  })) << "some held contact set is in force closure";
+  EXPECT_EQ(now.quality_late(), 0u);  // within the step: never waits
+}
+
+// The worker's results are a function of the jobs alone: on its thread or not, the same, in
+// order, the memo's reuse included (a set asked again is not recomputed); a forgotten hand starts
+// afresh.
+TEST(QualityWorkerTest, ThreadedAndInlineGiveTheSameResults) {
+  std::vector<QualityJob> jobs;
+  const std::vector<QualityContact> a = {{{0.04, 0, 0}, {1, 0, 0}}, {{-0.04, 0, 0}, {-1, 0, 0}}, {{0, 0.04, 0}, {0, 1, 0}}};
+  std::vector<QualityContact> b(a);
+  b.push_back({{0, -0.04, 0}, {0, -1, 0}});
+  for (const std::vector<QualityContact>* set : {&a, &std::as_const(b), &a, &std::as_const(b)}) {
+    QualityJob j;
+    j.hand = HandId(3);
+    j.contacts = *set;
+    j.mu = 0.5;
+    j.torque_scale = 0.04;
+    jobs.push_back(j);
+  }
+  QualityJob forget;
+  forget.hand = HandId(3);
+  forget.forget = true;
+  jobs.push_back(forget);
+  jobs.push_back(jobs.front());
+  for (std::size_t i = 0; i < jobs.size(); ++i) jobs[i].id = i + 1;
+  QualityWorker threaded(true), inline_worker(false);
+  for (const QualityJob& j : jobs) threaded.submit(j), inline_worker.submit(j);
+  bool waited = false;
+  const std::vector<QualityResult> x = threaded.take(jobs.size(), waited);
+  const std::vector<QualityResult> y = inline_worker.take(jobs.size(), waited);
+  EXPECT_FALSE(waited);  // inline: done in submit()
+  ASSERT_EQ(x.size(), jobs.size());
+  ASSERT_EQ(y.size(), jobs.size());
+  const std::vector<std::uint64_t> computed = {1, 2, 2, 2, 0, 1};  // reuse, then afresh after forget
+  for (std::size_t i = 0; i < jobs.size(); ++i) {
+    EXPECT_EQ(x[i].job.id, i + 1);
+    EXPECT_EQ(x[i].quality.epsilon, y[i].quality.epsilon);
+    EXPECT_EQ(x[i].computed, computed[i]) << i;
+    EXPECT_EQ(y[i].computed, computed[i]) << i;
+  }
+  EXPECT_EQ(x[0].quality.epsilon, x[2].quality.epsilon);
+  EXPECT_EQ(x[1].quality.epsilon, grasp_quality(b, 0.5, 0.04).epsilon);
+  EXPECT_TRUE(threaded.take(jobs.size(), waited).empty());  // each result is taken once
 }
 
 }  // namespace

@@ -179,6 +179,7 @@ Json server_status(const client::ServerStatus& s) {
               {"missed_ticks", s.missed_ticks},
               {"rss_kib", s.rss_kib},
               {"heap_kib", s.heap_kib},
+              {"quality_late", s.quality_late},
               {"inputs_accepted", s.inputs_accepted},
               {"inputs_rejected", s.inputs_rejected},
               {"rejected", rejected},

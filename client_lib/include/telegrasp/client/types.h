@@ -177,6 +177,7 @@ struct ServerStatus {
   std::uint64_t notices_sent = 0;  ///< Refusals told to their clients (Notice), since the server started.
   std::uint64_t rss_kib = 0;   ///< The server process's resident set, KiB.
   std::uint64_t heap_kib = 0;  ///< Its heap in use (malloc'd, not freed), KiB: what a leak makes grow.
+  std::uint64_t quality_late = 0;  ///< Ticks that waited for the grasp-quality worker, since start.
 };
 
 /// Why the server refused this client's input or command (ClientNotice): the client learns it

@@ -24,6 +24,10 @@ struct GraspQuality {
   bool force_closure = false;  ///< epsilon > 0.
 };
 
+/// A quality not computed yet (a HandController's until its World delivers one): epsilon and
+/// volume -1, no closure.
+inline constexpr GraspQuality kPendingQuality{-1, -1, false};
+
 /// Whether a quality includes the hull's volume: epsilon takes tens to hundreds of microseconds
 /// (wrench_epsilon), the volume needs the full hull (Qhull: milliseconds to tens of them).
 enum class QualityVolume { kSkip, kCompute };

@@ -7,6 +7,7 @@
 #include "telegrasp/sim/ids.h"
 #include "telegrasp/sim/object_model.h"
 #include "telegrasp/sim/pose_resolver.h"
+#include "telegrasp/sim/quality_worker.h"
 
 #include <Eigen/Geometry>
 
@@ -90,7 +91,9 @@ struct GraspMetrics {
   double hand_error_mm = 0;  ///< Sum over fingers of mean |ND| over the finger's capsules that hit.
   int capsules_without_hit = 0;  ///< Capsules whose sweep found nothing (left out of HandError).
   double palm_signed_distance = 0;  ///< Exact signed distance of the palm volume to the object, metres.
-  GraspQuality quality;  ///< Ferrari-Canny epsilon, wrench-space volume, force closure (section 4b).
+  /// Ferrari-Canny epsilon, wrench-space volume, force closure (section 4b); kPendingQuality
+  /// until the World delivers it (HandController::set_quality()).
+  GraspQuality quality = kPendingQuality;
 };
 
 /// A contact between a blocked phalanx (or the palm) and the grasped object.
@@ -155,23 +158,29 @@ class HandController {
   /// ND and signed distances of the hand as it is now while holding (the statistics kept while
   /// the object is held; the grasp tick's are in grasp_metrics()); empty when not holding.
   std::optional<GraspMetrics> hold_metrics() const;
-  /// How many grasp qualities (wrench_quality(): the expanding polytope, tens to hundreds of
-  /// microseconds; with the volume, Qhull's full hull: milliseconds) this hand has computed. The quality of the grasp tick and of hold_metrics() is that of the current contacts'
-  /// wrenches W (contact_wrenches() of the contacts, less those within 1 mm and 2.6 degrees of one
-  /// kept before them); a hull is built only when W is farther than d = 1e-11 from each of the 8
-  /// wrench sets used last (distance: same column count, largest distance between corresponding
-  /// columns), else that set's quality is returned. Bound on a reused quality's error: the two
-  /// hulls are within Hausdorff distance d, and epsilon is 1-Lipschitz in it, so epsilon is off by
-  /// at most d + 1e-12 (1e-12: the least epsilon reported as closure); the volumes differ by at
-  /// most kappa6 ((R + d)^6 - R^6) ~ 31 R^5 d (Steiner's formula for V(K + dB), each
-  /// quermassintegral of K at most that of the ball B_R holding it; kappa6 = pi^3 / 6, R the
-  /// largest wrench norm, <= sqrt(2 (1 + mu^2)) as contacts lie within the torque scale of the
-  /// centre of mass): about 1e-8 for mu <= 1. Except where grasp_quality() itself jumps (a set at
-  /// its flatness threshold gives all zero). A one-hand hold recomputes a contact set's wrenches
-  /// bit-identically, so it reuses exact matches only; d absorbs the rounding of two-hand holds.
-  std::uint64_t quality_hulls() const { return quality_hulls_; }
+  /// Counts the grasps this hand has made: the grasp a quality belongs to (set_quality()).
+  std::uint64_t grasp_serial() const { return grasp_serial_; }
+  /// The inputs of the grasp quality of the current contacts (QualityJob's contacts, friction:
+  /// the held object's, else the rig's; torque scale: its radius; the volume setting), or nothing
+  /// when not holding. The World hands them to its QualityWorker.
+  std::optional<QualityJob> quality_inputs() const;
+  /// Delivers the quality of a contact set of grasp number `grasp` (grasp_serial()): from now on
+  /// hold_metrics() carries it, and with `grasp_tick` grasp_metrics() too. A quality of another
+  /// grasp than the current one is ignored. Until the first arrives both carry kPendingQuality.
+  void set_quality(std::uint64_t grasp, const GraspQuality& quality, bool grasp_tick);
   /// The contacts the grasp quality is taken of (object frame): `contacts` (those of contacts())
-  /// less any not finite and those within 1 mm and 2.6 degrees of one kept before them.
+  /// less any not finite and those within 1 mm and 2.6 degrees of one kept before them. The
+  /// QualityWorker reuses a quality for a later set whose wrenches W are within d = 1e-11 of a
+  /// set it computed among the hand's last 8 (same column count, largest distance between
+  /// corresponding columns). Bound on a reused quality's error: the two hulls are within
+  /// Hausdorff distance d, and epsilon is 1-Lipschitz in it, so epsilon is off by at most d +
+  /// 1e-12 (1e-12: the least epsilon reported as closure); the volumes differ by at most kappa6
+  /// ((R + d)^6 - R^6) ~ 31 R^5 d (Steiner's formula for V(K + dB), each quermassintegral of K at
+  /// most that of the ball B_R holding it; kappa6 = pi^3 / 6, R the largest wrench norm, <=
+  /// sqrt(2 (1 + mu^2)) as contacts lie within the torque scale of the centre of mass): about
+  /// 1e-8 for mu <= 1. Except where grasp_quality() itself jumps (a set at its flatness threshold
+  /// gives all zero). A one-hand hold recomputes a contact set's wrenches bit-identically, so it
+  /// reuses exact matches only; d absorbs the rounding of two-hand holds.
   static std::vector<QualityContact> quality_contacts(std::span<const Contact> contacts);
   /// World pose of the grasped object, if any.
   std::optional<Eigen::Isometry3d> grasped_object_pose() const;
@@ -208,9 +217,6 @@ class HandController {
   void forget_bounds(const FingerStep& step);
   void block(int id);
   void refresh_contacts() const;
-  // Grasp quality (GRASPING.md section 4b) of contacts_ with the held object's friction, else the
-  // rig's; a hull is built only for wrenches unlike those of the last few hulls (quality_hulls()).
-  GraspQuality contact_quality() const;
   // Exact closest pair between capsule `id`'s segment [a, b] (object frame) and the object's mesh:
   // the cached one while the capsule has not moved since, else searched within `reach` first (a
   // touching capsule's is near), then everywhere.
@@ -232,13 +238,8 @@ class HandController {
   mutable std::vector<double> contacts_key_;
   mutable std::optional<GraspMetrics> hold_metrics_;
   mutable std::vector<double> hold_metrics_key_;
-  // Qualities of the last distinct wrench sets (most recently used first), and hulls built.
-  struct QualityMemo {
-    Wrenches wrenches;
-    GraspQuality quality;
-  };
-  mutable std::vector<QualityMemo> quality_memo_;
-  mutable std::uint64_t quality_hulls_ = 0;
+  std::uint64_t grasp_serial_ = 0;
+  GraspQuality hold_quality_ = kPendingQuality;  // the last delivered by set_quality()
   // reach_[k][m]: bound on the distance from joint k to any point of capsule m's segment.
   std::vector<std::vector<double>> reach_;
   // Per phalanx, the triangle last found nearest to its capsule: a search hint (speed only).

@@ -34,6 +34,10 @@ struct WorldSettings {
   double table_half_extent = 1.0;  ///< The table top is [-this, this]^2 at z = 0, m.
   GraspSettings grasp;
   TwoHandMode two_hand_mode = TwoHandMode::kShare;
+  /// Grasp qualities: 0 computes each within the step that took its contacts, on the calling
+  /// thread; k > 0 on a QualityWorker thread, delivered exactly k steps later (the step waits for
+  /// the worker if it is late, and counts it: quality_late()). Either way deterministic.
+  int quality_delay_ticks = 0;
 };
 
 /// A grasp or release, with the grasp's metrics and contacts.
@@ -44,7 +48,11 @@ struct GraspEvent {
   ObjectId object;
   std::uint64_t tick = 0;
   double time = 0;  ///< Seconds since the world started.
-  std::optional<GraspMetrics> metrics;  ///< Grasp events.
+  std::optional<GraspMetrics> metrics;  ///< Grasp events (quality: see quality_job).
+  /// Grasp events: the QualityJob whose result is this grasp's quality. With quality_delay_ticks
+  /// 0 metrics->quality already holds it; with k > 0 it is pending and comes k steps later in
+  /// quality_results().
+  std::uint64_t quality_job = 0;
   std::vector<Contact> contacts;  ///< Grasp events.
   Eigen::Vector3d v_WorldObject{0, 0, 0};  ///< Release events: velocity handed to physics.
   Eigen::Vector3d w_WorldObject{0, 0, 0};
@@ -107,6 +115,16 @@ class World {
   const HandController& hand(HandId id) const;
   /// Events of the last step, in order (a release caused by remove_object between steps comes first).
   const std::vector<GraspEvent>& events() const;
+  /// The grasp qualities the last step delivered, in job order: those of the contact sets of the
+  /// step quality_delay_ticks before it (each holding hand's, when its contacts changed or it
+  /// grasped). Each is also in its hand's hold_metrics() (and grasp_metrics() for a grasp's
+  /// first) if the hand still holds that grasp.
+  const std::vector<QualityResult>& quality_results() const;
+  /// Steps that had to wait for the quality worker (0 when it keeps up).
+  std::uint64_t quality_late() const;
+  /// Qualities computed (not reused from the hand's last 8 wrench sets) for `hand` so far, as
+  /// delivered.
+  std::uint64_t quality_computations(HandId hand) const;
 
  private:
   struct Impl;
