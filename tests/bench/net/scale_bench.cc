@@ -317,6 +317,7 @@ struct Step {
   std::string why;  // what failed, if not sustained
   double window_s = 0;
   std::uint64_t ticks = 0, missed = 0;
+  std::uint64_t quality_late = 0;  // ticks that waited for the server's grasp-quality worker
   int hands_min = 0, hands_max = 0;
   double tick_us_p50 = 0, tick_us_max = 0;
   double server_cpu_us = 0, sim_cpu_us = 0, pub_cpu_us = 0, other_cpu_us = 0, machine_cpu_us = 0;
@@ -418,6 +419,7 @@ Step measure(int hands, int attempt, const Options& o, StatusCollector& status, 
   st.window_s = static_cast<double>(end->received_ns - start->received_ns) * 1e-9;
   st.ticks = end->status.tick() - start->status.tick();
   st.missed = end->status.missed_ticks() - start->status.missed_ticks();
+  st.quality_late = end->status.quality_late() - start->status.quality_late();
   st.hands_min = st.hands_max = start->status.hands();
   std::vector<double> p50s;
   for (const auto& r : status.since(start->received_ns + 1)) {
@@ -532,6 +534,7 @@ nlohmann::ordered_json to_json(const Step& s) {
                            {"window_s", r(s.window_s, 0.001)},
                            {"ticks", s.ticks},
                            {"missed_ticks", s.missed},
+                           {"quality_late", s.quality_late},
                            {"server_hands_min", s.hands_min},
                            {"server_hands_max", s.hands_max},
                            {"tick_us_p50", r(s.tick_us_p50, 0.1)},
@@ -796,7 +799,7 @@ int run(const Options& o) {
       const Step *i = idle.sustained_at(both), *a = act.sustained_at(both);
       if (i && a)
         std::cout << std::setprecision(2) << "at " << both << " hands (" << a->ticks << " ticks, " << a->missed
-                  << " missed): server CPU " << a->cpu_us_per_hand_tick() << " us per active hand-tick vs "
+                  << " missed, " << a->quality_late << " waited for the quality worker): server CPU " << a->cpu_us_per_hand_tick() << " us per active hand-tick vs "
                   << i->cpu_us_per_hand_tick() << " idle (x"
                   << (i->cpu_us_per_hand_tick() > 0 ? a->cpu_us_per_hand_tick() / i->cpu_us_per_hand_tick() : 0)
                   << "), " << std::setprecision(1) << a->server_cpu_pct() << "% vs " << i->server_cpu_pct()
