@@ -236,21 +236,36 @@ void remove_object(SceneServerTest& t, int object) {
   EXPECT_EQ(t.scene->apply_command(c), "");
 }
 
+// A tennis ball (its grasps are in force closure) spawned and grasped by alice's right hand:
+// the ball, the grasp's event as the World reported it, and a fresh quality of its contacts.
+struct BallGrasp {
+  int ball = -1;
+  sim::GraspEvent grasp;
+  sim::GraspQuality fresh;
+};
+BallGrasp grasp_a_ball(SceneServerTest& t, sim::ControllerInput& in) {
+  BallGrasp b;
+  b.ball = t.spawn("056_tennis_ball", 0.45, 0.0);
+  for (int i = 0; i < 30; ++i) t.tick();
+  b.grasp = grasp_until_event(t, b.ball, in);
+  EXPECT_NE(b.grasp.tick, 0u);
+  b.fresh = sim::grasp_quality(sim::HandController::quality_contacts(b.grasp.contacts), t.right->friction(),
+                               t.scene->world().object_model(sim::ObjectId(b.ball)).max_radius);
+  EXPECT_GT(b.fresh.epsilon, 0.0);
+  return b;
+}
+
 // The grasp quality leaves the simulation thread: a GraspEvent goes out exactly
 // quality_delay_ticks (default 2) after its tick, carrying the quality of the grasp tick's
 // contacts (equal to a fresh computation of them, never the pending -1); GraspState shows -1
 // (pending) from the grasp until then, then that quality. Releases wait as long.
 TEST_F(SceneServerTest, GraspQualityIsPublishedAFixedNumberOfTicksLaterWithItsEvent) {
   ASSERT_EQ(settings.quality_delay_ticks, 2);
-  const int ball = spawn("056_tennis_ball", 0.45, 0.0);  // grasped in force closure
-  for (int i = 0; i < 30; ++i) tick();
   sim::ControllerInput in;
-  const sim::GraspEvent grasp = grasp_until_event(*this, ball, in);
-  ASSERT_NE(grasp.tick, 0u);
-  const sim::GraspQuality fresh =
-      sim::grasp_quality(sim::HandController::quality_contacts(grasp.contacts), right->friction(),
-                         scene->world().object_model(sim::ObjectId(ball)).max_radius);
-  EXPECT_GT(fresh.epsilon, 0.0);
+  const BallGrasp b = grasp_a_ball(*this, in);
+  const int ball = b.ball;
+  const sim::GraspEvent& grasp = b.grasp;
+  const sim::GraspQuality& fresh = b.fresh;
   EXPECT_TRUE(sink.events.empty()) << "held for its quality";
   EXPECT_EQ(sink.states.back().grasped_object(), ball);
   EXPECT_EQ(sink.states.back().epsilon(), -1.0);  // pending
@@ -287,16 +302,11 @@ TEST_F(SceneServerTest, GraspQualityIsPublishedAFixedNumberOfTicksLaterWithItsEv
 // A grasp whose object goes away before its quality is out: the grasp event still carries the
 // quality, and goes out before the release.
 TEST_F(SceneServerTest, AGraspReleasedBeforeItsQualityIsPublishedStillGetsIt) {
-  const int ball = spawn("056_tennis_ball", 0.45, 0.0);  // grasped in force closure
-  for (int i = 0; i < 30; ++i) tick();
   sim::ControllerInput in;
-  const sim::GraspEvent grasp = grasp_until_event(*this, ball, in);
-  ASSERT_NE(grasp.tick, 0u);
-  const sim::GraspQuality fresh =
-      sim::grasp_quality(sim::HandController::quality_contacts(grasp.contacts), right->friction(),
-                         scene->world().object_model(sim::ObjectId(ball)).max_radius);
-  EXPECT_GT(fresh.epsilon, 0.0);
-  remove_object(*this, ball);
+  const BallGrasp b = grasp_a_ball(*this, in);
+  const sim::GraspEvent& grasp = b.grasp;
+  const sim::GraspQuality& fresh = b.fresh;
+  remove_object(*this, b.ball);
   for (int i = 0; i < 4; ++i) tick();
   ASSERT_EQ(sink.events.size(), 2u);
   EXPECT_EQ(sink.events[0].kind(), msg::GRASP_EVENT_GRASP);

@@ -356,13 +356,16 @@ void print_plan(const Options& opt, int total, std::size_t standins) {
 std::string job_name(const Job& j) { return j.mode + "-p" + std::to_string(j.participant); }
 
 // Starts job `j` on DDS domain opt.domain + slot: a lockstep server and the participant driving
-// it, each logging into the work folder.
+// it, each logging into the work folder. The server computes grasp qualities within the tick
+// (the participant takes a grasp's GraspEvent before it answers that tick) and with the volume,
+// as telegrasp-eval in process does: an evaluation has no frame budget to keep.
 void start_job(Job& j, int slot, const Options& opt, const Setup& setup) {
   j.slot = slot;
   const std::string name = job_name(j);
   const std::string domain = std::to_string(opt.domain + slot);
-  std::vector<std::string> server = {setup.server_bin, "--lockstep", "--empty-scene", "--mode",   j.mode,
-                                     "--domain",       domain,       "--profile",     opt.profile};
+  std::vector<std::string> server = {setup.server_bin, "--lockstep",  "--empty-scene", "--mode",
+                                     j.mode,           "--domain",    domain,          "--profile",
+                                     opt.profile,      "--quality-delay-ticks", "0",   "--quality-volume"};
   std::vector<std::string> bot = {setup.self_bin,  "participant",
                                   "--domain",      domain,
                                   "--profile",     opt.profile,
