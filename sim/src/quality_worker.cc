@@ -89,9 +89,8 @@ QualityResult QualityWorker::compute(QualityJob job) {
   Memo& memo = memos_[job.hand.value];
   Wrenches wrenches = contact_wrenches(job.contacts, job.mu, job.torque_scale);
   // A pure function of the wrenches (friction and radius are in them): an entry serves any object.
-  auto it = std::find_if(memo.entries.begin(), memo.entries.end(), [&](const Memo::Entry& e) {
-    return wrench_distance(e.wrenches, wrenches) <= kSameWrench;
-  });
+  auto it = std::find_if(memo.entries.begin(), memo.entries.end(),
+                         [&](const Memo::Entry& e) { return wrench_distance(e.wrenches, wrenches) <= kSameWrench; });
   if (it == memo.entries.end() || (job.volume == QualityVolume::kCompute && it->quality.volume < 0)) {
     if (it != memo.entries.end()) memo.entries.erase(it);
     ++memo.computed;

@@ -213,9 +213,8 @@ struct World::Impl {
   }
 
   static bool same_contacts(const std::vector<QualityContact>& a, const std::vector<QualityContact>& b) {
-    return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](const auto& x, const auto& y) {
-             return x.p == y.p && x.n == y.n;
-           });
+    return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(),
+                                              [](const auto& x, const auto& y) { return x.p == y.p && x.n == y.n; });
   }
 
   // Delivers the qualities of the contact sets of step `now - quality_delay_ticks` and before.
@@ -378,8 +377,8 @@ void World::remove_hand(HandId id) {
     forget.hand = id;
     forget.tick = impl_->tick;
     forget.forget = true;
-    impl_->quality->submit(std::move(forget));
     impl_->quality_due.emplace_back(impl_->tick, forget.id);
+    impl_->quality->submit(std::move(forget));
   }
   impl_->quality_computed.erase(id.value);
 }

@@ -319,7 +319,8 @@ TEST(WorldTest, DelayedQualitiesAreTheSameQualitiesDeliveredKStepsLater) {
 // afresh.
 TEST(QualityWorkerTest, ThreadedAndInlineGiveTheSameResults) {
   std::vector<QualityJob> jobs;
-  const std::vector<QualityContact> a = {{{0.04, 0, 0}, {1, 0, 0}}, {{-0.04, 0, 0}, {-1, 0, 0}}, {{0, 0.04, 0}, {0, 1, 0}}};
+  const std::vector<QualityContact> a = {
+      {{0.04, 0, 0}, {1, 0, 0}}, {{-0.04, 0, 0}, {-1, 0, 0}}, {{0, 0.04, 0}, {0, 1, 0}}};
   std::vector<QualityContact> b(a);
   b.push_back({{0, -0.04, 0}, {0, -1, 0}});
   for (const std::vector<QualityContact>* set : {&a, &std::as_const(b), &a, &std::as_const(b)}) {

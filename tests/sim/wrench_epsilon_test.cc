@@ -112,9 +112,10 @@ Comparison compare_with_qhull(int count, int min_contacts, int max_contacts, uns
 TEST(WrenchEpsilon, AgreesWithQhullOnRandomGrasps) {
   const bool long_mode = std::getenv("TELEGRASP_EPSILON_LONG") != nullptr;
   const Comparison c = long_mode ? compare_with_qhull(10000, 3, 20, 2) : compare_with_qhull(1000, 3, 12, 1);
-  std::printf("wrench_epsilon vs Qhull: %d grasps (%d in closure), %d verdicts differ, %d beyond 1e-9, worst "
-              "|delta epsilon| / max(1, epsilon) %.3g, %d fell back to the full hull\n",
-              c.grasps, c.closure, c.verdicts_differ, c.beyond_tolerance, c.worst_relative, c.full_hull);
+  std::printf(
+      "wrench_epsilon vs Qhull: %d grasps (%d in closure), %d verdicts differ, %d beyond 1e-9, worst "
+      "|delta epsilon| / max(1, epsilon) %.3g, %d fell back to the full hull\n",
+      c.grasps, c.closure, c.verdicts_differ, c.beyond_tolerance, c.worst_relative, c.full_hull);
   EXPECT_EQ(c.verdicts_differ, 0);
   EXPECT_EQ(c.beyond_tolerance, 0);
   EXPECT_EQ(c.full_hull, 0);

@@ -39,8 +39,8 @@ using Wrenches = Eigen::Matrix<double, 6, Eigen::Dynamic>;
 /// linearised with `cone_edges` unit-normal-force edges, torques divided by `torque_scale` (the
 /// object's radius about its centre of mass, > 0). Never throws; degenerate inputs give all zero.
 /// Equals wrench_quality(contact_wrenches(contacts, mu, torque_scale, cone_edges), volume) bit for bit.
-GraspQuality grasp_quality(std::span<const QualityContact> contacts, double mu, double torque_scale,
-                           int cone_edges = 8, QualityVolume volume = QualityVolume::kSkip);
+GraspQuality grasp_quality(std::span<const QualityContact> contacts, double mu, double torque_scale, int cone_edges = 8,
+                           QualityVolume volume = QualityVolume::kSkip);
 
 /// The wrenches grasp_quality() takes the hull of: column k * edges + e is edge e of contact k's
 /// cone (edges = cone_edges, or 1 when mu = 0). No columns for degenerate inputs (grasp_quality
