@@ -113,8 +113,8 @@ std::vector<std::string> version_warnings(const proto::RecordingHeader& header) 
 ServerSettings recorded_settings(const proto::RecordingHeader& header, const std::string& path) {
   try {
     ServerSettings s = settings_from_proto(header.config(), "recording " + path + ": header.config");
-    // Recordings from before the quality worker computed it within the tick.
-    if (!header.config().has_quality_delay_ticks()) s.quality_delay_ticks = 0;
+    // Recordings from before the quality worker computed it within the tick, with the volume.
+    if (!header.config().has_quality_delay_ticks()) s.quality_delay_ticks = 0, s.quality_volume = true;
     return s;
   } catch (const std::runtime_error& e) {
     throw RecordingError(e.what());

@@ -164,7 +164,7 @@ void apply_flags(int argc, char** argv, Flags& f, std::vector<std::string>& conf
     else if (a == "--quality-volume")
       s.quality_volume = true;
     else if (a == "--quality-delay-ticks")
-      s.quality_delay_ticks = static_cast<int>(cli::parse_number(a, value(), 0, 90, usage_error));
+      s.quality_delay_ticks = static_cast<int>(cli::parse_whole(a, value(), 0, 90, usage_error));
     else if (a == "--list-models")
       f.list_models = true;
     else if (a == "--fill-standins")

@@ -91,8 +91,7 @@ QualityResult QualityWorker::compute(QualityJob job) {
   // A pure function of the wrenches (friction and radius are in them): an entry serves any object.
   auto it = std::find_if(memo.entries.begin(), memo.entries.end(),
                          [&](const Memo::Entry& e) { return wrench_distance(e.wrenches, wrenches) <= kSameWrench; });
-  if (it == memo.entries.end() || (job.volume == QualityVolume::kCompute && it->quality.volume < 0)) {
-    if (it != memo.entries.end()) memo.entries.erase(it);
+  if (it == memo.entries.end()) {
     ++memo.computed;
     const GraspQuality q = wrench_quality(wrenches, job.volume);
     if (memo.entries.size() == kMemoEntries) memo.entries.pop_back();
