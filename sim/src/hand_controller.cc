@@ -812,11 +812,14 @@ GraspMetrics HandController::measure(const ObjectView& object) const {
   // The palm volume is the one the resolved pose keeps outside (pose_resolver.h palm_volumes: the
   // palm box with rounded edges, as capsules): its exact signed distance is their lowest.
   out.palm_signed_distance = kInf;
-  for (std::size_t v = 0; v < palm_volume_count_; ++v)
-    out.palm_signed_distance =
-        std::min(out.palm_signed_distance,
-                 model.distance.capsule_signed_distance(X_ObjectPalm * volumes_[v].p_PalmA,
-                                                        X_ObjectPalm * volumes_[v].p_PalmB, volumes_[v].radius));
+  // A capsule can only lower it when its axis comes within (the lowest so far + its radius) of the
+  // surface or lies inside: the early-out overlap test says when, without the exact search.
+  for (std::size_t v = 0; v < palm_volume_count_; ++v) {
+    const Eigen::Vector3d a = X_ObjectPalm * volumes_[v].p_PalmA, b = X_ObjectPalm * volumes_[v].p_PalmB;
+    const double r = volumes_[v].radius, lowest = out.palm_signed_distance;
+    if (std::isfinite(lowest) && lowest + r > 0 && !model.distance.capsule_overlaps(a, b, lowest + r)) continue;
+    out.palm_signed_distance = std::min(lowest, model.distance.capsule_signed_distance(a, b, r));
+  }
   return out;
 }
 

@@ -541,8 +541,8 @@ struct SegmentProbe {
     const Vector3d w = offset_from(box_centre(blo, bhi));
     key = w.squaredNorm();
     if (std::isinf(e)) return true;
-    const double support = box_support(w, blo, bhi);
-    return !separated_beyond(key, obb ? std::min(support, obb->support(w)) : support, e);
+    if (separated_beyond(key, box_support(w, blo, bhi), e)) return false;
+    return !obb || !separated_beyond(key, obb->support(w), e);
   }
 };
 
