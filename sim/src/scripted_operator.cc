@@ -1,6 +1,8 @@
 // The scripted operator and its offline grasp planner.
 #include "telegrasp/sim/scripted_operator.h"
 
+#include "telegrasp/sim/pose_resolver.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -12,6 +14,9 @@ namespace telegrasp::sim {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
+// A plan whose open hand reaches further under the table top than this is held off by the
+// resolved pose by as much: too far to close as planned.
+constexpr double kReachableTableDepth = 0.005;
 
 // Minimum-jerk time scaling of s in [0, 1].
 double min_jerk(double s) {
@@ -35,6 +40,23 @@ Eigen::Isometry3d palm_frame(const Eigen::Vector3d& x, const Eigen::Vector3d& z)
   return X;
 }
 
+// How far the hand's volumes (palm and capsules) reach under the table top; 0 when clear.
+double table_depth(const HandRig& rig, const HandController& hand, const Eigen::Isometry3d& X_WorldPalm,
+                   double table_height) {
+  double depth = 0;
+  const auto reach = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius) {
+    depth = std::max(depth, table_height - (std::min(a.z(), b.z()) - radius));
+  };
+  for (const HandVolume& v : palm_volumes(rig.palm_half_extent()))
+    reach(X_WorldPalm * v.p_PalmA, X_WorldPalm * v.p_PalmB, v.radius);
+  for (PhalanxId id : rig.capsule_phalanges()) {
+    const CapsuleSpec& c = *rig.phalanges()[id.value].capsule;
+    const Eigen::Isometry3d X = X_WorldPalm * hand.state().X_PalmPhalanx[id.value];
+    reach(X * c.p_PhalanxA, X * c.p_PhalanxB, c.radius);
+  }
+  return depth;
+}
+
 }  // namespace
 
 OfflineClosing close_offline(const std::shared_ptr<const HandRig>& rig, const GraspSettings& settings,
@@ -50,6 +72,7 @@ OfflineClosing close_offline(const std::shared_ptr<const HandRig>& rig, const Gr
     input.trigger = std::min(1.0, static_cast<double>(i) / (0.7 * ticks));
     hand.tick(input, dt, {&view, 1});
     if (hand.state().grasped.valid()) out.grasped = true;
+    if (i == 0) out.open_table_depth = table_depth(*rig, hand, X_WorldPalm, table_height);
   }
   for (std::uint8_t b : hand.state().blocked) out.blocked += b;
   out.metrics = hand.measure(view);
@@ -378,11 +401,14 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
     const OfflineClosing t = close_offline(rig, planning, model, X_WorldObject, plan.X_WorldPalm, dt, table_height);
     plan.predicted_grasp = t.grasped && !t.penetrating;
     plan.predicted_blocked = t.blocked;
-    // A clean grasp first (no capsule in the object), then opposing contacts (a pinch or wrap
-    // rather than a press), then clear of the table, then the most capsules in contact, then
-    // the smallest HandError.
-    const double score = (plan.predicted_grasp ? 1e6 : 0) + (t.opposed ? 1e5 : 0) + (t.penetrating ? 0 : 5e4) +
-                         (t.below_table ? 0 : 1e4) + 100.0 * t.blocked - t.metrics.hand_error_mm;
+    // A clean grasp first (no capsule in the object), then one the hand can reach (the resolved
+    // pose keeps the hand out of the table: a plan whose open hand lies under the table top is
+    // held off and misses), then opposing contacts (a pinch or wrap rather than a press), then
+    // clear of the table at the end of the close, then the most capsules in contact, then the
+    // smallest HandError.
+    const double score = (plan.predicted_grasp ? 1e6 : 0) + (t.open_table_depth < kReachableTableDepth ? 2e5 : 0) +
+                         (t.opposed ? 1e5 : 0) + (t.penetrating ? 0 : 5e4) + (t.below_table ? 0 : 1e4) +
+                         100.0 * t.blocked - t.metrics.hand_error_mm;
     if (score > best_score) {
       best_score = score;
       best = plan;

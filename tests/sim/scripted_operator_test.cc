@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <numbers>
 #include <optional>
 
 namespace telegrasp::sim {
@@ -143,12 +144,12 @@ TEST(ScriptedOperatorTest, SeededAndDeterministic) {
 
 // A full trial in a world; returns whether the object was held through the lift and hold.
 bool trial(const std::string& rig_name, const std::string& object, const std::string& skill,
-           GraspSettings settings = {}) {
+           GraspSettings settings = {}, double yaw = 0.5) {
   WorldSettings ws;
   ws.grasp = settings;
   World world(ws);
   auto model = standin(object);
-  const ObjectId id = world.add_object(model, World::resting_pose(*model, 0.45, 0.02, 0.5));
+  const ObjectId id = world.add_object(model, World::resting_pose(*model, 0.45, 0.02, yaw));
   auto hand_rig = rig(rig_name);
   const HandId hand = world.add_hand(hand_rig);
   for (int i = 0; i < 30; ++i) world.step();
@@ -173,6 +174,36 @@ TEST(ScriptedOperatorTest, PerfectOperatorLiftsACan) {
 }
 TEST(ScriptedOperatorTest, LeftHandLiftsABox) { EXPECT_TRUE(trial("human_left", "004_sugar_box", "perfect")); }
 TEST(ScriptedOperatorTest, GripperLiftsABall) { EXPECT_TRUE(trial("gripper3", "055_baseball", "perfect")); }
+
+// close_offline measures how far the open hand reaches under the table top: nothing from a metre
+// above it; from half a metre below, at least the palm's depth (its centre 0.5 m down, less its
+// half thickness).
+TEST(ScriptedOperatorTest, OfflineClosingMeasuresTheOpenHandUnderTheTable) {
+  const auto hand_rig = rig("human_right");
+  const auto model = standin("005_tomato_soup_can");
+  const Eigen::Isometry3d X_WorldObject = World::resting_pose(*model, 0.45, 0.0, 0.0);
+  const auto palm_at = [](double z) { return Eigen::Isometry3d(Eigen::Translation3d(0.0, 0.0, z)); };
+  EXPECT_EQ(close_offline(hand_rig, {}, *model, X_WorldObject, palm_at(1.0), 1.0 / 90).open_table_depth, 0.0);
+  const double h = hand_rig->palm_half_extent().z();
+  EXPECT_GE(close_offline(hand_rig, {}, *model, X_WorldObject, palm_at(-0.5), 1.0 / 90).open_table_depth,
+            0.5 + h - 1e-12);
+}
+
+// The planner keeps the open hand above the table: at these turns the flat drill's best-scored
+// plan was a side grasp whose open thumb hung 28 mm under the table top; the resolved pose held
+// the hand 54 mm off the plan and every attempt missed. Now a top grasp, and the trial holds.
+TEST(ScriptedOperatorTest, PlansKeepTheOpenHandAboveTheTable) {
+  const auto hand_rig = rig("human_right");
+  const auto model = standin("035_power_drill");
+  for (double yaw_deg : {45.0, 90.0, 135.0, 180.0, 270.0}) {
+    const Eigen::Isometry3d X_WorldObject = World::resting_pose(*model, 0.45, 0.0, yaw_deg * std::numbers::pi / 180);
+    const GraspPlan plan = plan_grasp(hand_rig, {}, *model, X_WorldObject, 1.0 / 90);
+    EXPECT_TRUE(plan.predicted_grasp) << yaw_deg;
+    const OfflineClosing c = close_offline(hand_rig, {}, *model, X_WorldObject, plan.X_WorldPalm, 1.0 / 90);
+    EXPECT_LT(c.open_table_depth, 0.005) << yaw_deg;
+  }
+  EXPECT_TRUE(trial("human_right", "035_power_drill", "perfect", {}, std::numbers::pi / 2));
+}
 
 // A plan made for an upright object, moved with the object along the table (and turned about
 // +z), still closes cleanly on it: telegrasp-bench-scale --active plans once per model and moves

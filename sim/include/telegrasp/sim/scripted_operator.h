@@ -97,6 +97,7 @@ struct OfflineClosing {
   int blocked = 0;  ///< Capsules blocked at the end.
   bool penetrating = false;  ///< A blocked capsule ended below -0.1 mm (the hand started in the object).
   bool below_table = false;  ///< A capsule ended under the table top.
+  double open_table_depth = 0;  ///< How far the open hand (palm, capsules) reaches under the table top, m; 0: clear.
   bool opposed = false;  ///< Two contact normals oppose (n_i . n_j < -0.5): a pinch or wrap, not a press.
   GraspMetrics metrics{};  ///< ND and exact signed distances at the end.
 };
