@@ -813,12 +813,25 @@ GraspMetrics HandController::measure(const ObjectView& object) const {
   // palm box with rounded edges, as capsules): its exact signed distance is their lowest.
   out.palm_signed_distance = kInf;
   // A capsule can only lower it when its axis comes within (the lowest so far + its radius) of the
-  // surface or lies inside: the early-out overlap test says when, without the exact search.
-  for (std::size_t v = 0; v < palm_volume_count_; ++v) {
+  // surface or lies inside: the early-out overlap test says when, without the exact search. The
+  // capsules nearest the object's bounds go first, so the lowest is usually found first; they lie
+  // side by side, so each search starts from the triangle the last one found.
+  std::vector<std::pair<double, std::size_t>> order(palm_volume_count_);
+  for (std::size_t v = 0; v < palm_volume_count_; ++v)
+    order[v] = {distance_to_bounds(model, X_ObjectPalm * (0.5 * (volumes_[v].p_PalmA + volumes_[v].p_PalmB))), v};
+  std::sort(order.begin(), order.end());
+  std::uint32_t hint = MeshDistance::kNoHint;
+  for (const auto& [key, v] : order) {
     const Eigen::Vector3d a = X_ObjectPalm * volumes_[v].p_PalmA, b = X_ObjectPalm * volumes_[v].p_PalmB;
     const double r = volumes_[v].radius, lowest = out.palm_signed_distance;
-    if (std::isfinite(lowest) && lowest + r > 0 && !model.distance.capsule_overlaps(a, b, lowest + r)) continue;
-    out.palm_signed_distance = std::min(lowest, model.distance.capsule_signed_distance(a, b, r));
+    if (std::isfinite(lowest) && lowest + r > 0 && !model.distance.capsule_overlaps(a, b, lowest + r, hint)) continue;
+    const SegmentQuery q = model.distance.closest_to_segment(a, b, kInf, hint);
+    hint = q.triangle;
+    // Outside the solid (as capsule_signed_distance tells), the gap; otherwise the full computation.
+    const double d = q.distance > 0 && (q.point_on_segment - q.point_on_mesh).dot(q.normal) > 0
+                         ? q.distance - r
+                         : model.distance.capsule_signed_distance(a, b, r, hint);
+    out.palm_signed_distance = std::min(lowest, d);
   }
   return out;
 }
