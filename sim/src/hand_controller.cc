@@ -381,13 +381,35 @@ void HandController::close_discrete(const FingerStep& step) {
 
 // Precise: conservative advancement along the step s in [0, 1]. A capsule point moves at most
 // rate(m) per unit s, so advancing by (gap - tol/2) / rate never crosses the surface.
+//
+// The rate: joint k turns the points p of capsule m's segment at |delta_k| times their distance
+// to its axis. That distance, largest at an end of the segment, is taken in the pose at the step's
+// start and grows over the step by at most the motion the joints after k give p relative to k
+// (each |delta_j| reach_[j][m]); reach_[k][m] bounds it in any pose, so the smaller is used.
 void HandController::close_precise(const FingerStep& step) {
   Scratch::StepWork& work = scratch_->work;
   const std::vector<std::size_t>& affected = work.affected;
   std::vector<double>& rate = work.rate;
   rate.assign(step.size(), 0.0);
-  for (std::size_t m : affected)
-    for (std::size_t k = 0; k <= m; ++k) rate[m] += std::abs(work.delta[k]) * reach_[step.id(k)][step.id(m)];
+  set_fraction(step, 0.0);
+  const auto& specs = rig_->phalanges();
+  for (std::size_t m : affected) {
+    const CapsuleSpec& cap = *specs[step.id(m)].capsule;
+    const Eigen::Isometry3d& X_PalmM = state_.X_PalmPhalanx[step.id(m)];
+    const Eigen::Vector3d a = X_PalmM * cap.p_PhalanxA, b = X_PalmM * cap.p_PhalanxB;
+    double growth = 0;  // sum over j > k of |delta_j| reach_[j][m], built from the tip down
+    for (std::size_t k = m + 1; k-- > 0;) {
+      const Eigen::Isometry3d& X_PalmK = state_.X_PalmPhalanx[step.id(k)];
+      const Eigen::Vector3d axis = X_PalmK.linear() * specs[step.id(k)].axis;
+      const auto to_axis = [&](const Eigen::Vector3d& p) {
+        const Eigen::Vector3d r = p - X_PalmK.translation();
+        return (r - r.dot(axis) * axis).norm();
+      };
+      const double reach = std::min(reach_[step.id(k)][step.id(m)], std::max(to_axis(a), to_axis(b)) + growth);
+      rate[m] += std::abs(work.delta[k]) * reach;
+      growth += std::abs(work.delta[k]) * reach_[step.id(k)][step.id(m)];
+    }
+  }
 
   // Each affected capsule carries a lower bound on its gap (from earlier ticks, or from its last
   // exact query this step, minus its motion since): while the bound exceeds the tolerance it
