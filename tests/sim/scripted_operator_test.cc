@@ -176,8 +176,8 @@ TEST(ScriptedOperatorTest, LeftHandLiftsABox) { EXPECT_TRUE(trial("human_left", 
 TEST(ScriptedOperatorTest, GripperLiftsABall) { EXPECT_TRUE(trial("gripper3", "055_baseball", "perfect")); }
 
 // close_offline measures how far the open hand reaches under the table top: nothing from a metre
-// above it; from half a metre below, at least the palm's depth (its centre 0.5 m down, less its
-// half thickness).
+// above it; with the palm's centre half a metre below it, at least that plus the palm's half
+// thickness (the lowest skin of its rounded box).
 TEST(ScriptedOperatorTest, OfflineClosingMeasuresTheOpenHandUnderTheTable) {
   const auto hand_rig = rig("human_right");
   const auto model = standin("005_tomato_soup_can");
