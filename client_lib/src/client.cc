@@ -47,6 +47,9 @@ void validate(const ClientOptions& o) {
                              " characters; expected 1.." + std::to_string(kMaxClientIdChars));
   if (o.client_id.find('\0') != std::string::npos)
     throw std::runtime_error("ClientOptions.client_id contains a NUL character, which the wire cannot carry");
+  if (o.relay_prefix.size() >= kMaxClientIdChars || o.relay_prefix.find('\0') != std::string::npos)
+    throw std::runtime_error("ClientOptions.relay_prefix '" + o.relay_prefix + "' must be shorter than " +
+                             std::to_string(kMaxClientIdChars) + " characters, without NUL");
   if (o.domain < 0 || o.domain > kMaxDomain)
     throw std::runtime_error("ClientOptions.domain is " + std::to_string(o.domain) + "; expected 0.." +
                              std::to_string(kMaxDomain));
@@ -122,6 +125,8 @@ struct Client::Impl {
   // if the sample is of an incarnation already replaced (late, from a server run that is gone): drop it.
   bool noticed(std::uint64_t incarnation, const Source& source);
   void received(const msg::ClientNotice& m, const dds::SampleInfo& info);
+  /// Writes `sample` as `client_id`; `numbered_here`: a sequence number 0 takes the hand's next.
+  std::uint64_t publish(const std::string& client_id, const ControllerSample& sample, bool numbered_here);
   // The (checked) geometry `m` describes, built from a cached one with the same content hash: the
   // very same object if nothing differs, else a new one with a copy of its mesh; null if none is cached.
   std::shared_ptr<const ObjectGeometry> cached_geometry(const msg::ObjectGeometry& m);
@@ -479,7 +484,9 @@ void Client::Impl::received(const msg::ObjectGeometry& m, const dds::SampleInfo&
 }
 
 void Client::Impl::received(const msg::ClientNotice& m, const dds::SampleInfo&) {
-  if (m.client_id().to_string() != options.client_id) return;  // another client's
+  const std::string id = m.client_id().to_string();
+  if (id != options.client_id && (options.relay_prefix.empty() || !id.starts_with(options.relay_prefix)))
+    return;  // another client's
   const Notice n = from_msg(m);
   std::lock_guard delivery(notice_channel.mutex);
   {
@@ -496,21 +503,37 @@ Client::~Client() = default;
 const std::string& Client::client_id() const { return impl_->options.client_id; }
 
 std::uint64_t Client::publish(const ControllerSample& sample) {
+  return impl_->publish(impl_->options.client_id, sample, true);
+}
+
+std::uint64_t Client::publish_as(const std::string& client_id, const ControllerSample& sample) {
+  const std::string& prefix = impl_->options.relay_prefix;
+  if (prefix.empty() || !client_id.starts_with(prefix) || client_id.size() > kMaxClientIdChars)
+    throw std::invalid_argument("publish_as: client id '" + client_id + "' is not under this client's relay_prefix '" +
+                                prefix + "' (or longer than " + std::to_string(kMaxClientIdChars) + " characters)");
+  if (sample.sequence_number == 0)
+    throw std::invalid_argument("publish_as: client " + client_id + " needs the sample's own sequence number");
+  return impl_->publish(client_id, sample, false);
+}
+
+std::uint64_t Client::Impl::publish(const std::string& client_id, const ControllerSample& sample, bool numbered_here) {
   if (sample.curls.size() > kMaxCurls)
     throw std::invalid_argument("ControllerSample.curls has " + std::to_string(sample.curls.size()) +
                                 " values; the wire carries at most " + std::to_string(kMaxCurls));
-  msg::ControllerState m = to_msg(sample, impl_->options.client_id);
+  msg::ControllerState m = to_msg(sample, client_id);
   if (m.client_time_ns() == 0) m.client_time_ns(steady_now_ns());
-  std::lock_guard lock(impl_->publish_mutex);
-  // 0: one more than the largest number this hand has carried, so an explicit stale number
-  // (sent on purpose) does not make the following automatic ones stale too.
-  std::uint64_t& last = impl_->last_sequence[m.hand_side()];
-  if (m.sequence_number() == 0) m.sequence_number(last + 1);
-  last = std::max(last, m.sequence_number());
-  m.commands_sent(static_cast<std::uint32_t>(impl_->last_command_id));
-  if (!impl_->controller_writer->write(&m))
+  std::lock_guard lock(publish_mutex);
+  if (numbered_here) {
+    // 0: one more than the largest number this hand has carried, so an explicit stale number
+    // (sent on purpose) does not make the following automatic ones stale too.
+    std::uint64_t& last = last_sequence[m.hand_side()];
+    if (m.sequence_number() == 0) m.sequence_number(last + 1);
+    last = std::max(last, m.sequence_number());
+  }
+  m.commands_sent(static_cast<std::uint32_t>(last_command_id));
+  if (!controller_writer->write(&m))
     throw std::runtime_error("cannot write ControllerState " + std::to_string(m.sequence_number()) + " of client " +
-                             impl_->options.client_id);
+                             client_id);
   return m.sequence_number();
 }
 

@@ -463,6 +463,7 @@ client::ServerStatus from_msg(const msg::ServerStatus& m) {
 
 client::Notice from_msg(const msg::ClientNotice& m) {
   client::Notice n;
+  n.client_id = m.client_id().to_string();
   n.kind = m.kind() == msg::NOTICE_COMMAND_REJECTED ? client::Notice::Kind::kCommandRejected
                                                     : client::Notice::Kind::kInputRejected;
   n.reason = m.reason().to_string();

@@ -40,9 +40,17 @@ msg::ClientNotice make_client_notice(const Refusal& r) {
   return n;
 }
 
+namespace {
+InputLimits with_max_hands(int max_hands) {
+  InputLimits limits;
+  limits.max_hands = max_hands;
+  return limits;
+}
+}  // namespace
+
 InputMailbox::InputMailbox(std::array<std::size_t, 2> fingers, int max_hands,
                            std::function<void(const std::string&)> log)
-    : InputMailbox(fingers, InputLimits{max_hands}, std::move(log)) {}
+    : InputMailbox(fingers, with_max_hands(max_hands), std::move(log)) {}
 
 InputMailbox::InputMailbox(std::array<std::size_t, 2> fingers, const InputLimits& limits,
                            std::function<void(const std::string&)> log)
@@ -83,10 +91,10 @@ void InputMailbox::refuse(Refusal r, std::int64_t now_ns, bool every_time) {
   }
 }
 
-bool InputMailbox::reject(RejectReason reason, const std::string& client_id, std::int64_t now_ns) {
+bool InputMailbox::reject(RejectReason reason, const std::string& client_id, std::int64_t now_ns,
+                          std::string detail) {
   ++rejected_[static_cast<int>(reason)];
-  std::string detail;
-  switch (reason) {
+  if (detail.empty()) switch (reason) {
     case RejectReason::kClientIdOwnedByAnotherParticipant:
       detail = "another participant drives this client id: pick another";
       break;
@@ -112,7 +120,17 @@ bool InputMailbox::refuse(RejectReason reason, const std::string& client_id) {
   return reject(reason, client_id, steady_now_ns());
 }
 
+const Relay* InputMailbox::relay_of(const std::string& client_id) const {
+  for (const Relay& r : limits_.relays)
+    if (client_id.starts_with(r.prefix)) return &r;  // prefixes never start one another
+  return nullptr;
+}
+
 bool InputMailbox::owned_by_other(const std::string& client_id, const ParticipantKey& writer) {
+  if (const Relay* relay = relay_of(client_id)) {
+    const auto [held, free] = relay_owners_.try_emplace(relay, RelayState{writer, 0});
+    if (!free && held->second.owner != writer) return true;
+  }
   auto client = clients_.find(client_id);
   if (client == clients_.end()) {
     clients_.emplace(client_id, Client{writer, 0, RateLimiter(limits_.max_command_rate_hz)});
@@ -130,15 +148,26 @@ bool InputMailbox::offer(const msg::ControllerState& state, const ParticipantKey
   auto known = hands_.find(hand);
   if (known == hands_.end()) {  // a new hand: every check before anything is bound
     auto client = clients_.find(client_id);
-    if (client != clients_.end() && client->second.owner != writer)
-      return reject(RejectReason::kClientIdOwnedByAnotherParticipant, client_id, received_ns);
+    const Relay* relay = relay_of(client_id);
+    const auto relay_state = relay ? relay_owners_.find(relay) : relay_owners_.end();
+    if ((client != clients_.end() && client->second.owner != writer) ||
+        (relay_state != relay_owners_.end() && relay_state->second.owner != writer))
+      return reject(RejectReason::kClientIdOwnedByAnotherParticipant, client_id, received_ns,
+                    relay ? "client ids starting with '" + relay->prefix + "' belong to another participant (a relay)"
+                          : "");
     if (static_cast<int>(hands_.size()) >= limits_.max_hands)
       return reject(RejectReason::kTooManyHands, client_id, received_ns);
-    if (participant_hands_[writer] >= limits_.max_hands_per_participant)
+    if (relay && relay_state != relay_owners_.end() && relay_state->second.hands >= relay->max_hands)
+      return reject(RejectReason::kTooManyHandsForParticipant, client_id, received_ns,
+                    "relay '" + relay->prefix + "' may drive at most " + std::to_string(relay->max_hands) + " hands");
+    if (!relay && participant_hands_[writer] >= limits_.max_hands_per_participant)
       return reject(RejectReason::kTooManyHandsForParticipant, client_id, received_ns);
-    owned_by_other(client_id, writer);  // binds the id if it was free
+    owned_by_other(client_id, writer);  // binds the id (and its relay's prefix) if free
     ++clients_.at(client_id).hands;
-    ++participant_hands_[writer];
+    if (relay)
+      ++relay_owners_.at(relay).hands;
+    else
+      ++participant_hands_[writer];
     known = hands_.emplace(hand, KnownHand{0, RateLimiter(limits_.max_input_rate_hz)}).first;
     known->second.last_sequence = state.sequence_number();
   } else {
@@ -189,6 +218,7 @@ void InputMailbox::forget_participant(const ParticipantKey& writer) {
     client = clients_.erase(client);
   }
   participant_hands_.erase(writer);
+  std::erase_if(relay_owners_, [&](const auto& relay) { return relay.second.owner == writer; });
 }
 
 bool InputMailbox::wait(std::chrono::steady_clock::time_point deadline) {
@@ -224,8 +254,11 @@ void InputMailbox::forget_hand(const HandAddress& hand) {
   pending_.erase(hand);
   auto client = clients_.find(hand.client_id);
   if (client == clients_.end()) return;
-  if (auto p = participant_hands_.find(client->second.owner); p != participant_hands_.end() && --p->second <= 0)
+  if (const Relay* relay = relay_of(hand.client_id)) {
+    if (auto r = relay_owners_.find(relay); r != relay_owners_.end()) --r->second.hands;  // the prefix stays held
+  } else if (auto p = participant_hands_.find(client->second.owner); p != participant_hands_.end() && --p->second <= 0) {
     participant_hands_.erase(p);
+  }
   if (--client->second.hands <= 0) clients_.erase(client);
 }
 

@@ -3,6 +3,7 @@
 
 #include "conversions.h"
 #include "input_validation.h"
+#include "server_config.h"
 
 #include <array>
 #include <chrono>
@@ -27,6 +28,7 @@ struct InputLimits {
   int max_hands_per_participant = 16;  ///< Hands one DDS participant may drive.
   double max_input_rate_hz = 250;  ///< Samples per second per hand (bursts of a tenth of it, at least 10).
   double max_command_rate_hz = 20;  ///< Scene commands per second per client (bursts likewise).
+  std::vector<Relay> relays;  ///< Prefixes owned by one participant each (server_config.h).
 };
 
 /// A token bucket: `rate` per second, at most `burst` at once.
@@ -67,6 +69,9 @@ struct InputSample {
 /// first participant that drives it (or sends a command as it) until all its hands are forgotten
 /// or the participant leaves, sequence numbers must grow, each hand gets at most
 /// max_input_rate_hz samples a second, each participant at most max_hands_per_participant hands.
+/// A client id under a relay's prefix belongs to the participant that holds the prefix (the first
+/// to drive or command an id under it, until it leaves), whose hands there count against the
+/// relay's max_hands instead.
 /// A dropped sample is counted per reason, logged once per client and reason, and told to the
 /// client (the notifier) at most once a second per reason. Scene commands pass admit_command()
 /// first: the same ownership, and max_command_rate_hz per client.
@@ -120,7 +125,9 @@ class InputMailbox {
   std::uint64_t notices() const;
 
  private:
-  bool reject(RejectReason reason, const std::string& client_id, std::int64_t now_ns);
+  bool reject(RejectReason reason, const std::string& client_id, std::int64_t now_ns, std::string detail = "");
+  /// The relay whose prefix starts `client_id`; nullptr if none.
+  const Relay* relay_of(const std::string& client_id) const;
   /// Logs once per client and reason (at most kMaxLogged pairs), tells the client at most once a
   /// second per reason (always when `every_time`). Called with mutex_ held.
   void refuse(Refusal refusal, std::int64_t now_ns, bool every_time);
@@ -145,7 +152,12 @@ class InputMailbox {
   };
   static constexpr std::size_t kMaxLogged = 4096;  // (client, reason) pairs remembered for logs and notices
   std::map<std::string, Client> clients_;
-  std::map<ParticipantKey, int> participant_hands_;
+  std::map<ParticipantKey, int> participant_hands_;  // hands outside relay prefixes
+  struct RelayState {
+    ParticipantKey owner{};
+    int hands = 0;
+  };
+  std::map<const Relay*, RelayState> relay_owners_;  // the relays someone holds
   std::map<HandAddress, KnownHand> hands_;
   std::map<HandAddress, InputSample> pending_;
   std::map<std::pair<std::string, std::string>, std::int64_t> refused_;  // last notice time per (client, reason)

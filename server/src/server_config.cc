@@ -74,6 +74,7 @@ void apply_config(const proto::ServerConfig& c, ServerSettings& s, const std::st
   if (has("open_scene")) s.open_scene = c.open_scene();
   if (has("max_objects_per_client")) s.max_objects_per_client = c.max_objects_per_client();
   if (has("max_hands_per_participant")) s.max_hands_per_participant = c.max_hands_per_participant();
+  for (const auto& r : c.relays()) s.relays.push_back({r.prefix(), r.max_hands() == 0 ? 64 : r.max_hands()});
   if (has("max_input_rate_hz")) s.max_input_rate_hz = c.max_input_rate_hz();
   if (has("max_command_rate_hz")) s.max_command_rate_hz = c.max_command_rate_hz();
   if (has("snapshot")) s.snapshot_path = c.snapshot();
@@ -124,6 +125,14 @@ void validate_settings(const ServerSettings& s, const std::string& origin) {
     fail("max_objects_per_client must be in [0, 128]");
   if (s.max_hands_per_participant < 1 || s.max_hands_per_participant > 4096)
     fail("max_hands_per_participant must be in [1, 4096]");
+  for (const Relay& r : s.relays) {
+    if (r.prefix.empty() || r.prefix.size() > 32)
+      fail("relays: a prefix has 1..32 characters, got '" + r.prefix + "'");
+    if (r.max_hands < 1 || r.max_hands > 4096) fail("relays '" + r.prefix + "': max_hands must be in [1, 4096]");
+    for (const Relay& other : s.relays)
+      if (&other != &r && other.prefix.starts_with(r.prefix))
+        fail("relays '" + r.prefix + "' and '" + other.prefix + "': one prefix starts the other");
+  }
   if (!(s.max_input_rate_hz >= 1 && std::isfinite(s.max_input_rate_hz)))
     fail("max_input_rate_hz must be a finite value >= 1");
   if (!(s.max_command_rate_hz >= 0.1 && std::isfinite(s.max_command_rate_hz)))
@@ -167,6 +176,11 @@ proto::ServerConfig to_proto(const ServerSettings& s) {
   c.set_open_scene(s.open_scene);
   c.set_max_objects_per_client(s.max_objects_per_client);
   c.set_max_hands_per_participant(s.max_hands_per_participant);
+  for (const Relay& r : s.relays) {
+    proto::Relay* relay = c.add_relays();
+    relay->set_prefix(r.prefix);
+    relay->set_max_hands(r.max_hands);
+  }
   c.set_max_input_rate_hz(s.max_input_rate_hz);
   c.set_max_command_rate_hz(s.max_command_rate_hz);
   c.set_snapshot(s.snapshot_path);

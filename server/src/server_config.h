@@ -22,6 +22,16 @@ struct SceneObjectSpec {
   std::optional<double> friction{};  ///< Coulomb mu of hand contacts on it (grasp quality); unset: the rig's.
 };
 
+/// A relay: one DDS participant that forwards many remote users' inputs (telegrasp-view --drive
+/// forwards browser connections). It owns every client id that starts with `prefix`: the first
+/// participant (with DDS Security, the first identity) to drive or command one holds the prefix
+/// until it leaves the domain, and nobody else drives an id under it. Its hands under the prefix
+/// count against `max_hands`, not against the per-participant limit.
+struct Relay {
+  std::string prefix;  ///< 1..32 characters.
+  int max_hands = 64;  ///< 1..4096.
+};
+
 /// An object placed at an exact pose (a restored snapshot's), kept as read so that a recording's
 /// replay rebuilds the very same pose.
 struct PlacedObject {
@@ -82,6 +92,7 @@ struct ServerSettings {
   bool open_scene = false;
   int max_objects_per_client = 16;  ///< Objects a non-operator may have spawned at once.
   int max_hands_per_participant = 16;
+  std::vector<Relay> relays;  ///< Prefixes no two of which start one another.
   double max_input_rate_hz = 250;  ///< Per hand.
   double max_command_rate_hz = 20;  ///< Per client.
   /// Write the objects' last published poses here about once a second and on a clean stop, and

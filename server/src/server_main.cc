@@ -69,6 +69,9 @@ Options (override the --config file):
   --open-scene        every client is an operator
   --max-hands-per-participant N
                       hands one DDS participant may drive (default 16)
+  --relay PREFIX[:N]  a relay (telegrasp-view --drive) owns the client ids starting with PREFIX:
+                      the first participant to drive one holds them all until it leaves, up to
+                      N hands (default 64; repeat for more relays)
   --max-input-rate HZ ControllerState samples per second per hand (default 250; more are dropped
                       and counted as rate_limited)
   --max-command-rate HZ
@@ -186,6 +189,15 @@ void apply_flags(int argc, char** argv, Flags& f, std::vector<std::string>& conf
       s.open_scene = true;
     } else if (a == "--max-hands-per-participant") {
       s.max_hands_per_participant = static_cast<int>(cli::parse_number(a, value(), 1, 4096, usage_error));
+    } else if (a == "--relay") {
+      const std::string spec = value();
+      const std::size_t colon = spec.rfind(':');
+      Relay relay{spec.substr(0, colon), 64};
+      if (colon != std::string::npos)
+        relay.max_hands = static_cast<int>(cli::parse_whole(a, spec.substr(colon + 1), 1, 4096, usage_error));
+      if (relay.prefix.empty() || relay.prefix.size() > 32)
+        usage_error("--relay expects PREFIX[:N] with a prefix of 1..32 characters, got '" + spec + "'");
+      s.relays.push_back(relay);
     } else if (a == "--max-input-rate") {
       s.max_input_rate_hz = cli::parse_number(a, value(), 1, 1e6, usage_error);
     } else if (a == "--max-command-rate") {
@@ -232,7 +244,7 @@ Flags parse(int argc, char** argv) {
 // A lockstep run goes faster than real time, paced by its ticks: no rate limits then.
 InputLimits input_limits(const ServerSettings& s) {
   return {s.max_hands, s.max_hands_per_participant, s.lockstep ? 0 : s.max_input_rate_hz,
-          s.lockstep ? 0 : s.max_command_rate_hz};
+          s.lockstep ? 0 : s.max_command_rate_hz, s.relays};
 }
 
 // SIGINT and SIGTERM, blocked in every thread (threads started later inherit the mask) and taken

@@ -190,6 +190,41 @@ TEST(ClientLoopbackTest, PublishedControllerStatesArriveNumberedWithTheirFields)
   EXPECT_EQ(m->trigger(), 5);
 }
 
+// A relay publishes as ids under its prefix with its own sequence numbers, which go out as given
+// and do not touch the client's own numbering; ids outside the prefix and number 0 are refused.
+TEST(ClientLoopbackTest, ARelayPublishesAsIdsUnderItsPrefix) {
+  const DomainLease lease;
+  const int domain = lease.domain();
+  idl::DdsParticipant server(domain, "loopback");
+  dds::DataReader* reader = server.reader<msg::ControllerStatePubSubType>(idl::kControllerStateTopic);
+  server.reader<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic);
+  ClientOptions o = options("bridge", domain, 0);
+  o.relay_prefix = "xr-";
+  Client client(o);
+  ASSERT_TRUE(client.wait_for_server(kTimeout));
+  ControllerSample s;
+  s.sequence_number = 41;
+  EXPECT_THROW(client.publish_as("alice", s), std::invalid_argument);
+  EXPECT_THROW(client.publish_as("xr-" + std::string(70, 'a'), s), std::invalid_argument);
+  s.sequence_number = 0;
+  EXPECT_THROW(client.publish_as("xr-1", s), std::invalid_argument);
+  std::vector<msg::ControllerState> got;
+  std::uint64_t seq = 100;
+  ASSERT_TRUE(eventually([&] {
+    s.sequence_number = ++seq;
+    EXPECT_EQ(client.publish_as("xr-1", s), seq);
+    take_all(reader, got);
+    return !got.empty();
+  }));
+  EXPECT_EQ(got.back().client_id().to_string(), "xr-1");
+  EXPECT_GT(got.back().sequence_number(), 100u);
+  EXPECT_EQ(client.publish(ControllerSample{}), 1u);  // its own hands are numbered apart
+  ClientOptions plain = options("carol", domain, 0);
+  Client not_a_relay(plain);
+  s.sequence_number = 5;
+  EXPECT_THROW(not_a_relay.publish_as("xr-1", s), std::invalid_argument);
+}
+
 TEST(ClientLoopbackTest, SceneCommandsArriveNumbered) {
   const DomainLease lease;
   const int domain = lease.domain();

@@ -167,6 +167,45 @@ TEST(MailboxLimitsTest, AParticipantMintingClientIdsCannotLockOthersOut) {
   EXPECT_TRUE(box.offer(sample("id-0", 1, 1), kAlicePc, 0));
 }
 
+// A relay holds its whole prefix: up to its own hand limit (not the per-participant one), while
+// nobody else drives or commands an id under the prefix, even one the relay never used; ids
+// outside it follow the usual rules. The prefix is free again once the relay leaves.
+TEST(MailboxLimitsTest, ARelayOwnsItsPrefixUpToItsOwnLimit) {
+  const ParticipantKey kBridge{7, 7, 7};
+  InputLimits limits;
+  limits.max_hands_per_participant = 2;
+  limits.relays = {{"xr-", 5}};
+  std::vector<Refusal> told;
+  InputMailbox box({5, 5}, limits, [](const std::string&) {});
+  box.set_notifier([&](const Refusal& r) { told.push_back(r); });
+  int accepted = 0;
+  for (int i = 0; i < 8; ++i) accepted += box.offer(sample("xr-" + std::to_string(i), 1, 1), kBridge, i);
+  EXPECT_EQ(accepted, 5);  // the relay's limit, above the participant limit of 2
+  EXPECT_EQ(box.rejected()[static_cast<int>(RejectReason::kTooManyHandsForParticipant)], 3u);
+  ASSERT_FALSE(told.empty());
+  EXPECT_NE(told.back().detail.find("relay 'xr-' may drive at most 5 hands"), std::string::npos) << told.back().detail;
+  // Another participant: not an id under the prefix, used or not, by input or command.
+  EXPECT_FALSE(box.offer(sample("xr-0", 1, 2), kMallory, 10));
+  EXPECT_FALSE(box.offer(sample("xr-99", 0, 1), kMallory, 10));
+  msg::SceneCommand c;
+  c.client_id("xr-98");
+  EXPECT_EQ(box.admit_command(c, kMallory, 0), "client_id_owned_by_another_participant");
+  EXPECT_EQ(box.rejected()[static_cast<int>(RejectReason::kClientIdOwnedByAnotherParticipant)], 2u);
+  // Outside the prefix both are ordinary participants: the relay's hands there count against 2.
+  EXPECT_TRUE(box.offer(sample("mallory", 1, 1), kMallory, 10));
+  EXPECT_TRUE(box.offer(sample("bridge-a", 1, 1), kBridge, 10));
+  EXPECT_TRUE(box.offer(sample("bridge-b", 1, 1), kBridge, 10));
+  EXPECT_FALSE(box.offer(sample("bridge-c", 1, 1), kBridge, 10));
+  // A hand that leaves frees its slot under the relay's limit; the prefix stays the relay's.
+  box.forget_hand({"xr-0", 1});
+  EXPECT_FALSE(box.offer(sample("xr-0", 1, 5), kMallory, 20));
+  EXPECT_TRUE(box.offer(sample("xr-7", 1, 1), kBridge, 20));
+  // The relay leaves the domain: the prefix goes to whoever drives under it first.
+  box.forget_participant(kBridge);
+  EXPECT_TRUE(box.offer(sample("xr-0", 1, 6), kMallory, 30));
+  EXPECT_FALSE(box.offer(sample("xr-1", 1, 7), kBridge, 30));
+}
+
 // Commands: the client id belongs to its first participant (inputs and commands alike), and each
 // client gets max_command_rate_hz; every refusal is counted per reason.
 TEST(MailboxLimitsTest, CommandsAreAdmittedByOwnerAndRate) {

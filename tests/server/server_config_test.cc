@@ -88,6 +88,29 @@ TEST(ServerConfigTest, SceneObjectFriction) {
   EXPECT_NE(error_of("objects { model: \"005_tomato_soup_can\" friction: nan }").find("friction"), std::string::npos);
 }
 
+// Relays: prefix and hand limit (64 when left out) survive the recorded configuration; an empty
+// prefix, a limit out of range, or one prefix starting another is refused by name.
+TEST(ServerConfigTest, Relays) {
+  ServerSettings s;
+  load_server_config(write_temp("relays", R"(
+    relays { prefix: "xr-" max_hands: 32 }
+    relays { prefix: "lab-" }
+  )"),
+                     s);
+  ASSERT_EQ(s.relays.size(), 2u);
+  EXPECT_EQ(s.relays[0].prefix, "xr-");
+  EXPECT_EQ(s.relays[0].max_hands, 32);
+  EXPECT_EQ(s.relays[1].max_hands, 64);
+  const ServerSettings back = settings_from_proto(to_proto(s), "recording");
+  ASSERT_EQ(back.relays.size(), 2u);
+  EXPECT_EQ(back.relays[1].prefix, "lab-");
+  EXPECT_EQ(back.relays[0].max_hands, 32);
+  EXPECT_NE(error_of("relays { prefix: \"\" }").find("relays"), std::string::npos);
+  EXPECT_NE(error_of("relays { prefix: \"xr-\" max_hands: 5000 }").find("max_hands"), std::string::npos);
+  const std::string nested = error_of("relays { prefix: \"xr\" } relays { prefix: \"xr-a\" }");
+  EXPECT_NE(nested.find("one prefix starts the other"), std::string::npos) << nested;
+}
+
 // The example shipped for deployments loads as it is.
 TEST(ServerConfigTest, ShippedExampleLoads) {
   ServerSettings s;

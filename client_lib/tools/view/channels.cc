@@ -127,7 +127,42 @@ Json server_status_schema() {
   return s;
 }
 
+Json pose_schema() {
+  return object("telegrasp.PoseJson",
+                {{"position", object("telegrasp.Vector3", {{"x", number()}, {"y", number()}, {"z", number()}})},
+                 {"orientation",
+                  object("telegrasp.Quaternion", {{"x", number()}, {"y", number()}, {"z", number()}, {"w", number()}})}});
+}
+
+// Field meanings as HandSkeleton in client_lib/include/telegrasp/client/types.h; input_seq and
+// input_stamp are the page's own for the newest sample the skeleton reflects (null: a sample the
+// bridge sent itself, or one no longer remembered).
+Json driven_hand_schema() {
+  Json s = object("telegrasp.DrivenHand", {{"client_id", string()},
+                                           {"side", string()},
+                                           {"rig", string()},
+                                           {"tick", integer()},
+                                           {"input_seq", Json{{"type", {"integer", "null"}}}},
+                                           {"input_stamp", Json{{"type", {"object", "null"}}}},
+                                           {"late_latched", boolean()},
+                                           {"frozen", boolean()},
+                                           {"palm", pose_schema()},
+                                           {"tracked_palm", pose_schema()},
+                                           {"resolve_offset_m", vec3()},
+                                           {"resolve_angle_rad", number()},
+                                           {"phalanges", array_of(pose_schema())},
+                                           {"phalanx_names", array_of(string())},
+                                           {"joint_angles_rad", array_of(number())}});
+  s["description"] =
+      "A hand this connection drives, as the server resolved it (HandSkeleton topic), sent as it arrives";
+  return s;
+}
+
 }  // namespace
+
+Channel driven_hands_channel() {
+  return {kDrivenHandsChannel, "/xr/hands", "telegrasp.DrivenHand", driven_hand_schema().dump(), true};
+}
 
 std::vector<Channel> view_channels(const std::filesystem::path& schema_dir) {
   return {

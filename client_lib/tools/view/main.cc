@@ -3,6 +3,7 @@
 // (Foxglove and Lichtblick connect to ws://host:8765) and a built-in three.js page
 // (http://host:8765/) speaking the same protocol. See client_lib/tools/view/README.md.
 #include "channels.h"
+#include "drive.h"
 #include "network_flags.h"
 #include "cli.h"
 #include "mcap_recorder.h"
@@ -14,6 +15,8 @@
 #include "web_server.h"
 
 #include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/address.hpp>
+#include <boost/asio/post.hpp>
 #include <boost/asio/signal_set.hpp>
 #include <boost/asio/steady_timer.hpp>
 
@@ -68,6 +71,21 @@ Options:
                      bytes sent (and recorded, with the time spent recording) to stderr
   -h, --help         this text
 
+Driving hands from a headset (the page http://HOST:PORT/xr; the contract for other clients is
+in the view's README, "Driving hands"):
+  --drive            connections may publish controller input (/controller_state): each gets a
+                     client id of its own under --drive-prefix; start the server with
+                     --relay PREFIX so that this bridge owns those ids
+  --drive-token T    driving needs ?token=T in the page's URL; with --drive on an address other
+                     than 127.0.0.1 and no token, one is generated and printed in the URL
+  --drive-origin O   without a token, pages from Origin O (e.g. https://example.org:8443) may
+                     drive too (repeat for more); the bridge's own pages always may
+  --drive-prefix P   client ids P<tag>-<n> (default xr-)
+  --tracking-grace S a hand whose tracking is lost keeps its grasp S seconds, then opens
+                     (default 1)
+  --resume-window S  a connection that drops without closing keeps its hands S seconds for the
+                     page to reconnect with its resume token (default 5)
+
 Exit status: 0 stopped by SIGINT or SIGTERM, 1 a runtime failure (DDS could not start, the port
 is in use, the page or schema files are missing, the --record file is not writable), 2 a usage
 error (a bad or missing option or value). A recording that fails later (disk full) stops with a
@@ -84,6 +102,10 @@ struct Args {
   std::string web_dir;
   double stats_s = 0;
   std::string record_path;
+  bool drive = false;
+  std::string drive_token;
+  std::vector<std::string> drive_origins;
+  view::DriveOptions drive_options;
 };
 
 // Every flag is checked here, so the client library never sees a bad option.
@@ -113,6 +135,24 @@ Args parse(int argc, char** argv) {
       a.web_dir = value();
     else if (flag == "--stats")
       a.stats_s = cli::parse_number(flag, value(), 0.1, 86400, usage_error);
+    else if (flag == "--drive")
+      a.drive = true;
+    else if (flag == "--drive-token") {
+      a.drive_token = value();
+      if (a.drive_token.size() < 8 || a.drive_token.find_first_not_of(
+                                          "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_") !=
+                                          std::string::npos)
+        usage_error("--drive-token expects 8 or more letters, digits, '-' or '_'");
+    } else if (flag == "--drive-origin")
+      a.drive_origins.push_back(value());
+    else if (flag == "--drive-prefix") {
+      a.drive_options.prefix = value();
+      if (a.drive_options.prefix.empty() || a.drive_options.prefix.size() > 32)
+        usage_error("--drive-prefix expects 1..32 characters");
+    } else if (flag == "--tracking-grace")
+      a.drive_options.tracking_grace_s = cli::parse_number(flag, value(), 0, 60, usage_error);
+    else if (flag == "--resume-window")
+      a.drive_options.resume_window_s = cli::parse_number(flag, value(), 0, 600, usage_error);
     else if (flag == "--record") {
       a.record_path = value();
       if (a.record_path.empty()) usage_error("--record expects a file name, got ''");
@@ -120,7 +160,14 @@ Args parse(int argc, char** argv) {
       return false;
     return true;
   });
+  if (a.drive) a.client.relay_prefix = a.drive_options.prefix;
   return a;
+}
+
+bool is_loopback(const std::string& address) {
+  boost::system::error_code ec;
+  const auto a = boost::asio::ip::make_address(address, ec);
+  return !ec && a.is_loopback();
 }
 
 std::uint64_t wall_ns() {
@@ -219,11 +266,18 @@ int main(int argc, char** argv) {
   view::ViewModel model([&](const std::string& name) { return rigs.get(name); });
   asio::io_context io;
   std::optional<view::WebServer> server;
+  std::string drive_token = args.drive_token;
+  if (args.drive && drive_token.empty() && !is_loopback(args.address))
+    drive_token = view::random_hex(16);  // off this machine, driving always needs a token
+  if (args.drive) channels.push_back(view::driven_hands_channel());
   try {
     view::WebServer::Options options;
     options.address = args.address;
     options.port = args.port;
     options.web_root = web_root;
+    options.drive = args.drive;
+    options.drive_token = drive_token;
+    options.drive_origins = args.drive_origins;
     // Everything below runs on this thread (io.run()): the model needs no lock.
     server.emplace(io, options, std::move(channels), [&](std::uint32_t channel) {
       std::vector<std::shared_ptr<const std::string>> out;
@@ -256,6 +310,34 @@ int main(int argc, char** argv) {
   const std::string host = args.address == "0.0.0.0" ? "localhost" : args.address;
   std::cout << "telegrasp-view: http://" << host << ":" << server->port() << "/ (page), ws://" << host << ":"
             << server->port() << " (Foxglove WebSocket), DDS domain " << args.client.domain << std::endl;
+
+  // --drive: connections publish controller input, forwarded as client ids under the prefix.
+  std::optional<view::Drive> drive;
+  asio::steady_timer drive_timer(io);
+  std::function<void()> drive_tick = [&] {
+    drive->tick();
+    drive_timer.expires_after(std::chrono::milliseconds(30));
+    drive_timer.async_wait([&](boost::system::error_code ec) {
+      if (!ec) drive_tick();
+    });
+  };
+  if (args.drive) {
+    drive.emplace(*client, *server, view::kDrivenHandsChannel, [&](const std::string& name) { return rigs.get(name); },
+                  args.drive_options);
+    server->set_drive_hooks(drive->hooks());
+    const std::string prefix = args.drive_options.prefix;
+    // DDS threads hand the driven hands' skeletons and refusals to the io thread as they arrive.
+    client->on_hand_skeleton([&io, &drive, prefix](const tc::HandSkeleton& s) {
+      if (s.hand.client_id.starts_with(prefix)) asio::post(io, [&drive, s] { drive->skeleton(s, wall_ns()); });
+    });
+    client->on_notice([&io, &drive, prefix](const tc::Notice& n) {
+      if (n.client_id.starts_with(prefix)) asio::post(io, [&drive, n] { drive->notice(n); });
+    });
+    drive_tick();
+    std::cout << "telegrasp-view: headsets drive hands at http://" << host << ":" << server->port() << "/xr"
+              << (drive_token.empty() ? "" : "?token=" + drive_token) << " (client ids " << prefix
+              << "*: start the server with --relay " << prefix << ")" << std::endl;
+  }
 
   // One step per 1/rate: poll the client (newest of everything), update the model, publish.
   const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
@@ -311,8 +393,7 @@ int main(int argc, char** argv) {
                    wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - meter.wall).count();
       const std::uint64_t ticks = meter.hand_ticks;
       const std::uint64_t recorded = recorder ? recorder->writer().bytes_written() : meter.bytes_recorded;
-      std::cerr
-          << view::Json{{"viewers", s.viewers},
+      view::Json line{{"viewers", s.viewers},
                         {"hands", snap.skeletons.size()},
                         {"objects", model.object_count()},
                         {"seconds", wall},
@@ -327,9 +408,18 @@ int main(int argc, char** argv) {
                         {"recorded_kb_per_s", static_cast<double>(recorded - meter.bytes_recorded) / 1024.0 / wall},
                         {"record_us_per_step",
                          meter.steps ? 1e-3 * static_cast<double>(meter.record_ns) / static_cast<double>(meter.steps)
-                                     : 0.0}}
-                 .dump()
-          << std::endl;
+                                     : 0.0}};
+      if (drive) {
+        const view::DriveStats d = drive->stats();
+        line["drive"] = {{"connections", d.connections},         {"held", d.held},
+                         {"samples_forwarded", d.samples_forwarded}, {"keepalives", d.keepalives},
+                         {"resumed", d.resumed},                 {"notices", d.notices},
+                         {"skeletons_sent", d.skeletons_sent},   {"refused_connections", s.drive_refused},
+                         {"messages_rejected", s.client_messages_rejected},
+                         {"closed_for_errors", s.closed_for_errors}};
+      }
+      std::cerr << line.dump() << std::endl;
+
       meter = Meter{};
       meter.bytes_sent = s.bytes_sent;
       meter.bytes_recorded = recorded;
@@ -349,6 +439,7 @@ int main(int argc, char** argv) {
   asio::signal_set signals(io, SIGINT, SIGTERM);
   signals.async_wait([&](boost::system::error_code, int) {
     timer.cancel();
+    drive_timer.cancel();
     server->close();
     io.stop();
   });

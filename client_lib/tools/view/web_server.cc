@@ -25,7 +25,7 @@ using tcp = asio::ip::tcp;
 using Json = nlohmann::json;
 
 constexpr const char* kSubprotocol = "foxglove.websocket.v1";
-constexpr std::size_t kMaxRequestBytes = 1 << 20;  // a client's JSON request or HTTP request
+constexpr std::size_t kMaxRequestBytes = 1 << 20;  // an HTTP request
 
 class ViewerSession;
 
@@ -54,6 +54,30 @@ bool lists_protocol(std::string_view header, std::string_view wanted) {
   return false;
 }
 
+// The query parameters of a request target ("/?a=1&b=2"), undecoded (tokens are hex).
+std::map<std::string, std::string> query_of(std::string_view target) {
+  std::map<std::string, std::string> query;
+  const std::size_t question = target.find('?');
+  if (question == std::string_view::npos) return query;
+  std::string_view rest = target.substr(question + 1);
+  while (!rest.empty()) {
+    const std::size_t amp = rest.find('&');
+    const std::string_view item = rest.substr(0, amp);
+    const std::size_t eq = item.find('=');
+    if (eq != std::string_view::npos) query[std::string(item.substr(0, eq))] = std::string(item.substr(eq + 1));
+    if (amp == std::string_view::npos) break;
+    rest.remove_prefix(amp + 1);
+  }
+  return query;
+}
+
+// Equal in a time that depends on the lengths only, not on where the first difference is.
+bool constant_time_equal(std::string_view a, std::string_view b) {
+  unsigned char diff = a.size() == b.size() ? 0 : 1;
+  for (std::size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned char>(a[i] ^ (i < b.size() ? b[i] : 0));
+  return diff == 0;
+}
+
 }  // namespace
 
 // What every session shares: options, channels, the registry of viewers, the counters.
@@ -67,7 +91,10 @@ struct WebServer::Hub {
   std::set<std::shared_ptr<ViewerSession>> viewers;
   WebServerStats stats;
   std::string advertise;  // the Advertise message, the same for every viewer
-  std::string server_info;  // the Server Info message
+  Json server_info;  // the Server Info message, without a connection's own capabilities and metadata
+  DriveHooks drive_hooks;
+  std::uint64_t next_connection = 1;
+  std::map<std::uint64_t, ViewerSession*> by_id;  // the live sessions of `viewers`
   bool closed = false;
 
   Hub(asio::io_context& io_, Options o, std::vector<Channel> c, OnSubscribe s)
@@ -79,7 +106,17 @@ namespace {
 // One WebSocket viewer speaking foxglove.websocket.v1.
 class ViewerSession : public std::enable_shared_from_this<ViewerSession> {
  public:
-  ViewerSession(tcp::socket socket, WebServer::Hub& hub) : ws_(std::move(socket)), hub_(hub) {}
+  // `drive`: this connection may publish (else `why_not_drive` says why, if driving is on).
+  ViewerSession(tcp::socket socket, WebServer::Hub& hub, std::uint64_t id, bool drive, std::string why_not_drive,
+                std::map<std::string, std::string> query)
+      : ws_(std::move(socket)),
+        hub_(hub),
+        id_(id),
+        drive_(drive),
+        why_not_drive_(std::move(why_not_drive)),
+        query_(std::move(query)) {}
+
+  std::uint64_t id() const { return id_; }
 
   void start(http::request<http::string_body> request) {
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
@@ -87,17 +124,22 @@ class ViewerSession : public std::enable_shared_from_this<ViewerSession> {
       res.set(http::field::server, name);
       res.set(http::field::sec_websocket_protocol, kSubprotocol);
     }));
-    ws_.read_message_max(kMaxRequestBytes);
+    ws_.read_message_max(hub_.options.max_client_message_bytes);
     ws_.async_accept(request, [self = shared_from_this()](beast::error_code ec) { self->on_accept(ec); });
   }
 
   // Queues a Message Data frame of `channel` if this viewer subscribed to it.
   void offer(std::uint32_t channel, const std::shared_ptr<const std::string>& payload, std::uint64_t stamp_ns,
-             bool latest_only, const WebServer::Complete& complete = {}) {
+             bool latest_only, const WebServer::Complete& complete = {}, std::uint32_t key = 0) {
     const auto sub = subscription_of_channel_.find(channel);
     if (sub == subscription_of_channel_.end()) return;
-    enqueue(Out{message_header(sub->second, stamp_ns), payload, false, static_cast<std::int64_t>(channel), latest_only},
+    enqueue(Out{message_header(sub->second, stamp_ns), payload, false, static_cast<std::int64_t>(channel), latest_only,
+                key},
             complete);
+  }
+
+  void status(int level, const std::string& message) {
+    send_text(Json{{"op", "status"}, {"level", level}, {"message", message}}.dump());
   }
 
   void close() {
@@ -115,6 +157,7 @@ class ViewerSession : public std::enable_shared_from_this<ViewerSession> {
     bool text = false;
     std::int64_t channel = -1;  // -1: a protocol message
     bool latest_only = false;
+    std::uint32_t key = 0;  // latest only: replaces an unsent message of the same channel and key
     std::size_t size() const { return header.size() + payload->size(); }
   };
 
@@ -130,14 +173,22 @@ class ViewerSession : public std::enable_shared_from_this<ViewerSession> {
     enqueue(Out{"", std::make_shared<const std::string>(std::move(text)), true, -1, false});
   }
 
-  void status(int level, const std::string& message) {
-    send_text(Json{{"op", "status"}, {"level", level}, {"message", message}}.dump());
-  }
-
   void on_accept(beast::error_code ec) {
-    if (ec) return finish();
-    send_text(hub_.server_info);
+    if (ec) return finish(false);
+    Json info = hub_.server_info;
+    if (drive_) {
+      ++hub_.stats.drivers_total;
+      info["capabilities"] = Json::array({"clientPublish"});
+      info["supportedEncodings"] = Json::array({"json"});
+      if (hub_.drive_hooks.opened)
+        for (const auto& [key, value] : hub_.drive_hooks.opened(id_, query_)) info["metadata"][key] = value;
+    }
+    send_text(info.dump());
     send_text(hub_.advertise);
+    if (!why_not_drive_.empty()) {
+      ++hub_.stats.drive_refused;
+      status(1, "this connection may view, not drive: " + why_not_drive_);
+    }
     read();
   }
 
@@ -146,14 +197,75 @@ class ViewerSession : public std::enable_shared_from_this<ViewerSession> {
   }
 
   void on_read(beast::error_code ec) {
-    if (ec) return finish();
-    if (!ws_.got_text()) {
-      status(1, "telegrasp-view does not accept client publishing or service calls");
-    } else {
-      handle(beast::buffers_to_string(in_.data()));
+    if (ec) {
+      if (ec == websocket::error::message_too_big) {
+        ++hub_.stats.closed_for_errors;
+        std::cerr << "telegrasp-view: closed a connection that sent a message over "
+                  << hub_.options.max_client_message_bytes << " bytes\n";
+      }
+      return finish(ec == websocket::error::closed);
     }
+    const std::string data = beast::buffers_to_string(in_.data());
     in_.consume(in_.size());
-    read();
+    if (ws_.got_text())
+      handle(data);
+    else
+      handle_binary(data);
+    if (!closing_) read();
+  }
+
+  // A message this connection should not have sent: told, counted, and after too many, closed.
+  void protocol_error(const std::string& what) {
+    ++hub_.stats.client_messages_rejected;
+    status(2, what);
+    if (++errors_ >= hub_.options.max_protocol_errors) {
+      ++hub_.stats.closed_for_errors;
+      std::cerr << "telegrasp-view: closed a connection after " << errors_ << " bad messages (last: " << what << ")\n";
+      close();
+    }
+  }
+
+  // Client publishing: a Message Data frame (opcode 0x01, u32 client channel id, payload).
+  void handle_binary(const std::string& data) {
+    if (!drive_)
+      return protocol_error(why_not_drive_.empty() ? "telegrasp-view accepts client publishing only with --drive"
+                                                   : "this connection may not drive: " + why_not_drive_);
+    if (data.size() < 5 || static_cast<unsigned char>(data[0]) != 0x01)
+      return protocol_error("binary messages: expected Message Data (opcode 0x01, u32 channel id, payload)");
+    std::uint32_t channel = 0;
+    for (int i = 0; i < 4; ++i) channel |= static_cast<std::uint32_t>(static_cast<unsigned char>(data[1 + i])) << (8 * i);
+    if (!client_channels_.contains(channel))
+      return protocol_error("message on channel " + std::to_string(channel) + ", which this connection did not advertise");
+    const std::string error =
+        hub_.drive_hooks.message ? hub_.drive_hooks.message(id_, std::string_view(data).substr(5)) : "";
+    if (!error.empty()) return protocol_error(hub_.options.drive_topic + ": " + error);
+    ++hub_.stats.client_messages;
+  }
+
+  void advertise(const Json& request) {
+    if (!drive_)
+      return protocol_error(why_not_drive_.empty() ? "telegrasp-view accepts client publishing only with --drive"
+                                                   : "this connection may not drive: " + why_not_drive_);
+    if (!request.contains("channels") || !request["channels"].is_array())
+      return protocol_error("advertise: expected 'channels', an array");
+    const WebServer::Options& o = hub_.options;
+    for (const Json& c : request["channels"]) {
+      const auto text = [&](const char* key) {
+        return c.is_object() && c.contains(key) && c[key].is_string() ? c[key].get<std::string>() : std::string();
+      };
+      if (!c.is_object() || !c.contains("id") || !c["id"].is_number_unsigned())
+        protocol_error("advertise: each channel needs an unsigned 'id'");
+      else if (text("topic") != o.drive_topic)
+        protocol_error("advertise: topic '" + text("topic") + "': this bridge takes " + o.drive_topic + " only");
+      else if (text("encoding") != "json")
+        protocol_error("advertise: encoding '" + text("encoding") + "': expected json");
+      else if (text("schemaName") != o.drive_schema_name)
+        protocol_error("advertise: schemaName '" + text("schemaName") + "': expected " + o.drive_schema_name);
+      else if (client_channels_.size() >= 8)
+        protocol_error("advertise: at most 8 client channels per connection");
+      else
+        client_channels_.insert(c["id"].get<std::uint32_t>());
+    }
   }
 
   // A client's JSON request: subscribe and unsubscribe; anything else gets a warning status.
@@ -196,8 +308,14 @@ class ViewerSession : public std::enable_shared_from_this<ViewerSession> {
         subscription_of_channel_.erase(it->second);
         channel_of_subscription_.erase(it);
       }
+    } else if (op == "advertise") {
+      advertise(request);
+    } else if (op == "unadvertise" && request.contains("channelIds") && request["channelIds"].is_array()) {
+      for (const Json& id : request["channelIds"])
+        if (id.is_number_unsigned()) client_channels_.erase(id.get<std::uint32_t>());
     } else {
-      status(1, "telegrasp-view ignores op '" + op + "' (it serves subscribe and unsubscribe)");
+      protocol_error("telegrasp-view does not serve op '" + op + "' (it serves subscribe, unsubscribe" +
+                     (drive_ ? ", advertise and unadvertise)" : ")"));
     }
   }
 
@@ -207,7 +325,7 @@ class ViewerSession : public std::enable_shared_from_this<ViewerSession> {
       // Newest wins: replace an unsent message of the same channel (never the one being written),
       // by the complete message when the channel sends deltas.
       for (std::size_t i = writing_ ? 1 : 0; i < queue_.size(); ++i) {
-        if (queue_[i].channel == out.channel && queue_[i].latest_only) {
+        if (queue_[i].channel == out.channel && queue_[i].latest_only && queue_[i].key == out.key) {
           if (complete) out.payload = complete();
           queued_bytes_ = queued_bytes_ - queue_[i].size() + out.size();
           queue_[i] = std::move(out);
@@ -237,7 +355,7 @@ class ViewerSession : public std::enable_shared_from_this<ViewerSession> {
 
   void on_write(beast::error_code ec) {
     writing_ = false;
-    if (ec) return finish();
+    if (ec) return finish(false);
     ++hub_.stats.messages_sent;
     hub_.stats.bytes_sent += queue_.front().size();
     queued_bytes_ -= queue_.front().size();
@@ -245,11 +363,14 @@ class ViewerSession : public std::enable_shared_from_this<ViewerSession> {
     if (!queue_.empty()) write();
   }
 
-  void finish() {
+  // `clean`: the peer closed with a close frame.
+  void finish(bool clean) {
     if (!finished_) {
       finished_ = true;
       closing_ = true;
       queue_.clear();
+      hub_.by_id.erase(id_);
+      if (drive_ && hub_.drive_hooks.closed) hub_.drive_hooks.closed(id_, clean);
       hub_.viewers.erase(shared_from_this());
     }
   }
@@ -257,10 +378,16 @@ class ViewerSession : public std::enable_shared_from_this<ViewerSession> {
   websocket::stream<beast::tcp_stream> ws_;
   beast::flat_buffer in_;
   WebServer::Hub& hub_;
+  const std::uint64_t id_;
+  const bool drive_;
+  const std::string why_not_drive_;
+  const std::map<std::string, std::string> query_;
   std::deque<Out> queue_;
   std::size_t queued_bytes_ = 0;
   bool writing_ = false, closing_ = false, finished_ = false;
+  int errors_ = 0;
   std::map<std::uint32_t, std::uint32_t> channel_of_subscription_, subscription_of_channel_;
+  std::set<std::uint32_t> client_channels_;  // advertised by this connection
 };
 
 // One HTTP connection: files of the page, or the upgrade to a ViewerSession.
@@ -287,8 +414,13 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
         return reply_text(request, http::status::bad_request,
                           std::string("this WebSocket speaks the subprotocol ") + kSubprotocol + " only\n");
       stream_.expires_never();
-      auto viewer = std::make_shared<ViewerSession>(stream_.release_socket(), hub_);
+      std::map<std::string, std::string> query = query_of(std::string_view(request.target().data(), request.target().size()));
+      const std::string why_not = why_not_drive(request, query);
+      const std::uint64_t id = hub_.next_connection++;
+      auto viewer = std::make_shared<ViewerSession>(stream_.release_socket(), hub_, id,
+                                                    hub_.options.drive && why_not.empty(), why_not, std::move(query));
       hub_.viewers.insert(viewer);
+      hub_.by_id[id] = viewer.get();
       ++hub_.stats.viewers_total;
       viewer->start(std::move(request));
       return;
@@ -297,6 +429,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
       return reply_text(request, http::status::method_not_allowed, "GET only\n");
     std::string target(request.target().substr(0, request.target().find('?')));
     if (target == "/") target = "/index.html";
+    if (target == "/xr") target = "/xr.html";
     // Files under the web root only.
     if (target.empty() || target[0] != '/' || target.find("..") != std::string::npos ||
         target.find('\\') != std::string::npos)
@@ -323,6 +456,29 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
       return send(head);
     }
     send(response);
+  }
+
+  // "" when a WebSocket upgrade may publish (or driving is off), else why not: the token when
+  // one is set, else the page's Origin (the bridge's own pages, a configured one, or none at all:
+  // not a browser), so that a web site open in the user's browser cannot drive through localhost.
+  std::string why_not_drive(const http::request<http::string_body>& request,
+                            const std::map<std::string, std::string>& query) const {
+    const WebServer::Options& o = hub_.options;
+    if (!o.drive) return "";
+    if (!o.drive_token.empty()) {
+      const auto token = query.find("token");
+      if (token == query.end()) return "driving needs the token: open the URL telegrasp-view printed (?token=...)";
+      if (!constant_time_equal(token->second, o.drive_token)) return "wrong token";
+      return "";
+    }
+    const auto origin_field = request.find(http::field::origin);
+    if (origin_field == request.end()) return "";
+    const std::string origin(origin_field->value());
+    const std::string host(request[http::field::host]);
+    if (origin == "http://" + host || origin == "https://" + host) return "";
+    for (const std::string& allowed : o.drive_origins)
+      if (origin == allowed) return "";
+    return "Origin " + origin + " is not this bridge's (" + host + ") nor one given with --drive-origin";
   }
 
   void reply_text(const http::request<http::string_body>& request, http::status status, std::string text) {
@@ -382,8 +538,7 @@ WebServer::WebServer(asio::io_context& io, Options options, std::vector<Channel>
                            {"name", hub_->options.name},
                            {"capabilities", Json::array()},
                            {"metadata", Json::object()},
-                           {"sessionId", std::to_string(session.count())}}
-                          .dump();
+                           {"sessionId", std::to_string(session.count())}};
 
   const std::string where = hub_->options.address + ":" + std::to_string(hub_->options.port);
   beast::error_code ec;
@@ -422,6 +577,19 @@ void WebServer::publish(std::uint32_t channel, std::shared_ptr<const std::string
   // A viewer may drop out of the set while offered a message (a full queue): iterate a copy.
   const std::vector<std::shared_ptr<ViewerSession>> viewers(hub_->viewers.begin(), hub_->viewers.end());
   for (const auto& viewer : viewers) viewer->offer(channel, payload, stamp_ns, latest_only, once);
+}
+
+void WebServer::set_drive_hooks(DriveHooks hooks) { hub_->drive_hooks = std::move(hooks); }
+
+void WebServer::send_to(std::uint64_t connection, std::uint32_t channel, std::shared_ptr<const std::string> payload,
+                        std::uint64_t stamp_ns, std::uint32_t key) {
+  const auto it = hub_->by_id.find(connection);
+  if (it != hub_->by_id.end()) it->second->offer(channel, payload, stamp_ns, true, {}, key);
+}
+
+void WebServer::status_to(std::uint64_t connection, int level, const std::string& message) {
+  const auto it = hub_->by_id.find(connection);
+  if (it != hub_->by_id.end()) it->second->status(level, message);
 }
 
 void WebServer::close() {

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -34,6 +35,11 @@ struct WebServerStats {
   std::uint64_t messages_replaced = 0;  ///< Dropped for a newer one (slow viewers).
   std::uint64_t viewers_dropped = 0;  ///< Disconnected for a queue past the bound.
   std::uint64_t http_requests = 0;
+  std::uint64_t drivers_total = 0;  ///< Connections allowed to publish, since start.
+  std::uint64_t drive_refused = 0;  ///< Connections with --drive that may only view (no token, foreign Origin).
+  std::uint64_t client_messages = 0;  ///< Published by connections and taken by DriveHooks::message.
+  std::uint64_t client_messages_rejected = 0;  ///< Refused (bad op, channel, field, size), each told by a status.
+  std::uint64_t closed_for_errors = 0;  ///< Connections closed for breaking the protocol too often or too big a message.
 };
 
 class WebServer {
@@ -44,6 +50,32 @@ class WebServer {
     std::filesystem::path web_root;  ///< The page's files; "/" is index.html.
     std::size_t max_queued_bytes = 64u << 20;  ///< Per viewer, messages kept (not latest only).
     std::string name = "telegrasp-view";
+    /// Connections may publish on drive_topic (encoding json, schema drive_schema_name).
+    bool drive = false;
+    std::string drive_topic = "/controller_state";
+    std::string drive_schema_name = "telegrasp.ControllerInput";
+    /// Not empty: publishing needs ?token=<this> in the WebSocket URL (compared in constant time).
+    std::string drive_token;
+    /// Empty token: the Origins that may publish besides the bridge's own pages (http(s)://Host);
+    /// a connection with no Origin header (not a browser) may too.
+    std::vector<std::string> drive_origins;
+    /// A client message larger than this closes the connection.
+    std::size_t max_client_message_bytes = 16384;
+    /// A connection that sends this many bad messages is closed.
+    int max_protocol_errors = 32;
+  };
+  /// What a publishing connection brings; all called on the io_context's thread.
+  struct DriveHooks {
+    /// A connection that may publish opened; `query` holds its URL's query parameters. Returns the
+    /// metadata of its serverInfo (its client id, a resume token).
+    std::function<std::map<std::string, std::string>(std::uint64_t connection,
+                                                     const std::map<std::string, std::string>& query)>
+        opened;
+    /// A message on drive_topic: "" taken, else what is wrong (told in a status, counted).
+    std::function<std::string(std::uint64_t connection, std::string_view payload)> message;
+    /// A publishing connection ended; `clean`: with a WebSocket close (the page went away), not a
+    /// dropped link.
+    std::function<void(std::uint64_t connection, bool clean)> closed;
   };
   /// Called on the server thread when a viewer subscribes to `channel`: the messages (payloads)
   /// that bring it up to date, sent to that viewer only, before anything published later.
@@ -66,6 +98,14 @@ class WebServer {
   /// older one in a slow viewer's queue, so that viewer misses no change.
   void publish(std::uint32_t channel, std::shared_ptr<const std::string> payload, std::uint64_t stamp_ns,
                const Complete& complete = {});
+  /// Sets the hooks of publishing connections (before any connects).
+  void set_drive_hooks(DriveHooks hooks);
+  /// Sends `payload` on `channel` to `connection` alone, if it subscribed to it; an unsent older
+  /// message of the same channel and `key` in its queue is replaced (newest wins).
+  void send_to(std::uint64_t connection, std::uint32_t channel, std::shared_ptr<const std::string> payload,
+               std::uint64_t stamp_ns, std::uint32_t key);
+  /// A status message (level 0 info, 1 warning, 2 error) to `connection`.
+  void status_to(std::uint64_t connection, int level, const std::string& message);
   /// Closes the listener and every connection (on the io_context's thread).
   void close();
   WebServerStats stats() const;

@@ -45,6 +45,10 @@ struct ClientOptions {
   /// empty: $TELEGRASP_DISCOVERY_SERVERS, else the profile's discovery.
   std::vector<std::string> discovery_servers;
   unsigned topics = kAllTopics;  ///< Outputs to subscribe to (bits of Topics).
+  /// A relay forwarding many users' hands (a server's --relay PREFIX; telegrasp-view --drive):
+  /// publish_as() sends as client ids that start with this prefix, and their notices arrive with
+  /// this client's. "": not a relay.
+  std::string relay_prefix;
 };
 
 /// "" when `name` can be a scene name (ClientOptions::scene), else why not.
@@ -70,6 +74,10 @@ class Client {
   /// Publishes one controller sample; returns the sequence number it carries. Invalid values go out
   /// unchanged; throws std::invalid_argument only for what the wire cannot carry (> 5 curls).
   std::uint64_t publish(const ControllerSample& sample);
+  /// publish() as `client_id`, which starts with ClientOptions::relay_prefix, with the sample's
+  /// own sequence number (not 0: the relay numbers each id's hands). Throws std::invalid_argument
+  /// for an id outside the prefix or sequence number 0.
+  std::uint64_t publish_as(const std::string& client_id, const ControllerSample& sample);
   /// Sends a scene command (reliable); returns its command id (1, 2, 3 ...). Throws
   /// std::invalid_argument for a model name longer than 128 characters, std::runtime_error when
   /// the secure profile's permissions give this identity no operator role.

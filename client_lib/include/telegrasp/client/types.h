@@ -184,6 +184,7 @@ struct ServerStatus {
 /// instead of being ignored. Input refusals come at most once a second per reason.
 struct Notice {
   enum class Kind { kInputRejected, kCommandRejected };
+  std::string client_id;  ///< The refused client: this one, or one its relay_prefix covers.
   Kind kind = Kind::kInputRejected;
   std::string reason;  ///< A key of ServerStatus::rejected or commands_rejected_by_reason, e.g. "rate_limited".
   std::string detail;  ///< For people: what was wrong.
