@@ -240,7 +240,6 @@ try {
   await moveTo(page, "controller", [-0.3, -0.2, 0.3], [grip[0], grip[1] - 0.15, grip[2] + 0.1], kGripSideGrasp, 40);
   await moveTo(page, "controller", [grip[0], grip[1] - 0.15, grip[2] + 0.1], grip, kGripSideGrasp, 40);
   await sleep(300);
-  console.log(`at the can: ${JSON.stringify((await summary(page)).ownHands.right)}`);
   for (let v = 0; v <= 1.0001; v += 0.05) {
     await squeeze(page, "controller", v);
     await sleep(40);
@@ -261,6 +260,36 @@ try {
     "opening the hand released the can");
   const s = await summary(page);
   console.log(`page: ${JSON.stringify({ sent: s.sent, skeletons: s.skeletons, latency: s.latency })}`);
+
+  // 2. A tracked hand: the wrist's grip pose places the hand, the pinch closes the curls.
+  await page.evaluate(() => { window.iwerDevice.primaryInputMode = "hand"; });
+  await sleep(500);
+  const start = [grip[0], grip[1] - 0.15, grip[2] + 0.1];
+  await moveTo(page, "hand", start, start, kGripSideGrasp, 10);
+  await moveTo(page, "hand", start, grip, kGripSideGrasp, 40);
+  await sleep(300);
+  const handGrasps = events.filter((e) => e.kind === "grasp").length;
+  for (let v = 0; v <= 1.0001; v += 0.05) {
+    await squeeze(page, "hand", v);
+    await sleep(40);
+  }
+  const curls = (await summary(page)).lastSent.right?.curls;
+  checks.check(Array.isArray(curls) && curls.length === 5 && curls[0] > 0.2 && curls[1] > 0.2,
+    `the pinching hand sends five curls, thumb and index closing (${JSON.stringify(curls?.map((c) => +c.toFixed(2)))})`);
+  const handGrasped = await until(() => events.filter((e) => e.kind === "grasp").length > handGrasps &&
+    events.at(-1).hand.client_id === me, 5000, "a GraspEvent of the tracked hand");
+  checks.check(handGrasped, "the tracked hand's pinch grasped the can");
+  if (handGrasped) {
+    const from = canAt()[2];
+    await moveTo(page, "hand", grip, [grip[0], grip[1], grip[2] + 0.15], kGripSideGrasp, 50);
+    await sleep(300);
+    checks.check(canAt()[2] - from > 0.1, `the can followed the tracked hand up (${((canAt()[2] - from) * 1000).toFixed(0)} mm)`);
+    await squeeze(page, "hand", 0);
+    await until(() => events.at(-1)?.kind === "release", 5000, "the release");
+    await moveTo(page, "hand", [grip[0], grip[1], grip[2] + 0.15], grip, kGripSideGrasp, 30);
+  }
+  await page.evaluate(() => { window.iwerDevice.primaryInputMode = "controller"; });
+  await sleep(500);
 
   // 3. Another connection drives its own id only, whatever its messages say.
   const other = wsClient(`ws://127.0.0.1:${port}/`);
@@ -316,7 +345,9 @@ try {
   await stop(tokened.view);
 
   // 4. Closing the page releases what it holds within a second.
-  await moveTo(page, "controller", [grip[0], grip[1], grip[2] + 0.15], grip, kGripSideGrasp, 40);
+  const canNow = canAt();
+  const grip2 = [canNow[0], canNow[1], canNow[2]];
+  await moveTo(page, "controller", [grip2[0], grip2[1] - 0.15, grip2[2] + 0.1], grip2, kGripSideGrasp, 40);
   await sleep(300);
   const grasps = events.filter((e) => e.kind === "grasp" && e.hand.client_id === me).length;
   for (let v = 0; v <= 1.0001; v += 0.1) {

@@ -222,32 +222,38 @@ const sent = { left: 0, right: 0 };
 const lastSent = {};  // side -> the newest message, for tests
 
 // Five curls (thumb first) from a tracked hand's joints: the bends along each finger's chain of
-// bones, over what a full fist bends them.
+// bones over what a fist bends them, and a pinch closes the whole hand: every curl is at least
+// the pinch, 0 with the thumb and index tips 6 cm apart, 1 at 1.5 cm.
 const kFingers = [
   ["thumb-metacarpal", "thumb-phalanx-proximal", "thumb-phalanx-distal", "thumb-tip"],
   ...["index-finger", "middle-finger", "ring-finger", "pinky-finger"].map((f) =>
     [`${f}-metacarpal`, `${f}-phalanx-proximal`, `${f}-phalanx-intermediate`, `${f}-phalanx-distal`, `${f}-tip`]),
 ];
-const kFullBend = [Math.PI * 0.8, Math.PI * 1.4, Math.PI * 1.4, Math.PI * 1.4, Math.PI * 1.4];
+const kFullBend = [Math.PI * 0.45, Math.PI * 1.2, Math.PI * 1.2, Math.PI * 1.2, Math.PI * 1.2];
+const kPinchOpen = 0.06, kPinchClosed = 0.015;  // m between the thumb and index tips
 
 function handCurls(frame, hand, space) {
-  const curls = [];
-  for (let f = 0; f < kFingers.length; ++f) {
+  const chains = [];
+  for (const chain of kFingers) {
     const points = [];
-    for (const joint of kFingers[f]) {
-      const space_ = hand.get(joint);
-      const pose = space_ && frame.getJointPose?.(space_, space);
+    for (const joint of chain) {
+      const jointSpace = hand.get(joint);
+      const pose = jointSpace && frame.getJointPose?.(jointSpace, space);
       if (!pose) return null;
       points.push(vec(pose.transform.position));
     }
+    chains.push(points);
+  }
+  const pinchGap = chains[0].at(-1).distanceTo(chains[1].at(-1));
+  const pinch = Math.min(1, Math.max(0, (kPinchOpen - pinchGap) / (kPinchOpen - kPinchClosed)));
+  return chains.map((points, f) => {
     let bend = 0;
     for (let i = 0; i + 2 < points.length; ++i) {
       const a = points[i + 1].clone().sub(points[i]), b = points[i + 2].clone().sub(points[i + 1]);
       if (a.lengthSq() > 0 && b.lengthSq() > 0) bend += a.angleTo(b);
     }
-    curls.push(Math.min(1, Math.max(0, bend / kFullBend[f])));
-  }
-  return curls;
+    return Math.min(1, Math.max(pinch, bend / kFullBend[f]));
+  });
 }
 
 function sample(frame, source, space) {
