@@ -284,10 +284,15 @@ try {
     await moveTo(page, "hand", grip, [grip[0], grip[1], grip[2] + 0.15], kGripSideGrasp, 50);
     await sleep(300);
     checks.check(canAt()[2] - from > 0.1, `the can followed the tracked hand up (${((canAt()[2] - from) * 1000).toFixed(0)} mm)`);
+    await moveTo(page, "hand", [grip[0], grip[1], grip[2] + 0.15], grip, kGripSideGrasp, 30);  // set it down
     await squeeze(page, "hand", 0);
     await until(() => events.at(-1)?.kind === "release", 5000, "the release");
-    await moveTo(page, "hand", [grip[0], grip[1], grip[2] + 0.15], grip, kGripSideGrasp, 30);
+    await sleep(600);  // the fingers open before the hand backs away
+    await moveTo(page, "hand", grip, [grip[0], grip[1] - 0.1, grip[2]], kGripSideGrasp, 30);
+    await moveTo(page, "hand", [grip[0], grip[1] - 0.1, grip[2]], start, kGripSideGrasp, 20);
   }
+  // The controller comes back where the tracked hand left off, not at the lifted pose of part 1.
+  await moveTo(page, "controller", start, start, kGripSideGrasp, 2);
   await page.evaluate(() => { window.iwerDevice.primaryInputMode = "controller"; });
   await sleep(500);
 

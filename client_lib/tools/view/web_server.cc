@@ -512,7 +512,12 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 void accept(const std::shared_ptr<WebServer::Hub>& hub) {
   hub->acceptor.async_accept([hub](beast::error_code ec, tcp::socket socket) {
     if (hub->closed) return;
-    if (!ec) std::make_shared<HttpSession>(std::move(socket), *hub)->read();
+    if (!ec) {
+      // Small messages go out at once (a skeleton must not wait for the last one's ACK).
+      beast::error_code ignored;
+      socket.set_option(tcp::no_delay(true), ignored);
+      std::make_shared<HttpSession>(std::move(socket), *hub)->read();
+    }
     accept(hub);
   });
 }
