@@ -13,7 +13,7 @@ packages=(
   libprotobuf-dev protobuf-compiler nlohmann-json3-dev
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
   libgtest-dev libgmock-dev libbenchmark-dev
-  libzstd-dev openssl
+  libzstd-dev openssl libssl-dev
   libboost-dev chromium
   iptables iproute2
 )

@@ -15,6 +15,7 @@
 import fs from "node:fs";
 import os from "node:os";
 import path from "node:path";
+import { execFileSync } from "node:child_process";
 import { Checks, fatal, here, installHint, need, options, sleep, start, stop, testDomain, until } from "./view_common.mjs";
 
 const kChromium = "/usr/bin/chromium";
@@ -61,7 +62,7 @@ async function startView(extra) {
       log.write(line + "\n");
       const m = line.match(/http:\/\/127\.0\.0\.1:(\d+)\/ \(page\)/);
       if (m) port = Number(m[1]);
-      const x = line.match(/(http:\/\/\S+\/xr\S*)/);
+      const x = line.match(/(https?:\/\/\S+\/xr\S*)/);
       if (x) url = x[1];
     },
   });
@@ -76,6 +77,7 @@ const context = await playwright.chromium.launchPersistentContext(profile, {
   executablePath: kChromium,
   headless: true,
   viewport: { width: 960, height: 540 },
+  ignoreHTTPSErrors: true,  // the TLS part's self-signed certificate
   args: ["--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--disable-background-networking",
     "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-frame-rate-limit", "--disable-gpu-vsync"],
 });
@@ -179,7 +181,7 @@ const canAt = () => scene?.objects?.find((o) => o.name.startsWith("005_tomato_so
 // A WebSocket client speaking the contract (telegrasp.ControllerInput), as other clients would.
 function wsClient(url, headers = {}) {
   const c = { serverInfo: null, statuses: [], hands: [], closed: false, seq: 0 };
-  c.ws = new WebSocket(url, ["foxglove.websocket.v1"], { headers });
+  c.ws = new WebSocket(url, ["foxglove.websocket.v1"], { headers, rejectUnauthorized: false });  // our self-signed test certificate
   c.ws.on("message", (data, binary) => {
     if (!binary) {
       const m = JSON.parse(data.toString());
@@ -338,15 +340,24 @@ try {
   garbage.ws.send("x".repeat(20000));
   checks.check(await until(() => garbage.closed, 3000, "the close"), "a client message over the size cap closes the connection");
 
-  // With a token, driving needs it (on loopback too).
-  const tokened = await startView(["--drive-token", "secret-token-1"]);
-  const noToken = wsClient(`ws://127.0.0.1:${tokened.port}/`), wrong = wsClient(`ws://127.0.0.1:${tokened.port}/?token=secret-token-2`),
-    right = wsClient(`ws://127.0.0.1:${tokened.port}/?token=secret-token-1`);
-  await Promise.all([noToken.open(), wrong.open(), right.open()]);
+  // With a token, driving needs it (on loopback too); with a certificate (deploy/make-cert.sh) the
+  // same port serves HTTPS and WSS, and plain HTTP still.
+  execFileSync(path.join(here, "..", "..", "deploy", "make-cert.sh"), ["127.0.0.1", out]);
+  const tokened = await startView(["--drive-token", "secret-token-1", "--tls-cert", path.join(out, "view-cert.pem"),
+    "--tls-key", path.join(out, "view-key.pem")]);
+  const noToken = wsClient(`wss://127.0.0.1:${tokened.port}/`), wrong = wsClient(`wss://127.0.0.1:${tokened.port}/?token=secret-token-2`),
+    right = wsClient(`wss://127.0.0.1:${tokened.port}/?token=secret-token-1`), plain = wsClient(`ws://127.0.0.1:${tokened.port}/?token=secret-token-1`);
+  await Promise.all([noToken.open(), wrong.open(), right.open(), plain.open()]);
   checks.check(!noToken.mayDrive() && !wrong.mayDrive() && right.mayDrive(),
-    "with --drive-token only a connection presenting the token may drive");
-  checks.check(tokened.url.endsWith("/xr?token=secret-token-1"), `the bridge prints the page's URL with the token (${tokened.url})`);
-  for (const c of [noToken, wrong, right]) c.ws.close();
+    "with --drive-token only a connection presenting the token may drive (over WSS)");
+  checks.check(plain.mayDrive(), "the TLS port still speaks plain WebSocket");
+  checks.check(tokened.url === `https://127.0.0.1:${tokened.port}/xr?token=secret-token-1`,
+    `the bridge prints the page's https URL with the token (${tokened.url})`);
+  for (const c of [noToken, wrong, right, plain]) c.ws.close();
+  const securePage = await openPage(tokened.url);
+  checks.check(await until(async () => (await summary(securePage))?.mayDrive, 15000, "the https page to drive"),
+    "the page over HTTPS with the token drives through WSS");
+  await securePage.close();
   await stop(tokened.view);
 
   // 4. Closing the page releases what it holds within a second.

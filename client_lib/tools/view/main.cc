@@ -85,6 +85,10 @@ in the view's README, "Driving hands"):
                      (default 1)
   --resume-window S  a connection that drops without closing keeps its hands S seconds for the
                      page to reconnect with its resume token (default 5)
+  --tls-cert FILE    with --tls-key: the port also serves HTTPS and WSS with this certificate
+  --tls-key FILE     chain and private key (PEM; deploy/make-cert.sh makes a self-signed pair for
+                     a LAN host name or IP); plain HTTP keeps working on the same port. Headset
+                     browsers give WebXR only to https:// pages (or http://localhost)
 
 Exit status: 0 stopped by SIGINT or SIGTERM, 1 a runtime failure (DDS could not start, the port
 is in use, the page or schema files are missing, the --record file is not writable), 2 a usage
@@ -106,6 +110,7 @@ struct Args {
   std::string drive_token;
   std::vector<std::string> drive_origins;
   view::DriveOptions drive_options;
+  std::string tls_cert, tls_key;
 };
 
 // Every flag is checked here, so the client library never sees a bad option.
@@ -153,6 +158,10 @@ Args parse(int argc, char** argv) {
       a.drive_options.tracking_grace_s = cli::parse_number(flag, value(), 0, 60, usage_error);
     else if (flag == "--resume-window")
       a.drive_options.resume_window_s = cli::parse_number(flag, value(), 0, 600, usage_error);
+    else if (flag == "--tls-cert")
+      a.tls_cert = value();
+    else if (flag == "--tls-key")
+      a.tls_key = value();
     else if (flag == "--record") {
       a.record_path = value();
       if (a.record_path.empty()) usage_error("--record expects a file name, got ''");
@@ -161,6 +170,7 @@ Args parse(int argc, char** argv) {
     return true;
   });
   if (a.drive) a.client.relay_prefix = a.drive_options.prefix;
+  if (a.tls_cert.empty() != a.tls_key.empty()) usage_error("--tls-cert and --tls-key go together");
   return a;
 }
 
@@ -278,6 +288,8 @@ int main(int argc, char** argv) {
     options.drive = args.drive;
     options.drive_token = drive_token;
     options.drive_origins = args.drive_origins;
+    options.tls_cert = args.tls_cert;
+    options.tls_key = args.tls_key;
     // Everything below runs on this thread (io.run()): the model needs no lock.
     server.emplace(io, options, std::move(channels), [&](std::uint32_t channel) {
       std::vector<std::shared_ptr<const std::string>> out;
@@ -309,7 +321,8 @@ int main(int argc, char** argv) {
   }
   const std::string host = args.address == "0.0.0.0" ? "localhost" : args.address;
   std::cout << "telegrasp-view: http://" << host << ":" << server->port() << "/ (page), ws://" << host << ":"
-            << server->port() << " (Foxglove WebSocket), DDS domain " << args.client.domain << std::endl;
+            << server->port() << " (Foxglove WebSocket), DDS domain " << args.client.domain
+            << (args.tls_cert.empty() ? "" : "; https:// and wss:// on the same port") << std::endl;
 
   // --drive: connections publish controller input, forwarded as client ids under the prefix.
   std::optional<view::Drive> drive;
@@ -334,7 +347,7 @@ int main(int argc, char** argv) {
       if (n.client_id.starts_with(prefix)) asio::post(io, [&drive, n] { drive->notice(n); });
     });
     drive_tick();
-    std::cout << "telegrasp-view: headsets drive hands at http://" << host << ":" << server->port() << "/xr"
+    std::cout << "telegrasp-view: headsets drive hands at " << (args.tls_cert.empty() ? "http" : "https") << "://" << host << ":" << server->port() << "/xr"
               << (drive_token.empty() ? "" : "?token=" + drive_token) << " (client ids " << prefix
               << "*: start the server with --relay " << prefix << ")" << std::endl;
   }

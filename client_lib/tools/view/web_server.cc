@@ -1,9 +1,13 @@
 #include "web_server.h"
 
 #include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/ssl.hpp>
 #include <boost/beast/core.hpp>
+#include <boost/beast/core/detect_ssl.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/beast/ssl.hpp>
 #include <boost/beast/websocket.hpp>
+#include <boost/beast/websocket/ssl.hpp>
 #include <nlohmann/json.hpp>
 
 #include <array>
@@ -11,6 +15,7 @@
 #include <deque>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <set>
 #include <stdexcept>
 
@@ -22,12 +27,22 @@ namespace beast = boost::beast;
 namespace http = beast::http;
 namespace websocket = beast::websocket;
 using tcp = asio::ip::tcp;
+namespace ssl = asio::ssl;
+using TlsStream = beast::ssl_stream<beast::tcp_stream>;
 using Json = nlohmann::json;
 
 constexpr const char* kSubprotocol = "foxglove.websocket.v1";
 constexpr std::size_t kMaxRequestBytes = 1 << 20;  // an HTTP request
 
-class ViewerSession;
+// What the hub asks of a viewer, whether its connection is plain or TLS.
+class Viewer {
+ public:
+  virtual ~Viewer() = default;
+  virtual void offer(std::uint32_t channel, const std::shared_ptr<const std::string>& payload, std::uint64_t stamp_ns,
+                     bool latest_only, const WebServer::Complete& complete = {}, std::uint32_t key = 0) = 0;
+  virtual void status(int level, const std::string& message) = 0;
+  virtual void close() = 0;
+};
 
 std::string_view mime_type(const std::filesystem::path& path) {
   const std::string ext = path.extension().string();
@@ -88,13 +103,14 @@ struct WebServer::Hub {
   std::map<std::uint32_t, const Channel*> channel_by_id;
   OnSubscribe on_subscribe;
   tcp::acceptor acceptor;
-  std::set<std::shared_ptr<ViewerSession>> viewers;
+  std::set<std::shared_ptr<Viewer>> viewers;
+  std::optional<ssl::context> tls;  // with a certificate: TLS connections are served too
   WebServerStats stats;
   std::string advertise;  // the Advertise message, the same for every viewer
   Json server_info;  // the Server Info message, without a connection's own capabilities and metadata
   DriveHooks drive_hooks;
   std::uint64_t next_connection = 1;
-  std::map<std::uint64_t, ViewerSession*> by_id;  // the live sessions of `viewers`
+  std::map<std::uint64_t, Viewer*> by_id;  // the live sessions of `viewers`
   bool closed = false;
 
   Hub(asio::io_context& io_, Options o, std::vector<Channel> c, OnSubscribe s)
@@ -104,12 +120,15 @@ struct WebServer::Hub {
 namespace {
 
 // One WebSocket viewer speaking foxglove.websocket.v1.
-class ViewerSession : public std::enable_shared_from_this<ViewerSession> {
+// `Stream`: beast::tcp_stream, or TlsStream.
+template <class Stream>
+class ViewerSession : public Viewer, public std::enable_shared_from_this<ViewerSession<Stream>> {
  public:
+  using std::enable_shared_from_this<ViewerSession<Stream>>::shared_from_this;
   // `drive`: this connection may publish (else `why_not_drive` says why, if driving is on).
-  ViewerSession(tcp::socket socket, WebServer::Hub& hub, std::uint64_t id, bool drive, std::string why_not_drive,
+  ViewerSession(Stream&& stream, WebServer::Hub& hub, std::uint64_t id, bool drive, std::string why_not_drive,
                 std::map<std::string, std::string> query)
-      : ws_(std::move(socket)),
+      : ws_(std::move(stream)),
         hub_(hub),
         id_(id),
         drive_(drive),
@@ -130,7 +149,7 @@ class ViewerSession : public std::enable_shared_from_this<ViewerSession> {
 
   // Queues a Message Data frame of `channel` if this viewer subscribed to it.
   void offer(std::uint32_t channel, const std::shared_ptr<const std::string>& payload, std::uint64_t stamp_ns,
-             bool latest_only, const WebServer::Complete& complete = {}, std::uint32_t key = 0) {
+             bool latest_only, const WebServer::Complete& complete = {}, std::uint32_t key = 0) override {
     const auto sub = subscription_of_channel_.find(channel);
     if (sub == subscription_of_channel_.end()) return;
     enqueue(Out{message_header(sub->second, stamp_ns), payload, false, static_cast<std::int64_t>(channel), latest_only,
@@ -138,11 +157,11 @@ class ViewerSession : public std::enable_shared_from_this<ViewerSession> {
             complete);
   }
 
-  void status(int level, const std::string& message) {
+  void status(int level, const std::string& message) override {
     send_text(Json{{"op", "status"}, {"level", level}, {"message", message}}.dump());
   }
 
-  void close() {
+  void close() override {
     if (closing_) return;
     closing_ = true;
     beast::error_code ec;
@@ -375,7 +394,7 @@ class ViewerSession : public std::enable_shared_from_this<ViewerSession> {
     }
   }
 
-  websocket::stream<beast::tcp_stream> ws_;
+  websocket::stream<Stream> ws_;
   beast::flat_buffer in_;
   WebServer::Hub& hub_;
   const std::uint64_t id_;
@@ -391,14 +410,18 @@ class ViewerSession : public std::enable_shared_from_this<ViewerSession> {
 };
 
 // One HTTP connection: files of the page, or the upgrade to a ViewerSession.
-class HttpSession : public std::enable_shared_from_this<HttpSession> {
+template <class Stream>
+class HttpSession : public std::enable_shared_from_this<HttpSession<Stream>> {
  public:
-  HttpSession(tcp::socket socket, WebServer::Hub& hub) : stream_(std::move(socket)), hub_(hub) {}
+  using std::enable_shared_from_this<HttpSession<Stream>>::shared_from_this;
+  // `buffer`: bytes already read (the TLS detection's).
+  HttpSession(Stream&& stream, beast::flat_buffer buffer, WebServer::Hub& hub)
+      : stream_(std::move(stream)), buffer_(std::move(buffer)), hub_(hub) {}
 
   void read() {
     parser_.emplace();
     parser_->body_limit(kMaxRequestBytes);
-    stream_.expires_after(std::chrono::seconds(30));
+    beast::get_lowest_layer(stream_).expires_after(std::chrono::seconds(30));
     http::async_read(stream_, buffer_, *parser_,
                      [self = shared_from_this()](beast::error_code ec, std::size_t) { self->on_read(ec); });
   }
@@ -413,12 +436,13 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
       if (!lists_protocol(std::string_view(offered.data(), offered.size()), kSubprotocol))
         return reply_text(request, http::status::bad_request,
                           std::string("this WebSocket speaks the subprotocol ") + kSubprotocol + " only\n");
-      stream_.expires_never();
+      beast::get_lowest_layer(stream_).expires_never();
       std::map<std::string, std::string> query = query_of(std::string_view(request.target().data(), request.target().size()));
       const std::string why_not = why_not_drive(request, query);
       const std::uint64_t id = hub_.next_connection++;
-      auto viewer = std::make_shared<ViewerSession>(stream_.release_socket(), hub_, id,
-                                                    hub_.options.drive && why_not.empty(), why_not, std::move(query));
+      auto viewer = std::make_shared<ViewerSession<Stream>>(std::move(stream_), hub_, id,
+                                                            hub_.options.drive && why_not.empty(), why_not,
+                                                            std::move(query));
       hub_.viewers.insert(viewer);
       hub_.by_id[id] = viewer.get();
       ++hub_.stats.viewers_total;
@@ -496,18 +520,40 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     http::async_write(stream_, *response, [self = shared_from_this(), response](beast::error_code ec, std::size_t) {
       if (ec || !response->keep_alive()) {
         beast::error_code ignored;
-        self->stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
+        beast::get_lowest_layer(self->stream_).socket().shutdown(tcp::socket::shutdown_send, ignored);
         return;
       }
       self->read();
     });
   }
 
-  beast::tcp_stream stream_;
+  Stream stream_;
   beast::flat_buffer buffer_;
   std::optional<http::request_parser<http::string_body>> parser_;
   WebServer::Hub& hub_;
 };
+
+// With a certificate, one port serves both: a TLS handshake goes on as HTTPS/WSS, anything else
+// as plain HTTP/WS.
+void detect_tls(const std::shared_ptr<WebServer::Hub>& hub, beast::tcp_stream stream) {
+  auto state = std::make_shared<std::pair<beast::tcp_stream, beast::flat_buffer>>(std::move(stream), beast::flat_buffer());
+  state->first.expires_after(std::chrono::seconds(30));
+  beast::async_detect_ssl(state->first, state->second, [hub, state](beast::error_code ec, bool tls) {
+    if (ec || hub->closed) return;
+    if (!tls) {
+      std::make_shared<HttpSession<beast::tcp_stream>>(std::move(state->first), std::move(state->second), *hub)->read();
+      return;
+    }
+    auto secure = std::make_shared<TlsStream>(std::move(state->first), *hub->tls);
+    secure->async_handshake(ssl::stream_base::server, state->second.data(),
+                            [hub, state, secure](beast::error_code ec, std::size_t used) {
+                              if (ec || hub->closed) return;  // a bad handshake: dropped
+                              state->second.consume(used);
+                              std::make_shared<HttpSession<TlsStream>>(std::move(*secure), std::move(state->second), *hub)
+                                  ->read();
+                            });
+  });
+}
 
 void accept(const std::shared_ptr<WebServer::Hub>& hub) {
   hub->acceptor.async_accept([hub](beast::error_code ec, tcp::socket socket) {
@@ -516,7 +562,11 @@ void accept(const std::shared_ptr<WebServer::Hub>& hub) {
       // Small messages go out at once (a skeleton must not wait for the last one's ACK).
       beast::error_code ignored;
       socket.set_option(tcp::no_delay(true), ignored);
-      std::make_shared<HttpSession>(std::move(socket), *hub)->read();
+      if (hub->tls)
+        detect_tls(hub, beast::tcp_stream(std::move(socket)));
+      else
+        std::make_shared<HttpSession<beast::tcp_stream>>(beast::tcp_stream(std::move(socket)), beast::flat_buffer(), *hub)
+            ->read();
     }
     accept(hub);
   });
@@ -545,6 +595,22 @@ WebServer::WebServer(asio::io_context& io, Options options, std::vector<Channel>
                            {"metadata", Json::object()},
                            {"sessionId", std::to_string(session.count())}};
 
+  if (!hub_->options.tls_cert.empty()) {
+    hub_->tls.emplace(ssl::context::tls_server);
+    hub_->tls->set_options(ssl::context::default_workarounds | ssl::context::no_sslv2 | ssl::context::no_sslv3 |
+                           ssl::context::no_tlsv1 | ssl::context::no_tlsv1_1);
+    for (const auto& [flag, file] : {std::pair{"--tls-cert", hub_->options.tls_cert}, {"--tls-key", hub_->options.tls_key}})
+      if (!std::filesystem::is_regular_file(file)) throw std::runtime_error(std::string(flag) + " " + file.string() + ": no such file");
+    beast::error_code ec;
+    hub_->tls->use_certificate_chain_file(hub_->options.tls_cert.string(), ec);
+    if (ec)
+      throw std::runtime_error("--tls-cert " + hub_->options.tls_cert.string() +
+                               ": not a PEM certificate chain (" + ec.message() + "); deploy/make-cert.sh makes one");
+    hub_->tls->use_private_key_file(hub_->options.tls_key.string(), ssl::context::pem, ec);
+    if (ec)
+      throw std::runtime_error("--tls-key " + hub_->options.tls_key.string() + ": not a PEM private key (" +
+                               ec.message() + ")");
+  }
   const std::string where = hub_->options.address + ":" + std::to_string(hub_->options.port);
   beast::error_code ec;
   const asio::ip::address address = asio::ip::make_address(hub_->options.address, ec);
@@ -580,7 +646,7 @@ void WebServer::publish(std::uint32_t channel, std::shared_ptr<const std::string
       return built;
     };
   // A viewer may drop out of the set while offered a message (a full queue): iterate a copy.
-  const std::vector<std::shared_ptr<ViewerSession>> viewers(hub_->viewers.begin(), hub_->viewers.end());
+  const std::vector<std::shared_ptr<Viewer>> viewers(hub_->viewers.begin(), hub_->viewers.end());
   for (const auto& viewer : viewers) viewer->offer(channel, payload, stamp_ns, latest_only, once);
 }
 
@@ -602,7 +668,7 @@ void WebServer::close() {
   hub_->closed = true;
   beast::error_code ec;
   hub_->acceptor.close(ec);
-  const std::vector<std::shared_ptr<ViewerSession>> viewers(hub_->viewers.begin(), hub_->viewers.end());
+  const std::vector<std::shared_ptr<Viewer>> viewers(hub_->viewers.begin(), hub_->viewers.end());
   for (const auto& viewer : viewers) viewer->close();
 }
 

@@ -63,6 +63,9 @@ class WebServer {
     std::size_t max_client_message_bytes = 16384;
     /// A connection that sends this many bad messages is closed.
     int max_protocol_errors = 32;
+    /// Both set: the port also speaks TLS (HTTPS, WSS) with this certificate chain and private key
+    /// (PEM); a connection that does not start with a TLS handshake is served plain.
+    std::filesystem::path tls_cert, tls_key;
   };
   /// What a publishing connection brings; all called on the io_context's thread.
   struct DriveHooks {
