@@ -195,7 +195,7 @@ function wsClient(url, headers = {}) {
             schemaName: "telegrasp.ControllerInput" }] }));
       }
     } else if (data.length > 13 && data[0] === 1) {
-      c.hands.push(JSON.parse(data.subarray(13).toString()));
+      c.hands.push({ ...JSON.parse(data.subarray(13).toString()), at: performance.now() });
     }
   });
   c.ws.on("close", () => { c.closed = true; });
@@ -314,6 +314,16 @@ try {
   const pageHandAfter = (await summary(page)).ownHands.right.tracked_palm.position;
   checks.check(Math.hypot(pageHandAfter.x - pageHand.x, pageHandAfter.y - pageHand.y, pageHandAfter.z - pageHand.z) < 1e-6,
     "the page's hand did not move (a client_id field in a message changes nothing)");
+
+  // A connection that falls silent keeps its hand for the tracking grace (1 s; the server alone
+  // would remove a silent hand after 0.5 s), then the hand opens and leaves.
+  const silentAt = performance.now();
+  const skeletonsSince = (t) => other.hands.filter((h) => h.at >= t).length;
+  await sleep(900);
+  checks.check(skeletonsSince(performance.now() - 200) > 0, "a silent connection's hand is kept through the grace (0.9 s)");
+  await sleep(1700);
+  checks.check(skeletonsSince(performance.now() - 500) === 0 && skeletonsSince(silentAt + 900) > 0,
+    "after the grace the silent hand left the scene (no skeleton in the last 0.5 s of 2.6 s)");
 
   // A dropped link (no WebSocket close) gets its id back with its resume token.
   const token = other.serverInfo.metadata.resume_token;
