@@ -91,6 +91,9 @@ function onMessage(topic, message) {
   dirty = true;
 }
 
+// The headset page keeps this page's query (a --drive-token's ?token=).
+$("enter-xr").href = `xr${location.search}`;
+
 const url = `${location.protocol === "https:" ? "wss" : "ws"}://${location.host}`;
 new FoxgloveConnection(url, ["/scene", "/tf", "/grasp_state", "/grasp_events", "/server_status"], {
   onMessage,
