@@ -223,8 +223,15 @@ try {
   const first = await summary(page);
   checks.check(/^xr-[0-9a-f]+-\d+$/.test(first.clientId ?? ""), `the bridge gave the page its client id (${first.clientId})`);
   checks.check(await enterVR(page), "the emulated Quest 3 entered immersive-vr");
-  // The user looks down at the table: 35 degrees below the horizon.
-  await page.evaluate(() => window.iwerDevice.quaternion.set(-Math.sin(0.3054), 0, 0, Math.cos(0.3054)));
+  // The user stands at the table's right front and looks down at the can (turned 32 degrees left,
+  // 40 below the horizon); the left controller hangs by the user's side.
+  await page.evaluate(() => {
+    const d = window.iwerDevice;
+    d.position.set(0.25, 1.2, -0.2);
+    const [cy, sy, cp, sp] = [Math.cos(0.28), Math.sin(0.28), Math.cos(0.349), Math.sin(0.349)];
+    d.quaternion.set(-cy * sp, sy * cp, sy * sp, cy * cp);
+    d.controllers.left.position.set(-0.35, 0.75, 0);
+  });
   checks.check(await until(() => canAt() !== null, 15000, "the can's pose over DDS"), "the can's pose arrived over DDS");
 
   // Where the emulated controller's grip lands in the page's world frame, against the test's.
