@@ -322,6 +322,13 @@ try {
   checks.check(Math.hypot(pageHandAfter.x - pageHand.x, pageHandAfter.y - pageHand.y, pageHandAfter.z - pageHand.z) < 1e-6,
     "the page's hand did not move (a client_id field in a message changes nothing)");
 
+  // The server's refusals for a connection's id reach it as status messages: a burst over the
+  // server's 250 samples a second per hand is rate limited.
+  for (let i = 0; i < 600; ++i) other.drive([0.3, 0.3, 0.3]);
+  checks.check(await until(() => other.statuses.some((m) => m.includes(`the server refused ${otherId}: rate_limited`)), 5000,
+    "the server's refusal"), `the server's refusal reached the connection (${other.statuses.find((m) => m.includes("refused"))})`);
+  other.drive([0.3, 0.3, 0.3]);
+
   // A connection that falls silent keeps its hand for the tracking grace (1 s; the server alone
   // would remove a silent hand after 0.5 s), then the hand opens and leaves.
   const silentAt = performance.now();
