@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Installs every Debian package telegrasp needs to build, test and run, then the npm packages of
 # tests/js (the reference MCAP reader the tests check telegrasp's recordings with, the Foxglove
-# client and playwright-core for telegrasp-view's tests) and of client_lib/tools/view/web (three.js
-# and @foxglove/schemas, which telegrasp-view's page and schemas are built from). Idempotent and
+# client, playwright-core and the IWER headset emulator for telegrasp-view's tests) and of
+# client_lib/tools/view/web (three.js, the generic hand glTF of @webxr-input-profiles/assets and
+# @foxglove/schemas, which telegrasp-view's pages and schemas are built from). Idempotent and
 # quiet when everything is present. Run as root (or with sudo available) on Debian 12.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"

@@ -261,9 +261,21 @@ try {
   await sleep(300);
   const lifted = canAt()[2] - before;
   checks.check(lifted > 0.1, `the can followed the controller up (rose ${(lifted * 1000).toFixed(0)} mm of 150)`);
+  const mine = (await summary(page)).hands.find((h) => h.client_id === me && h.side === "right");
+  checks.check(mine?.skinned === true, "the page draws its human hand as the skinned hand mesh");
   const shot = path.join(out, "xr_view.png");
   await page.screenshot({ path: shot });
   console.log(`screenshot: ${shot}`);
+  // A close look too (the headset 30 cm from the held can), for people checking the hand mesh.
+  const head = await page.evaluate(() => ({ p: window.iwerDevice.position.toArray?.() ?? null }));
+  await page.evaluate((c) => {
+    const d = window.iwerDevice;
+    d.position.set(-c[1] + 0.18, c[2] + 0.8 + 0.3, -c[0] - 0.6 + 0.1);
+  }, canAt());
+  await sleep(400);
+  await page.screenshot({ path: path.join(out, "xr_close.png") });
+  await page.evaluate(() => window.iwerDevice.position.set(0.25, 1.2, -0.2));
+  void head;
   await squeeze(page, "controller", 0);
   checks.check(await until(() => events.some((e) => e.kind === "release" && e.hand.client_id === me), 5000, "the release"),
     "opening the hand released the can");

@@ -5,6 +5,7 @@ import * as THREE from "three";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
 import { FoxgloveConnection } from "./protocol.js";
 import { FoxgloveScene, metadata } from "./scene.js";
+import { SkinnedHands } from "./skinned_hand.js";
 
 // Every JavaScript error the page meets, for the people and the tests that look at it.
 const errors = [];
@@ -40,6 +41,10 @@ controls.enableDamping = true;
 controls.update();
 
 const fox = new FoxgloveScene(world);
+// Human hands as a skinned hand mesh; their capsules and palm box as an overlay (the checkbox).
+const skinned = new SkinnedHands(fox, world);
+$("capsules-box").checked = localStorage.getItem("telegrasp.capsules") === "true";
+$("capsules-box").addEventListener("change", () => localStorage.setItem("telegrasp.capsules", String($("capsules-box").checked)));
 const hands = new Map();        // "client/side" -> { key, client_id, side, colour, rig }
 const objects = new Map();      // object id -> { id, name, held, holder }
 const graspStates = new Map();  // hand key -> latest /grasp_state
@@ -239,6 +244,7 @@ function render() {
     }
   }
   controls.update();
+  skinned.update([...hands.values()], $("capsules-box").checked);
   renderer.render(scene3d, camera);
   ++frames;
   requestAnimationFrame(render);
@@ -253,7 +259,7 @@ window.telegraspView = {
     messages,
     frames,
     entities: fox.entities.size,
-    hands: [...hands.values()],
+    hands: [...hands.values()].map((h) => ({ ...h, skinned: skinned.skinned(h.key) })),
     objects: [...objects.values()],
     events: events.length,
     selected,

@@ -14,6 +14,7 @@
 import * as THREE from "three";
 import { FoxgloveConnection } from "./protocol.js";
 import { FoxgloveScene, metadata } from "./scene.js";
+import { SkinnedHands } from "./skinned_hand.js";
 
 const errors = [];
 window.addEventListener("error", (e) => errors.push(String(e.message ?? e)));
@@ -72,6 +73,10 @@ const table = new THREE.Mesh(new THREE.BoxGeometry(1.2, 0.8, 0.02), new THREE.Me
 table.position.z = -0.0101;
 world.add(table);
 const fox = new FoxgloveScene(world);
+const skinned = new SkinnedHands(fox, world);
+const capsulesBox = $("capsules");
+capsulesBox.checked = localStorage.getItem("telegrasp.capsules") === "true";
+capsulesBox.addEventListener("change", () => localStorage.setItem("telegrasp.capsules", String(capsulesBox.checked)));
 
 // A faint ghost of each tracked controller where the resolved hand differs from it (> 5 mm).
 const ghostMaterial = new THREE.MeshStandardMaterial({ color: 0x9fc6ff, transparent: true, opacity: 0.25, depthWrite: false });
@@ -158,7 +163,10 @@ function onMessage(topic, message) {
     fox.applyTransforms(message);
   } else if (topic === "/scene") {
     fox.applySceneUpdate(message);
-    for (const d of message.deletions ?? []) if (d.id.startsWith("object/")) objects.delete(Number(d.id.slice(7)));
+    for (const d of message.deletions ?? []) {
+      if (d.id.startsWith("object/")) objects.delete(Number(d.id.slice(7)));
+      if (d.id.startsWith("hand/") && hands.has(d.id.slice(5))) hands.delete(d.id.slice(5));
+    }
     for (const entity of message.entities ?? []) {
       const m = metadata(entity);
       if (m.kind === "object") {
@@ -361,6 +369,7 @@ renderer.setAnimationLoop((time, frame) => {
     const space = renderer.xr.getReferenceSpace();
     for (const source of frame.session.inputSources) sample(frame, source, space);
   }
+  skinned.update([...hands.entries()].map(([key, h]) => ({ key, side: h.side, rig: h.rig })), capsulesBox.checked);
   renderer.render(scene3d, camera);
 });
 
@@ -385,7 +394,7 @@ window.telegraspXR = {
     skeletons,
     ownHands: Object.fromEntries([...own].map(([side, m]) => [side, { palm: m.palm, tracked_palm: m.tracked_palm, frozen: m.frozen }])),
     objects: [...objects.values()].map((o) => ({ ...o, position: fox.worldPosition(`object/${o.id}`)?.applyMatrix4(X_World_XR).toArray() ?? null })),
-    hands: [...hands.values()],
+    hands: [...hands.entries()].map(([key, h]) => ({ ...h, skinned: skinned.skinned(key) })),
     graspEvents,
     lastStatus,
     latency: { count: latencies.length, p50: percentile(latencies, 0.5), p99: percentile(latencies, 0.99) },
