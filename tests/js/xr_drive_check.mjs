@@ -266,6 +266,35 @@ try {
   const shot = path.join(out, "xr_view.png");
   await page.screenshot({ path: shot });
   console.log(`screenshot: ${shot}`);
+  // The picture is not blank: the hand's skin and the held can in the hand's colour are in it.
+  const colour = mine?.colour ?? [1, 1, 1];
+  const pixels = await page.evaluate(async ({ png, colour }) => {
+    const image = new Image();
+    image.src = `data:image/png;base64,${png}`;
+    await image.decode();
+    const c = document.createElement("canvas");
+    [c.width, c.height] = [image.width, image.height];
+    const g = c.getContext("2d");
+    g.drawImage(image, 0, 0);
+    const { data } = g.getImageData(0, 0, c.width, c.height);
+    const hsv = (r, gr, b) => {
+      const max = Math.max(r, gr, b), min = Math.min(r, gr, b), d = max - min;
+      let h = 0;
+      if (d > 0) h = max === r ? ((gr - b) / d) % 6 : max === gr ? (b - r) / d + 2 : (r - gr) / d + 4;
+      return [(h * 60 + 360) % 360, max === 0 ? 0 : d / max, max / 255];
+    };
+    const hueDistance = (a, b) => Math.min(Math.abs(a - b), 360 - Math.abs(a - b));
+    const [hue, sat] = hsv(...colour.map((v) => v * 255));
+    let skin = 0, held = 0;
+    for (let i = 0; i < data.length; i += 4) {
+      const [h, s, v] = hsv(data[i], data[i + 1], data[i + 2]);
+      if (h >= 10 && h <= 40 && s >= 0.15 && s <= 0.6 && v >= 0.3) ++skin;
+      if (hueDistance(h, hue) <= 15 && s >= 0.6 * sat && v >= 0.2) ++held;
+    }
+    return { skin, held };
+  }, { png: fs.readFileSync(shot).toString("base64"), colour });
+  checks.check(pixels.skin >= 150 && pixels.held >= 150,
+    `the XR view shows the hand (${pixels.skin} skin pixels) and the can in its colour (${pixels.held} pixels), at least 150 each`);
   // A close look too (the headset 30 cm from the held can), for people checking the hand mesh.
   const head = await page.evaluate(() => ({ p: window.iwerDevice.position.toArray?.() ?? null }));
   await page.evaluate((c) => {

@@ -173,7 +173,7 @@ function onMessage(topic, message) {
         const id = Number(entity.id.slice(7));
         objects.set(id, { id, name: m.name, held: m.held === "true", holder: m.holder ?? null });
       } else if (m.kind === "hand") {
-        hands.set(`${m.client_id}/${m.side}`, { client_id: m.client_id, side: m.side, rig: m.rig });
+        hands.set(`${m.client_id}/${m.side}`, { client_id: m.client_id, side: m.side, rig: m.rig, colour: JSON.parse(m.colour ?? "[1,1,1]") });
       }
     }
   } else if (topic === "/grasp_events") {
