@@ -54,13 +54,14 @@ const echo = start(path.join(bin, "telegrasp-echo"), ["--domain", String(domain)
 
 async function startView(extra) {
   let port = null, url = null;
-  const log = fs.createWriteStream(path.join(out, `view${extra.length ? "-token" : ""}.log`));
+  const name = `view${extra.length ? `-${extra.length}` : ""}`;
+  const log = fs.createWriteStream(path.join(out, `${name}.log`));
   const view = start(path.join(bin, "telegrasp-view"), ["--domain", String(domain), "--profile", "loopback", "--port", "0",
     "--address", "127.0.0.1", "--drive", "--tracking-grace", "1", ...extra], {
-    log: path.join(out, `view${extra.length ? "-token" : ""}.stderr.log`),
+    log: path.join(out, `${name}.stderr.log`),
     onLine: (line) => {
       log.write(line + "\n");
-      const m = line.match(/http:\/\/127\.0\.0\.1:(\d+)\/ \(page\)/);
+      const m = line.match(/http:\/\/(?:127\.0\.0\.1|localhost):(\d+)\/ \(page\)/);
       if (m) port = Number(m[1]);
       const x = line.match(/(https?:\/\/\S+\/xr\S*)/);
       if (x) url = x[1];
@@ -93,6 +94,12 @@ await context.addInitScript(() => {
     const space = input.inputSource.gripSpace;
     const key = Object.getOwnPropertySymbols(space).find((k) => space[k]?.offsetMatrix);
     return space[key].offsetMatrix;
+  };
+  // The last haptic pulse IWER's emulated controller was asked for ({value, duration, startTime}).
+  window.IWER_lastPulse = (controller) => {
+    const actuator = controller.inputSource.gamepad.hapticActuators[0];
+    const key = Object.getOwnPropertySymbols(actuator).find((k) => "lastPulse" in actuator[k]);
+    return actuator[key].lastPulse;
   };
 });
 
@@ -256,6 +263,9 @@ try {
   const me = first.clientId;
   const grasped = await until(() => events.some((e) => e.kind === "grasp" && e.hand.client_id === me), 5000, "a GraspEvent of the page's hand");
   checks.check(grasped, `a DDS subscriber saw the GraspEvent of ${me}`);
+  const pulse = await until(async () => (await page.evaluate(() => window.IWER_lastPulse(window.iwerDevice.controllers.right)))?.value === 0.7,
+    3000, "the grasp's haptic pulse");
+  checks.check(pulse, "the grasp gave the right controller a haptic pulse (strength 0.7)");
   const before = canAt()[2];
   await moveTo(page, "controller", grip, [grip[0], grip[1], grip[2] + 0.15], kGripSideGrasp, 50);
   await sleep(300);
@@ -443,6 +453,30 @@ try {
     e.time_s > (events.filter((g) => g.kind === "grasp" && g.hand.client_id === me).at(-1)?.time_s ?? 0)), 3000, "the release");
   const releaseMs = Date.now() - closedAt;
   checks.check(released && releaseMs <= 1000, `closing the page released the can in ${releaseMs} ms (at most 1000)`);
+
+  // Recentre (here from the desktop camera, at (0, 1.45, 0.1) looking down the -z axis): the table
+  // goes 0.45 m ahead of the eyes and 0.45 m below them, kept for the next visit; ?align=default
+  // ignores the kept placement.
+  const aligned = await openPage(`http://127.0.0.1:${port}/xr?align=default`);
+  await aligned.evaluate(() => window.telegraspXR.recentre());
+  const kept = await openPage(`http://127.0.0.1:${port}/xr`);
+  const a = await kept.evaluate(() => window.telegraspXR.alignment());
+  checks.check(Math.abs(a.x) < 1e-9 && Math.abs(a.y - 1.0) < 1e-9 && Math.abs(a.z + 0.35) < 1e-9 && Math.abs(a.yaw) < 1e-9,
+    `a recentred placement is kept for the next visit (${JSON.stringify([a.x, a.y, a.z, a.yaw])}, expected [0, 1, -0.35, 0])`);
+  const fresh = await openPage(`http://127.0.0.1:${port}/xr?align=default`);
+  const d = await fresh.evaluate(() => window.telegraspXR.alignment());
+  checks.check(d.x === 0 && d.y === 0.8 && d.z === -0.6 && d.yaw === 0, "?align=default ignores it");
+  for (const p of [aligned, kept, fresh]) await p.close();
+
+  // Off loopback a token is always needed: one is generated and printed.
+  const open = await startView(["--address", "0.0.0.0"]);
+  const generated = open.url.match(/\?token=([0-9a-f]{32})$/)?.[1];
+  checks.check(generated !== undefined, `a bridge on every interface generates a token (${open.url})`);
+  const withIt = wsClient(`ws://127.0.0.1:${open.port}/?token=${generated}`), without = wsClient(`ws://127.0.0.1:${open.port}/`);
+  await Promise.all([withIt.open(), without.open()]);
+  checks.check(withIt.mayDrive() && !without.mayDrive(), "only a connection with the generated token drives");
+  for (const c of [withIt, without]) c.ws.close();
+  await stop(open.view);
   checks.check(errors.length === 0, `no JavaScript error (${errors.join("; ")})`);
   result = checks.finish();
 } catch (e) {

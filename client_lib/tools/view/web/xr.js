@@ -297,13 +297,17 @@ function sample(frame, source, space) {
   }
 }
 const recentreHeld = {};
+let pulses = 0;  // haptic pulses asked for (grasps and releases of this connection's hands)
 
 function pulse(side, strength) {
   const session = renderer.xr.getSession();
   for (const source of session?.inputSources ?? []) {
     if (source.handedness !== side) continue;
     const actuator = source.gamepad?.hapticActuators?.[0];
-    if (actuator?.pulse) actuator.pulse(strength, 60).catch(() => {});
+    if (actuator?.pulse) {
+      actuator.pulse(strength, 60).catch(() => {});
+      ++pulses;
+    }
     else source.gamepad?.vibrationActuator?.playEffect?.("dual-rumble", { duration: 60, strongMagnitude: strength }).catch(() => {});
   }
 }
@@ -397,6 +401,7 @@ window.telegraspXR = {
     hands: [...hands.entries()].map(([key, h]) => ({ ...h, skinned: skinned.skinned(key) })),
     graspEvents,
     lastStatus,
+    pulses,
     latency: { count: latencies.length, p50: percentile(latencies, 0.5), p99: percentile(latencies, 0.99) },
   }),
   recentre,
