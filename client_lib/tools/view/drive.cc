@@ -83,9 +83,12 @@ void Drive::closed(std::uint64_t connection, bool clean) {
   Driver* driver = it->second;
   by_connection_.erase(it);
   if (clean) {
+    std::cerr << "telegrasp-view: " << driver->client_id << " closed; its hands leave\n";
     drivers_.erase(driver->client_id);  // no more samples: the server removes the hands within 0.5 s
     return;
   }
+  std::cerr << "telegrasp-view: " << driver->client_id << "'s link dropped; its hands are held " << options_.resume_window_s
+            << " s for its resume token\n";
   driver->connection = 0;
   driver->detached = Clock::now();
 }
