@@ -2,14 +2,19 @@
 // emulates a Quest 3 inside Debian's headless Chromium, which opens /xr of a live telegrasp-view
 // --drive and telegrasp-server (--relay xr-) over loopback DDS and enters immersive-vr. Checked
 // from outside, with telegrasp-echo as the DDS subscriber:
-//   1. controller: the right controller reaches the soup can (its published pose), the trigger
-//      closes, the hand lifts: a GraspEvent of the page's client id, the can following the
-//      controller; opening releases it; a screenshot of the XR view during the hold (kept in OUT,
-//      checked for the hand's and the can's colours);
+//   1. controller: the page sends the grip in the world frame; the right controller reaches the
+//      soup can (its published pose), the trigger closes, the hand lifts: a GraspEvent of the
+//      page's client id, a haptic pulse, the can following the controller; opening releases it;
+//      the hand drawn as the skinned mesh; a screenshot of the XR view during the hold (kept in
+//      OUT, checked for the hand's skin and the can in the hand's colour);
 //   2. tracked hand: the same with IWER's hand input, the pinch closing the curls;
-//   3. security: a second page drives its own id, never the first one's; a WebSocket from a
-//      foreign Origin, and one without the token when the bridge has one, may not publish;
-//   4. closing the page releases a held object within 1 s.
+//   3. connections: a second one drives its own id only and gets its own skeletons; the server's
+//      refusals reach it; a silent one keeps its hand through the grace, then the hand leaves; a
+//      dropped link gets its id back with the resume token; a foreign Origin may not drive and
+//      is closed after 32 bad messages; an oversized message closes a connection; with a token
+//      (and TLS from deploy/make-cert.sh) only the token drives, over WSS, from an https page;
+//   4. closing the page releases a held object within 1 s; recentre is kept for the next visit
+//      and ?align=default ignores it; a bridge on every interface generates a token.
 // Usage: BUILD/bin/telegrasp-test-domains node xr_drive_check.mjs --bin BUILD/bin --out DIR
 //   (ctest: client_lib.view.xr_drive; the wrapper leases the DDS domain)
 import fs from "node:fs";
@@ -306,15 +311,13 @@ try {
   checks.check(pixels.skin >= 150 && pixels.held >= 150,
     `the XR view shows the hand (${pixels.skin} skin pixels) and the can in its colour (${pixels.held} pixels), at least 150 each`);
   // A close look too (the headset 30 cm from the held can), for people checking the hand mesh.
-  const head = await page.evaluate(() => ({ p: window.iwerDevice.position.toArray?.() ?? null }));
   await page.evaluate((c) => {
     const d = window.iwerDevice;
     d.position.set(-c[1] + 0.18, c[2] + 0.8 + 0.3, -c[0] - 0.6 + 0.1);
   }, canAt());
   await sleep(400);
   await page.screenshot({ path: path.join(out, "xr_close.png") });
-  await page.evaluate(() => window.iwerDevice.position.set(0.25, 1.2, -0.2));
-  void head;
+  await page.evaluate(() => window.iwerDevice.position.set(0.25, 1.2, -0.2));  // back where the user stands
   await squeeze(page, "controller", 0);
   checks.check(await until(() => events.some((e) => e.kind === "release" && e.hand.client_id === me), 5000, "the release"),
     "opening the hand released the can");
