@@ -11,6 +11,7 @@ namespace telegrasp::view {
 namespace {
 
 constexpr auto kSilentAfter = std::chrono::milliseconds(100);  // a page this quiet counts as not tracking
+constexpr auto kQuietForTakeover = std::chrono::milliseconds(500);  // a resume may take over a connection this quiet
 constexpr auto kReleaseFor = std::chrono::milliseconds(300);  // the open hand is sent this long after the grace
 constexpr std::size_t kRecent = 64;  // samples remembered per hand for skeleton -> page matching
 
@@ -53,8 +54,22 @@ std::map<std::string, std::string> Drive::opened(std::uint64_t connection,
                                                  const std::map<std::string, std::string>& query) {
   Driver* driver = nullptr;
   if (const auto resume = query.find("resume"); resume != query.end()) {
-    for (auto& [id, d] : drivers_)
-      if (d->connection == 0 && d->resume_token == resume->second) driver = d.get();
+    // A dropped link's id, or one whose old connection has gone quiet (a link that died without
+    // a word: the new connection takes over, the old one is closed).
+    const Clock::time_point now = Clock::now();
+    for (auto& [id, d] : drivers_) {
+      if (d->resume_token != resume->second) continue;
+      bool quiet = true;
+      for (const auto& [side, hand] : d->hands) quiet = quiet && now - hand.received > kQuietForTakeover;
+      if (d->connection != 0 && !quiet) break;  // the page is alive: a second tab gets its own id
+      driver = d.get();
+      if (d->connection != 0) {
+        const std::uint64_t old = d->connection;
+        by_connection_.erase(old);
+        d->connection = 0;
+        server_.close(old);
+      }
+    }
     if (driver) {
       ++stats_.resumed;
       for (auto& [side, hand] : driver->hands) hand.page_seq = 0;  // a reloaded page numbers anew

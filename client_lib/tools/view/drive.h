@@ -4,9 +4,11 @@
 // queued) with the rig's grip-to-palm offset applied. The server's refusals for the id come back
 // to the connection as status messages, and the skeletons of its hands as they arrive.
 // A hand whose page stops sending or reports tracking lost keeps its last pose and grasp for the
-// tracking grace, then opens; a link that drops without a WebSocket close is held for the resume
-// window, and a page that reconnects with its resume token gets its id and hands back; a page that
-// closes stops its hands at once (the server removes silent hands within 0.5 s).
+// tracking grace, then opens. A page that reconnects with its resume token gets its id and hands
+// back, taking over from its old connection if that has gone quiet (a link that died without a
+// word) or failed (then the hands are held for the resume window); a page that closes (a
+// WebSocket close, or its TCP connection closed) stops its hands at once (the server removes
+// silent hands within 0.5 s).
 // Everything runs on the bridge's io_context thread.
 #pragma once
 
@@ -34,8 +36,10 @@ std::string random_hex(std::size_t bytes);
 
 struct DriveOptions {
   std::string prefix = "xr-";  ///< Client ids are prefix + bridge tag + "-" + n (the server's --relay PREFIX).
-  double tracking_grace_s = 1.0;  ///< A hand with no tracking (or no samples) keeps its grasp this long.
-  double resume_window_s = 5.0;  ///< A dropped link's hands are held this long for its resume token.
+  /// A hand with no tracking (or no samples: a paused session, or a link that died without a
+  /// word, until the page resumes) keeps its grasp this long.
+  double tracking_grace_s = 2.0;
+  double resume_window_s = 5.0;  ///< A failed link's hands are held this long for its resume token.
 };
 
 struct DriveStats {

@@ -81,10 +81,11 @@ in the view's README, "Driving hands"):
   --drive-origin O   without a token, pages from Origin O (e.g. https://example.org:8443) may
                      drive too (repeat for more); the bridge's own pages always may
   --drive-prefix P   client ids P<tag>-<n> (default xr-)
-  --tracking-grace S a hand whose tracking is lost keeps its grasp S seconds, then opens
-                     (default 1)
-  --resume-window S  a connection that drops without closing keeps its hands S seconds for the
-                     page to reconnect with its resume token (default 5)
+  --tracking-grace S a hand whose tracking is lost (or whose page stops sending) keeps its grasp
+                     S seconds, then opens (default 2)
+  --resume-window S  a connection whose link fails (not one the page closed) keeps its hands S
+                     seconds for the page to reconnect with its resume token (default 5); a page
+                     whose link died without a word gets them back within the tracking grace
   --tls-cert FILE    with --tls-key: the port also serves HTTPS and WSS with this certificate
   --tls-key FILE     chain and private key (PEM; deploy/make-cert.sh makes a self-signed pair for
                      a LAN host name or IP); plain HTTP keeps working on the same port. Headset

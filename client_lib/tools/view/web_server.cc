@@ -222,7 +222,9 @@ class ViewerSession : public Viewer, public std::enable_shared_from_this<ViewerS
         std::cerr << "telegrasp-view: closed a connection that sent a message over "
                   << hub_.options.max_client_message_bytes << " bytes\n";
       }
-      return finish(ec == websocket::error::closed);
+      // The peer ended it (a close frame, or its TCP connection closed: a tab that went away), or
+      // the link failed otherwise, whose hands wait for a resume.
+      return finish(ec == websocket::error::closed || ec == asio::error::eof || ec == asio::error::connection_reset);
     }
     const std::string data = beast::buffers_to_string(in_.data());
     in_.consume(in_.size());
@@ -656,6 +658,11 @@ void WebServer::send_to(std::uint64_t connection, std::uint32_t channel, std::sh
                         std::uint64_t stamp_ns, std::uint32_t key) {
   const auto it = hub_->by_id.find(connection);
   if (it != hub_->by_id.end()) it->second->offer(channel, payload, stamp_ns, true, {}, key);
+}
+
+void WebServer::close(std::uint64_t connection) {
+  const auto it = hub_->by_id.find(connection);
+  if (it != hub_->by_id.end()) it->second->close();
 }
 
 void WebServer::status_to(std::uint64_t connection, int level, const std::string& message) {

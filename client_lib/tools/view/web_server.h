@@ -76,8 +76,8 @@ class WebServer {
         opened;
     /// A message on drive_topic: "" taken, else what is wrong (told in a status, counted).
     std::function<std::string(std::uint64_t connection, std::string_view payload)> message;
-    /// A publishing connection ended; `clean`: with a WebSocket close (the page went away), not a
-    /// dropped link.
+    /// A publishing connection ended; `clean`: its peer ended it (a WebSocket close, or its TCP
+    /// connection closed: the page went away), not a link that failed otherwise.
     std::function<void(std::uint64_t connection, bool clean)> closed;
   };
   /// Called on the server thread when a viewer subscribes to `channel`: the messages (payloads)
@@ -107,6 +107,8 @@ class WebServer {
   /// message of the same channel and `key` in its queue is replaced (newest wins).
   void send_to(std::uint64_t connection, std::uint32_t channel, std::shared_ptr<const std::string> payload,
                std::uint64_t stamp_ns, std::uint32_t key);
+  /// Closes `connection` (its hooks' closed() follows, as for any end).
+  void close(std::uint64_t connection);
   /// A status message (level 0 info, 1 warning, 2 error) to `connection`.
   void status_to(std::uint64_t connection, int level, const std::string& message);
   /// Closes the listener and every connection (on the io_context's thread).
