@@ -92,11 +92,11 @@ std::unique_ptr<ChildProcess> start_server(int domain, const std::string& config
 }
 
 std::unique_ptr<ChildProcess> start_bot(int domain, const std::string& id, const std::string& hands, int trials,
-                                        const std::string& json) {
+                                        const std::string& json, const std::string& profile = "loopback") {
   return std::make_unique<ChildProcess>(
       std::vector<std::string>{bin("telegrasp-bot"), "--client-id", id, "--hands", hands, "--trials",
                                std::to_string(trials), "--seed", "3", "--domain", std::to_string(domain), "--profile",
-                               "loopback", "--json", json, "--timeout", "30"},
+                               profile, "--json", json, "--timeout", "30"},
       work_path(id + ".log"));
 }
 
@@ -243,7 +243,10 @@ TEST(LoopbackTest, KilledBotsObjectIsReleasedAndFalls) {
   auto observer = observe(domain, seen);
   auto server = start_server(domain, write_config("kill", kFourObjects), "kill");
   ASSERT_TRUE(observer->wait_for_server(kStartGuard));
-  auto victim = start_bot(domain, "victim", "right", 3, work_path("victim.json"));
+  // The victim speaks UDP only: a participant SIGKILLed while on Fast DDS's shared-memory transport
+  // can leave its mutexes locked, and the server then stalls on them ("Interprocess mutex timeout",
+  // seen under ASan): that is Fast DDS's matter, not what this test is about.
+  auto victim = start_bot(domain, "victim", "right", 3, work_path("victim.json"), "udp");
   auto survivor = start_bot(domain, "survivor", "left", 1, work_path("survivor.json"));
 
   // Wait until the victim lifts something.
