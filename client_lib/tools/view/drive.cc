@@ -15,7 +15,11 @@ constexpr auto kQuietForTakeover = std::chrono::milliseconds(500);  // a resume 
 constexpr auto kReleaseFor = std::chrono::milliseconds(300);  // the open hand is sent this long after the grace
 constexpr std::size_t kRecent = 64;  // samples remembered per hand for skeleton -> page matching
 
-std::string side_name(client::HandSide side) { return side == client::HandSide::kLeft ? "left" : "right"; }
+// A sample whose fingers are all open.
+void open(client::ControllerSample& sample) {
+  sample.trigger = 0;
+  sample.curls.assign(sample.curls.size(), 0.0);
+}
 
 std::chrono::steady_clock::duration seconds(double s) {
   return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(s));
@@ -110,8 +114,8 @@ void Drive::closed(std::uint64_t connection, bool clean) {
 
 Eigen::Isometry3d Drive::grip_to_palm(client::HandSide side) {
   const auto known = rig_names_.find(side);
-  const sim::HandRig* rig = rig_(known != rig_names_.end() ? known->second : "human_" + side_name(side));
-  if (!rig) rig = rig_("human_" + side_name(side));
+  const sim::HandRig* rig = rig_(known != rig_names_.end() ? known->second : "human_" + client::to_string(side));
+  if (!rig) rig = rig_("human_" + client::to_string(side));
   return rig ? view::grip_to_palm(*rig, side) : Eigen::Isometry3d::Identity();
 }
 
@@ -124,7 +128,7 @@ std::string Drive::message(std::uint64_t connection, std::string_view payload) {
   if (!in) return error;
   Hand& hand = driver.hands[in->side];
   if (in->seq <= hand.page_seq)
-    return "seq " + std::to_string(in->seq) + " of the " + side_name(in->side) + " hand is not above the last, " +
+    return "seq " + std::to_string(in->seq) + " of the " + client::to_string(in->side) + " hand is not above the last, " +
            std::to_string(hand.page_seq);
   hand.page_seq = in->seq;
   if (hand.seq == 0 && !in->tracking) return "";  // no pose yet: the hand joins once tracked
@@ -140,10 +144,7 @@ std::string Drive::message(std::uint64_t connection, std::string_view payload) {
   } else if (!hand.lost_since) {
     hand.lost_since = hand.received;
   }
-  if (hand.released) {  // past the grace without tracking: the hand stays open
-    hand.sample.trigger = 0;
-    hand.sample.curls.assign(hand.sample.curls.size(), 0.0);
-  }
+  if (hand.released) open(hand.sample);  // past the grace without tracking: the hand stays open
   send(driver, hand, in->side, in->seq, in->stamp_ns);
   ++stats_.samples_forwarded;
   return "";
@@ -182,9 +183,8 @@ void Drive::tick() {
       if (!hand.lost_since) hand.lost_since = detached ? driver.detached : hand.received;
       const auto lost = now - *hand.lost_since;
       if (lost > hold && !hand.released) {
-        hand.released = true;  // let go: open the hand
-        hand.sample.trigger = 0;
-        hand.sample.curls.assign(hand.sample.curls.size(), 0.0);
+        hand.released = true;  // let go
+        open(hand.sample);
       }
       if (lost > hold + kReleaseFor || !silent) continue;  // opened long enough: let it fall silent
       hand.sample.tracking_valid = false;
@@ -212,7 +212,7 @@ void Drive::skeleton(const client::HandSkeleton& s, std::uint64_t stamp_ns) {
   if (const sim::HandRig* rig = rig_(s.rig); rig && rig->phalanges().size() == s.X_WorldPhalanx.size())
     for (const sim::PhalanxSpec& p : rig->phalanges()) names.push_back(p.name);
   const Json message{{"client_id", s.hand.client_id},
-                     {"side", side_name(s.hand.side)},
+                     {"side", client::to_string(s.hand.side)},
                      {"rig", s.rig},
                      {"tick", s.tick},
                      {"input_seq", page_seq},
