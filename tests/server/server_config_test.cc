@@ -12,8 +12,12 @@
 namespace telegrasp::server {
 namespace {
 
+// ctest runs each test as its own process, two at a time: the file name carries the test's name
+// so that two tests never write the same file.
 std::string write_temp(const std::string& name, const std::string& text) {
-  const auto path = std::filesystem::temp_directory_path() / ("telegrasp_server_config_test_" + name + ".textproto");
+  const std::string test = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+  const auto path =
+      std::filesystem::temp_directory_path() / ("telegrasp_server_config_test_" + test + "_" + name + ".textproto");
   std::ofstream(path) << text;
   return path.string();
 }
@@ -62,7 +66,7 @@ TEST(ServerConfigTest, ErrorsNameTheFileAndField) {
   const std::string typo = error_of("tick_hertz: 90");
   EXPECT_NE(typo.find("tick_hertz"), std::string::npos);
   EXPECT_NE(typo.find("line 1"), std::string::npos);
-  EXPECT_NE(typo.find("telegrasp_server_config_test_bad"), std::string::npos);
+  EXPECT_NE(typo.find("telegrasp_server_config_test_ErrorsNameTheFileAndField_bad"), std::string::npos);
   ServerSettings s;
   EXPECT_THROW(load_server_config("/no/such/file.textproto", s), std::runtime_error);
 }
