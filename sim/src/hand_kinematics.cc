@@ -25,7 +25,9 @@ void forward_kinematics(const HandRig& rig, const std::vector<double>& q,
 }
 
 double target_angle(const PhalanxSpec& phalanx, double u) {
-  return std::clamp(phalanx.open + u * (phalanx.closed - phalanx.open), phalanx.min, phalanx.max);
+  // The default range [0, 1] gives t = u exactly.
+  const double t = std::clamp((u - phalanx.closes_from) / (phalanx.closes_until - phalanx.closes_from), 0.0, 1.0);
+  return std::clamp(phalanx.open + t * (phalanx.closed - phalanx.open), phalanx.min, phalanx.max);
 }
 
 }  // namespace telegrasp::sim

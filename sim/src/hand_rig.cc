@@ -143,8 +143,15 @@ HandRig HandRig::parse(const std::string& text, const std::string& source) {
       spec.min = j.min_deg() * kDeg;
       spec.max = j.max_deg() * kDeg;
       spec.max_speed = (j.max_speed_deg_s() > 0 ? j.max_speed_deg_s() : default_speed) * kDeg;
+      spec.closes_from = j.has_closes_from() ? j.closes_from() : 0.0;
+      spec.closes_until = j.has_closes_until() ? j.closes_until() : 1.0;
+      if (!(spec.closes_from >= 0 && spec.closes_from < spec.closes_until && spec.closes_until <= 1))
+        fail(source, field + ".joint.closes_from/closes_until",
+             "must satisfy 0 <= closes_from < closes_until <= 1 (got " + std::to_string(spec.closes_from) + " and " +
+                 std::to_string(spec.closes_until) + ")");
       spec.length = ph.length();
-      if (!(spec.length > 0) || !std::isfinite(spec.length)) fail(source, field + ".length", "must be > 0");
+      if (!(spec.length >= 0) || !std::isfinite(spec.length))
+        fail(source, field + ".length", "must be >= 0 (0: one more axis of the next phalanx's joint)");
       if (ph.has_capsule()) {
         const auto& c = ph.capsule();
         CapsuleSpec cs{to_eigen(c.a()), to_eigen(c.b()), c.radius(), to_eigen(c.ctc()), to_eigen(c.sp())};

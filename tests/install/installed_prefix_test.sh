@@ -25,6 +25,7 @@ cmake --install "$build_dir" --prefix "$prefix" --strip >"$work/install.log"
 for f in bin/telegrasp-server bin/telegrasp-bot bin/telegrasp-echo bin/telegrasp-eval bin/telegrasp-replay \
          share/telegrasp/telegrasp_profiles.xml share/telegrasp/rigs/human_right.textproto \
          share/telegrasp/rigs/human_left.textproto share/telegrasp/rigs/gripper3.textproto \
+         share/telegrasp/rigs/human_right_opposable.textproto share/telegrasp/rigs/human_left_opposable.textproto \
          share/telegrasp/paper_results_per_object.csv; do
   [ -e "$prefix/$f" ] || fail "$f was not installed"
 done

@@ -54,11 +54,63 @@ TEST(HandKinematicsTest, TargetAngleInterpolatesAndClamps) {
   EXPECT_DOUBLE_EQ(target_angle(p, 1.0), std::numbers::pi / 2);
 }
 
+// A joint with closes_from 0.2 and closes_until 0.6 is open up to 20 % of the closing input,
+// closed from 60 %, and linear between.
+TEST(HandKinematicsTest, TargetAngleFollowsTheJointsPartOfTheInput) {
+  std::string text = kTwoLinkRig;
+  const std::string joint = "open_deg: 0 closed_deg: 90 min_deg: 0 max_deg: 90";
+  text.replace(text.find(joint), joint.size(), joint + " closes_from: 0.2 closes_until: 0.6");
+  const HandRig rig = HandRig::parse(text, "inline");
+  const PhalanxSpec& p = rig.phalanges()[0];
+  constexpr double kHalfPi = std::numbers::pi / 2;
+  EXPECT_EQ(target_angle(p, 0.0), 0.0);
+  EXPECT_EQ(target_angle(p, 0.2), 0.0);
+  EXPECT_NEAR(target_angle(p, 0.3), kHalfPi / 4, kExact);
+  EXPECT_NEAR(target_angle(p, 0.4), kHalfPi / 2, kExact);
+  EXPECT_EQ(target_angle(p, 0.6), kHalfPi);
+  EXPECT_EQ(target_angle(p, 1.0), kHalfPi);
+}
+
+// A joint with two axes: a phalanx of length 0 turning about z, then one flexing about its y.
+// The tip of the second is at R_z(a) R_y(b) (0.03, 0, 0) from the joint.
+TEST(HandKinematicsTest, ZeroLengthPhalanxIsAnotherAxisOfTheSameJoint) {
+  const HandRig rig = HandRig::parse(R"(
+name: "two_axis"
+palm_selection_sphere { radius: 0.1 }
+palm_contact_volume { radius: 0.01 }
+palm_half_extent { x: 0.04 y: 0.04 z: 0.01 }
+default_max_speed_deg_s: 90
+nd_sweep_beyond: 0.01
+fingers {
+  name: "f"
+  phalanges { name: "f_abd" rest { translation { x: 0.04 y: 0.01 } }
+    joint { axis { z: 1 } open_deg: 0 closed_deg: 40 min_deg: -40 max_deg: 40 } length: 0 }
+  phalanges { name: "f_mid" rest { }
+    joint { axis { y: 1 } open_deg: 0 closed_deg: 90 min_deg: 0 max_deg: 90 } length: 0.03
+    capsule { a { } b { x: 0.03 } radius: 0.005 ctc { x: 0.015 z: -0.005 } sp { x: 0.015 } } }
+}
+grasp_rule { members: ["f_mid"] }
+)",
+                                     "inline");
+  for (double a : {-0.5, 0.0, 0.6}) {
+    for (double b : {0.0, 0.4, 1.2}) {
+      std::vector<Eigen::Isometry3d> X;
+      forward_kinematics(rig, {a, b}, &X);
+      EXPECT_LT((X[0].translation() - X[1].translation()).norm(), kExact);
+      const Eigen::Vector3d tip = X[1] * Eigen::Vector3d(0.03, 0, 0);
+      const Eigen::Vector3d expected(0.04 + 0.03 * std::cos(b) * std::cos(a), 0.01 + 0.03 * std::cos(b) * std::sin(a),
+                                     -0.03 * std::sin(b));
+      EXPECT_LT((tip - expected).norm(), kExact) << a << " " << b;
+    }
+  }
+}
+
 // Left hand mirrors right: every phalanx frame of the shipped left hand is the reflection
 // M X M (M = diag(1, -1, 1)) of the right hand's at the same joint angles.
-TEST(HandKinematicsTest, LeftHandMirrorsRight) {
-  const HandRig right = HandRig::load(HandRig::builtin_path("human_right"));
-  const HandRig left = HandRig::load(HandRig::builtin_path("human_left"));
+void expect_mirrored(const std::string& right_name, const std::string& left_name) {
+  SCOPED_TRACE(left_name);
+  const HandRig right = HandRig::load(HandRig::builtin_path(right_name));
+  const HandRig left = HandRig::load(HandRig::builtin_path(left_name));
   const HandRig mirrored = right.mirrored();
   ASSERT_EQ(left.phalanges().size(), right.phalanges().size());
   EXPECT_EQ(left.side(), HandSide::kLeft);
@@ -90,6 +142,11 @@ TEST(HandKinematicsTest, LeftHandMirrorsRight) {
   }
   EXPECT_LT((left.selection_sphere().p_PalmCenter - mirror(right.selection_sphere().p_PalmCenter)).norm(), kExact);
   EXPECT_LT((left.palm_contact().p_PalmCenter - mirror(right.palm_contact().p_PalmCenter)).norm(), kExact);
+}
+
+TEST(HandKinematicsTest, LeftHandMirrorsRight) {
+  expect_mirrored("human_right", "human_left");
+  expect_mirrored("human_right_opposable", "human_left_opposable");
 }
 
 }  // namespace

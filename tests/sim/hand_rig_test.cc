@@ -54,6 +54,25 @@ TEST(HandRigTest, LoadsHumanRightHand) {
   EXPECT_EQ(rig.grasp_rule()[1][0].phalanx, rig.find("index_mid"));
 }
 
+// human_right_opposable: human_right with two more phalanges on the thumb, its carpometacarpal
+// joint's abduction and axial rotation, of length 0 and without a capsule, closing early.
+TEST(HandRigTest, OpposableThumbIsWrittenAsZeroLengthPhalanges) {
+  const HandRig rig = HandRig::load(HandRig::builtin_path("human_right_opposable"));
+  const HandRig planar = HandRig::load(HandRig::builtin_path("human_right"));
+  EXPECT_EQ(rig.phalanges().size(), 17u);
+  EXPECT_EQ(rig.fingers()[0].phalanges.size(), 5u);
+  for (const char* axis : {"thumb_cmc_abd", "thumb_cmc_rot"}) {
+    const PhalanxSpec& p = rig.phalanges()[rig.find(axis).value];
+    EXPECT_EQ(p.finger, 0) << axis;
+    EXPECT_EQ(p.length, 0.0) << axis;
+    EXPECT_FALSE(p.capsule.has_value()) << axis;
+    EXPECT_EQ(p.closes_from, 0.0) << axis;
+    EXPECT_LT(p.closes_until, 0.5) << axis;
+  }
+  EXPECT_EQ(rig.capsule_phalanges().size(), planar.capsule_phalanges().size());
+  EXPECT_EQ(rig.grasp_rule().size(), planar.grasp_rule().size());
+}
+
 TEST(HandRigTest, GripperStatesItsOwnGraspGroups) {
   const HandRig rig = HandRig::load(HandRig::builtin_path("gripper3"));
   EXPECT_EQ(rig.fingers().size(), 3u);
@@ -87,8 +106,8 @@ TEST(HandRigTest, BadFieldsAreNamed) {
   EXPECT_NE(error_of(edit(good, "\"index_dist\", \"middle_mid\"", "\"index_nail\", \"middle_mid\""))
                 .find("unknown phalanx 'index_nail'"),
             std::string::npos);
-  EXPECT_NE(error_of(edit(good, "open_deg: 0 closed_deg: 45 min_deg: -10", "open_deg: -20 closed_deg: 45 min_deg: -10"))
-                .find("fingers[0].phalanges[0].joint.open_deg"),
+  EXPECT_NE(error_of(edit(good, "open_deg: 5 closed_deg: 80 min_deg: -10", "open_deg: -20 closed_deg: 80 min_deg: -10"))
+                .find("fingers[1].phalanges[0].joint.open_deg"),
             std::string::npos);
   EXPECT_NE(error_of(edit(good, "name: \"human_right\"", "name: \"\"")).find("field 'name'"), std::string::npos);
   EXPECT_NE(
@@ -100,6 +119,29 @@ TEST(HandRigTest, BadFieldsAreNamed) {
   EXPECT_NE(
       error_of(edit(good, "joint { axis { x: 0 y: 1 z: 0 }", "joint { axis { x: 0 y: 0 z: 0 }")).find("joint.axis"),
       std::string::npos);
+}
+
+// A joint's part of the trigger defaults to all of it and must be an interval within [0, 1]; a
+// phalanx may have length 0 (another axis of the next joint), not less.
+TEST(HandRigTest, ClosingRangeAndZeroLength) {
+  const std::string good = read_builtin("gripper3");  // written before either field existed
+  const HandRig old = HandRig::parse(good, "old");
+  for (const PhalanxSpec& p : old.phalanges()) {
+    EXPECT_EQ(p.closes_from, 0.0) << p.name;
+    EXPECT_EQ(p.closes_until, 1.0) << p.name;
+  }
+  const std::string human = read_builtin("human_right");
+  const std::string first_joint = "joint { axis { x: 0 y: 1 z: 0 } open_deg: 5 closed_deg: 80";
+  const HandRig late = HandRig::parse(edit(human, first_joint, first_joint + " closes_from: 0.25 closes_until: 0.75"), "late");
+  EXPECT_EQ(late.phalanges()[late.find("index_prox").value].closes_from, 0.25);
+  EXPECT_EQ(late.phalanges()[late.find("index_prox").value].closes_until, 0.75);
+  for (const char* range : {" closes_from: 0.5 closes_until: 0.5", " closes_until: 1.5", " closes_from: -0.1",
+                            " closes_from: nan"}) {
+    const std::string msg = error_of(edit(human, first_joint, first_joint + range));
+    EXPECT_NE(msg.find("fingers[1].phalanges[0].joint.closes_from/closes_until"), std::string::npos) << range << ": " << msg;
+  }
+  EXPECT_NE(error_of(edit(human, "length: 0.045", "length: -0.045")).find("fingers[1].phalanges[0].length"),
+            std::string::npos);
 }
 
 TEST(HandRigTest, FrictionDefaultsToHalfAndMustBeFiniteAndNonNegative) {

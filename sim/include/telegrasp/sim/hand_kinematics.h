@@ -16,7 +16,8 @@ Eigen::Isometry3d phalanx_pose(const PhalanxSpec& phalanx, const Eigen::Isometry
 void forward_kinematics(const HandRig& rig, const std::vector<double>& q,
                         std::vector<Eigen::Isometry3d>* X_PalmPhalanx);
 
-/// Target joint angle at closing input `u` in [0, 1]: open + u (closed - open), within limits.
+/// Target joint angle at closing input `u` in [0, 1]: open + t (closed - open), within limits,
+/// t = (u - closes_from) / (closes_until - closes_from) clamped to [0, 1] (t = u by default).
 double target_angle(const PhalanxSpec& phalanx, double u);
 
 }  // namespace telegrasp::sim

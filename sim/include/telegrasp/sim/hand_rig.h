@@ -36,9 +36,10 @@ struct PhalanxSpec {
   Eigen::Isometry3d X_ParentJoint = Eigen::Isometry3d::Identity();  ///< Joint frame at angle 0.
   Eigen::Vector3d axis = Eigen::Vector3d::UnitY();  ///< Unit axis in the joint frame.
   double open = 0, closed = 0;  ///< Radians at trigger 0 and 1.
+  double closes_from = 0, closes_until = 1;  ///< The closing input's range over which it goes from open to closed.
   double min = 0, max = 0;  ///< Radian limits.
   double max_speed = 0;  ///< rad/s.
-  double length = 0;  ///< Display length along +x.
+  double length = 0;  ///< Display length along +x; 0 for an extra axis of the next phalanx's joint.
   std::optional<CapsuleSpec> capsule;
 };
 
@@ -67,7 +68,8 @@ class HandRig {
   static HandRig load(const std::string& path);
   /// Parses and validates rig text; `source` names it in errors.
   static HandRig parse(const std::string& text, const std::string& source);
-  /// Path of a rig shipped with telegrasp ("human_right", "human_left", "gripper3").
+  /// Path of a rig shipped with telegrasp ("human_right", "human_left", "human_right_opposable",
+  /// "human_left_opposable", "gripper3").
   static std::string builtin_path(const std::string& name);
 
   /// This rig reflected through the palm's x-z plane: a right hand becomes a left hand.
