@@ -13,6 +13,16 @@ namespace {
 
 constexpr std::size_t kMaxObjects = 128;  // the SceneState bound in telegrasp.idl
 
+// The model as `spec` configures its object: a copy of the shared one when it sets the object's
+// own friction or shape.
+sim::ObjectModelPtr with_overrides(const sim::ObjectModelPtr& model, const SceneObjectSpec& spec) {
+  if (!spec.friction && !spec.shape) return model;
+  auto own = std::make_shared<sim::ObjectModel>(*model);
+  if (spec.friction) own->friction = spec.friction;
+  if (spec.shape) own->shape.shape = *spec.shape;
+  return own;
+}
+
 }  // namespace
 
 std::vector<SceneObjectSpec> default_layout(const std::vector<sim::ObjectModelPtr>& models, double gap,
@@ -71,15 +81,12 @@ void SceneServer::spawn_restored_objects() {
     if (world_->objects().size() >= kMaxObjects)
       throw std::runtime_error("restored scene: at most " + std::to_string(kMaxObjects) + " objects");
     sim::ObjectModelPtr model = it->second;
-    // The k-th restored object of a model takes the friction of the k-th configured object of that
-    // model that has one (the snapshot keeps poses, not friction).
+    // The k-th restored object of a model takes the friction and shape of the k-th configured
+    // object of that model (the snapshot keeps poses, not those).
     int k = seen[o.model]++;
     for (const SceneObjectSpec& spec : settings_.objects) {
-      if (spec.model != o.model || !spec.friction) continue;
-      if (k-- > 0) continue;
-      auto own = std::make_shared<sim::ObjectModel>(*model);
-      own->friction = spec.friction;
-      model = std::move(own);
+      if (spec.model != o.model || k-- > 0) continue;
+      model = with_overrides(model, spec);
       break;
     }
     spawn(model, o.X_WorldObject());
@@ -100,12 +107,7 @@ void SceneServer::spawn_initial_scene() {
     auto it = models_.find(s.model);
     if (it == models_.end())
       throw std::runtime_error("scene object '" + s.model + "': no such model (see --list-models)");
-    sim::ObjectModelPtr model = it->second;
-    if (s.friction) {  // this object's own friction: a copy of the shared model
-      auto own = std::make_shared<sim::ObjectModel>(*model);
-      own->friction = s.friction;
-      model = std::move(own);
-    }
+    const sim::ObjectModelPtr model = with_overrides(it->second, s);
     spawn(model, sim::World::resting_pose(*model, s.x, s.y, s.yaw));
   }
 }

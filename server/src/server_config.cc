@@ -43,8 +43,14 @@ void apply_config(const proto::ServerConfig& c, ServerSettings& s, const std::st
   if (has("fill_standins")) s.fill_standins = c.fill_standins();
   for (const auto& o : c.objects()) {
     if (o.model().empty()) throw std::runtime_error(origin + ": objects.model must name a model");
-    s.objects.push_back({o.model(), o.x(), o.y(), o.yaw(), {}});
+    s.objects.push_back({o.model(), o.x(), o.y(), o.yaw(), {}, {}});
     if (o.has_friction()) s.objects.back().friction = o.friction();
+    if (o.has_shape()) {
+      s.objects.back().shape = sim::parse_shape_class(o.shape());
+      if (!s.objects.back().shape)
+        throw std::runtime_error(origin + ": objects '" + o.model() +
+                                 "': shape must be sphere, cylinder, box, thin or other, got '" + o.shape() + "'");
+    }
   }
   if (has("empty_scene")) s.empty_scene = c.empty_scene();
   if (has("quality_volume")) s.quality_volume = c.quality_volume();
@@ -157,6 +163,7 @@ proto::ServerConfig to_proto(const ServerSettings& s) {
     p->set_y(o.y);
     p->set_yaw(o.yaw);
     if (o.friction) p->set_friction(*o.friction);
+    if (o.shape) p->set_shape(sim::shape_class_name(*o.shape));
   }
   c.set_empty_scene(s.empty_scene);
   c.set_right_rig(s.right_rig);

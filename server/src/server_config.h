@@ -2,6 +2,7 @@
 #pragma once
 
 #include "telegrasp/sim/hand_controller.h"
+#include "telegrasp/sim/object_shape.h"
 #include "telegrasp/sim/world.h"
 
 #include <cstdint>
@@ -20,6 +21,7 @@ struct SceneObjectSpec {
   std::string model;
   double x = 0, y = 0, yaw = 0;
   std::optional<double> friction{};  ///< Coulomb mu of hand contacts on it (grasp quality); unset: the rig's.
+  std::optional<sim::ShapeClass> shape{};  ///< Its shape class; unset: the one read from its mesh.
 };
 
 /// A relay: one DDS participant that forwards many remote users' inputs (telegrasp-view --drive

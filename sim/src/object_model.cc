@@ -39,6 +39,7 @@ ObjectModelPtr make_object_model(const std::string& name, const TriangleMesh& me
   model->p_ObjectMin = model->mesh.min_corner();
   model->p_ObjectMax = model->mesh.max_corner();
   model->max_radius = max_vertex_radius(model->mesh);
+  model->shape = classify_shape(model->mesh, model->mass_properties);
   model->distance = MeshDistance(model->mesh);
   return model;
 }
@@ -67,6 +68,7 @@ ObjectModelPtr make_object_model_in_model_frame(const std::string& name, Triangl
   model->p_ObjectMax = model->mesh.max_corner();
   model->p_OriginalCenterOfMass = p_OriginalCenterOfMass;
   model->max_radius = max_vertex_radius(model->mesh);
+  model->shape = classify_shape(model->mesh, model->mass_properties);
   model->distance = MeshDistance(model->mesh);
   return model;
 }

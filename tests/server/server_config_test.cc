@@ -92,6 +92,27 @@ TEST(ServerConfigTest, SceneObjectFriction) {
   EXPECT_NE(error_of("objects { model: \"005_tomato_soup_can\" friction: nan }").find("friction"), std::string::npos);
 }
 
+// A scene object may set its shape class (the grasp type's input); it stays unset (read from the
+// mesh) otherwise, goes into the recorded configuration, and must be one of the five names.
+TEST(ServerConfigTest, SceneObjectShape) {
+  ServerSettings s;
+  load_server_config(write_temp("shape", R"(
+    objects { model: "011_banana" x: 0.4 shape: "cylinder" }
+    objects { model: "006_mustard_bottle" x: 0.2 }
+  )"),
+                     s);
+  ASSERT_EQ(s.objects.size(), 2u);
+  EXPECT_EQ(s.objects[0].shape, sim::ShapeClass::kCylinder);
+  EXPECT_FALSE(s.objects[1].shape.has_value());
+  const ServerSettings back = settings_from_proto(to_proto(s), "recording");
+  EXPECT_EQ(back.objects[0].shape, sim::ShapeClass::kCylinder);
+  EXPECT_FALSE(back.objects[1].shape.has_value());
+  const std::string wrong = error_of("objects { model: \"011_banana\" shape: \"banana\" }");
+  EXPECT_NE(wrong.find("shape"), std::string::npos) << wrong;
+  EXPECT_NE(wrong.find("011_banana"), std::string::npos) << wrong;
+  EXPECT_NE(wrong.find("'banana'"), std::string::npos) << wrong;
+}
+
 // Relays: prefix and hand limit (64 when left out) survive the recorded configuration; an empty
 // prefix, a limit out of range, or one prefix starting another is refused by name.
 TEST(ServerConfigTest, Relays) {

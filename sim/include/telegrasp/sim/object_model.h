@@ -4,6 +4,7 @@
 #include "telegrasp/sim/mass_properties.h"
 #include "telegrasp/sim/mesh_distance.h"
 #include "telegrasp/sim/mesh_loading.h"
+#include "telegrasp/sim/object_shape.h"
 #include "telegrasp/sim/triangle_mesh.h"
 
 #include <functional>
@@ -26,6 +27,7 @@ struct ObjectModel {
   Eigen::Vector3d p_ObjectMin{0, 0, 0}, p_ObjectMax{0, 0, 0};  ///< Bounds of `mesh`.
   Eigen::Vector3d p_OriginalCenterOfMass{0, 0, 0};  ///< Where the origin was in the source file's frame.
   double max_radius = 0;  ///< Largest distance from the centre of mass to a vertex, m (grasp quality's torque scale).
+  ObjectShape shape;  ///< Its class and oriented box (classify_shape); a scene may set the class.
   std::optional<double> friction;  ///< Coulomb friction coefficient mu against the hand; unset: the rig's.
 
   /// Heap bytes held by this model (mesh and distance structure).
