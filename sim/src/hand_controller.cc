@@ -209,7 +209,7 @@ void HandController::select_object(std::span<const ObjectView> objects) {
 
 bool HandController::depenetrate(int finger, const Eigen::Isometry3d& X_ObjectPalm, const ObjectView& object) {
   const auto& chain = rig_->fingers()[finger].phalanges;
-  const auto& specs = rig_->phalanges();
+  const auto& specs = joints();
   const MeshDistance& mesh = object.model->distance;
   const double tol = settings_.contact_tolerance;
   std::vector<double> q0;
@@ -297,7 +297,7 @@ void HandController::block(int id) {
 // A capsule whose pose in the object frame is bit-identical to its last check (e.g. while the
 // object is held) is still touching and needs no query.
 bool HandController::unblock_phalanges(const FingerStep& step) {
-  const auto& specs = rig_->phalanges();
+  const auto& specs = joints();
   // A blocked capsule stays blocked while it touches: within the tolerance (precise, with 2x
   // hysteresis against rounding) or overlapping (discrete).
   const double release_gap = step.precise ? 2.0 * step.tol : 0.0;
@@ -325,7 +325,7 @@ bool HandController::unblock_phalanges(const FingerStep& step) {
 // Finger movement: rate-limited steps toward the targets into the work space's delta, where
 // joints up to `held` may only open; true when some joint moves (`closing`: some joint closes).
 bool HandController::plan_motion(const FingerStep& step, double dt, int held, bool& closing) {
-  const auto& specs = rig_->phalanges();
+  const auto& specs = joints();
   std::vector<double>& delta = scratch_->work.delta;
   delta.assign(step.size(), 0.0);
   bool moving = false;
@@ -606,6 +606,13 @@ const ObjectView* HandController::choose_object(std::span<const ObjectView> obje
   return object;
 }
 
+// 1b. The grasp type: from the object's shape and the hand's pose while nothing is blocked.
+void HandController::choose_type(const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm) {
+  if (std::any_of(state_.blocked.begin(), state_.blocked.end(), [](std::uint8_t b) { return b != 0; })) return;
+  GraspType type = object ? choose_grasp_type(object->model->shape, X_ObjectPalm) : GraspType::kOther;
+  state_.grasp_type = rig_->has_grasp_type(type) ? type : GraspType::kOther;
+}
+
 // Gap bounds carried over from the last tick shrink by how far the hand moved relative to the
 // object: a capsule point p (palm frame) moves at most |dt| + angle(dR) |p|.
 void HandController::carry_gap_bounds(const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm) {
@@ -632,7 +639,7 @@ void HandController::apply_grasp_rule(const ObjectView* object, const Eigen::Iso
     state_.palm_contact =
         distance_to_bounds(model, c) <= palm.radius && model.distance.capsule_overlaps(c, c, palm.radius);
   }
-  const bool rule = object && evaluate_grasp_rule(rig_->grasp_rule(), state_.blocked, state_.palm_contact);
+  const bool rule = object && evaluate_grasp_rule(rig_->grasp_rule(state_.grasp_type), state_.blocked, state_.palm_contact);
   if (rule && !state_.grasped.valid()) {
     state_.grasped = object->id;
     state_.X_PalmObject = state_.X_WorldPalm.inverse() * object->X_WorldObject;
@@ -670,6 +677,7 @@ HandTickEvents HandController::tick(const ControllerInput& raw_input, double dt,
                                              ? state_.X_PalmObject.inverse()
                                              : object->X_WorldObject.inverse() * state_.X_WorldPalm;
   carry_gap_bounds(object, X_ObjectPalm);
+  choose_type(object, X_ObjectPalm);
 
   // 2 + 3. Interaction manager and finger movement, finger by finger.
   for (std::size_t f = 0; f < rig_->fingers().size(); ++f) {

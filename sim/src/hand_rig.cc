@@ -8,6 +8,7 @@
 #include <google/protobuf/io/tokenizer.h>
 #include <google/protobuf/text_format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <numbers>
@@ -56,6 +57,31 @@ PalmSphere to_sphere(const proto::Sphere& s, const std::string& source, const st
   if (required && !(out.radius > 0))
     fail(source, field + ".radius", "must be > 0 (got " + std::to_string(s.radius()) + ")");
   return out;
+}
+
+// The groups of a grasp rule, each member a phalanx of `rig` with a capsule, or "palm".
+template <typename Groups>
+std::vector<std::vector<GraspTerm>> parse_rule(const HandRig& rig, const Groups& groups, const std::string& source,
+                                               const std::string& field) {
+  std::vector<std::vector<GraspTerm>> rule;
+  for (int g = 0; g < groups.size(); ++g) {
+    const std::string gfield = field + "[" + std::to_string(g) + "].members";
+    std::vector<GraspTerm> group;
+    if (groups.Get(g).members().empty()) fail(source, gfield, "group is empty");
+    for (const auto& member : groups.Get(g).members()) {
+      if (member == "palm") {
+        group.push_back({true, {}});
+        continue;
+      }
+      const PhalanxId id = rig.find(member);
+      if (!id.valid()) fail(source, gfield, "unknown phalanx '" + member + "'");
+      if (!rig.phalanges()[id.value].capsule)
+        fail(source, gfield, "phalanx '" + member + "' has no capsule trigger, so it can never block");
+      group.push_back({false, id});
+    }
+    rule.push_back(std::move(group));
+  }
+  return rule;
 }
 
 }  // namespace
@@ -172,22 +198,42 @@ HandRig HandRig::parse(const std::string& text, const std::string& source) {
   }
 
   if (msg.grasp_rule().empty()) fail(source, "grasp_rule", "needs at least one group");
-  for (int g = 0; g < msg.grasp_rule_size(); ++g) {
-    const std::string field = "grasp_rule[" + std::to_string(g) + "].members";
-    std::vector<GraspTerm> group;
-    if (msg.grasp_rule(g).members().empty()) fail(source, field, "group is empty");
-    for (const auto& member : msg.grasp_rule(g).members()) {
-      if (member == "palm") {
-        group.push_back({true, {}});
-        continue;
-      }
-      const PhalanxId id = rig.find(member);
-      if (!id.valid()) fail(source, field, "unknown phalanx '" + member + "'");
-      if (!rig.phalanges_[id.value].capsule)
-        fail(source, field, "phalanx '" + member + "' has no capsule trigger, so it can never block");
-      group.push_back({false, id});
+  rig.grasp_rule_ = parse_rule(rig, msg.grasp_rule(), source, "grasp_rule");
+
+  for (int t = 0; t < msg.grasp_types_size(); ++t) {
+    const auto& type_msg = msg.grasp_types(t);
+    const std::string tfield = "grasp_types[" + std::to_string(t) + "]";
+    const std::optional<GraspType> type = parse_grasp_type(type_msg.type());
+    if (!type || *type == GraspType::kOther)
+      fail(source, tfield + ".type",
+           "must be power_sphere, tripod, small_wrap, medium_wrap, large_wrap, disk, prismatic or lateral_pinch "
+           "(got '" + type_msg.type() + "')");
+    auto& slot = rig.types_[static_cast<std::size_t>(*type)];
+    if (slot) fail(source, tfield + ".type", "type '" + type_msg.type() + "' is listed twice");
+    TypeClosing closing;
+    for (const PhalanxSpec& p : rig.phalanges_) closing.joints.push_back({p.open, p.closed, p.closes_from, p.closes_until});
+    for (int j = 0; j < type_msg.joints_size(); ++j) {
+      const auto& jm = type_msg.joints(j);
+      const std::string jfield = tfield + ".joints[" + std::to_string(j) + "]";
+      const PhalanxId id = rig.find(jm.phalanx());
+      if (!id.valid()) fail(source, jfield + ".phalanx", "unknown phalanx '" + jm.phalanx() + "'");
+      const PhalanxSpec& spec = rig.phalanges_[id.value];
+      JointClosing& c = closing.joints[id.value];
+      if (jm.has_open_deg()) c.open = jm.open_deg() * kDeg;
+      if (jm.has_closed_deg()) c.closed = jm.closed_deg() * kDeg;
+      if (jm.has_closes_from()) c.closes_from = jm.closes_from();
+      if (jm.has_closes_until()) c.closes_until = jm.closes_until();
+      for (auto [v, n] : {std::pair{c.open, "open_deg"}, std::pair{c.closed, "closed_deg"}})
+        if (!(v >= spec.min - 1e-12 && v <= spec.max + 1e-12))
+          fail(source, jfield + "." + n,
+               "must lie within the joint's [min_deg, max_deg] = [" + std::to_string(spec.min / kDeg) + ", " +
+                   std::to_string(spec.max / kDeg) + "]");
+      if (!(c.closes_from >= 0 && c.closes_from < c.closes_until && c.closes_until <= 1))
+        fail(source, jfield + ".closes_from/closes_until", "must satisfy 0 <= closes_from < closes_until <= 1");
     }
-    rig.grasp_rule_.push_back(std::move(group));
+    if (!type_msg.grasp_rule().empty())
+      closing.grasp_rule = parse_rule(rig, type_msg.grasp_rule(), source, tfield + ".grasp_rule");
+    slot = std::move(closing);
   }
   rig.finish(source);
   return rig;
@@ -197,6 +243,36 @@ void HandRig::finish(const std::string&) {
   capsule_phalanges_.clear();
   for (std::size_t i = 0; i < phalanges_.size(); ++i)
     if (phalanges_[i].capsule) capsule_phalanges_.push_back(PhalanxId(static_cast<int>(i)));
+  for (auto& type : types_) {
+    if (!type) continue;
+    type->phalanges = phalanges_;
+    for (std::size_t i = 0; i < phalanges_.size(); ++i) {
+      const JointClosing& c = type->joints[i];
+      PhalanxSpec& p = type->phalanges[i];
+      p.open = c.open;
+      p.closed = c.closed;
+      p.closes_from = c.closes_from;
+      p.closes_until = c.closes_until;
+    }
+  }
+}
+
+bool HandRig::has_grasp_type(GraspType type) const {
+  return type == GraspType::kOther || types_[static_cast<std::size_t>(type)].has_value();
+}
+
+bool HandRig::has_grasp_types() const {
+  return std::any_of(types_.begin(), types_.end(), [](const auto& t) { return t.has_value(); });
+}
+
+const std::vector<PhalanxSpec>& HandRig::phalanges(GraspType type) const {
+  const auto& t = types_[static_cast<std::size_t>(type)];
+  return t ? t->phalanges : phalanges_;
+}
+
+const std::vector<std::vector<GraspTerm>>& HandRig::grasp_rule(GraspType type) const {
+  const auto& t = types_[static_cast<std::size_t>(type)];
+  return t && !t->grasp_rule.empty() ? t->grasp_rule : grasp_rule_;
 }
 
 PhalanxId HandRig::find(const std::string& name) const {
@@ -227,6 +303,7 @@ HandRig HandRig::mirrored() const {
       c.p_PhalanxSp = mirror_point(c.p_PhalanxSp);
     }
   }
+  out.finish(name_);  // the grasp types' phalanges from the mirrored ones
   return out;
 }
 

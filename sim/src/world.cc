@@ -183,6 +183,7 @@ struct World::Impl {
     GraspEvent e = event(GraspEvent::Kind::kGrasp, hand_id, oid);
     e.metrics = hand.grasp_metrics();
     e.contacts = hand.contacts();
+    e.grasp_type = hand.state().grasp_type;
     events.push_back(std::move(e));
   }
 

@@ -208,6 +208,10 @@ Trial run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRig
       rec.hand_error_mm = rec.grasp_tick_hand_error_mm;
       rec.capsules = rec.grasp_tick_capsules;
       rec.figures = rec.grasp_tick_figures;
+      rec.grasp_type = grasp_type_name(e.grasp_type);
+      rec.opposition_deg = telegrasp::report::opposition_deg(e.contacts, *rig);
+      rec.across_smallest =
+          telegrasp::report::closes_across_smallest(model->shape, world.hand(hand).state().X_PalmObject.inverse());
     }
   }
   if (held) {
@@ -341,6 +345,7 @@ json print_summaries(const std::vector<Config>& configs, const std::vector<Job>&
       all.push_back(&trials[j].record);
     }
     telegrasp::report::print_object_table(rows);
+    telegrasp::report::print_type_table(all);
     json s = summarize(all);
     s["mode"] = closing_mode_name(configs[c].mode);
     s["speed_scale"] = configs[c].speed;

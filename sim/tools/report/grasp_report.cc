@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
+#include <numbers>
 
 namespace telegrasp::report {
 
@@ -22,6 +24,22 @@ json capsule_json(const std::vector<CapsuleMetricRecord>& capsules) {
                    {"signed_distance_mm", c.signed_distance_mm}});
   }
   return out;
+}
+
+double opposition_deg(const std::vector<sim::Contact>& contacts, const sim::HandRig& rig) {
+  Eigen::Vector3d thumb = Eigen::Vector3d::Zero(), others = Eigen::Vector3d::Zero();
+  for (const sim::Contact& c : contacts) {
+    if (!c.phalanx.valid()) continue;  // the palm
+    const int finger = rig.phalanges()[c.phalanx.value].finger;
+    (rig.fingers()[finger].name == "thumb" ? thumb : others) += c.n_Object;
+  }
+  if (thumb.norm() < 1e-9 || others.norm() < 1e-9) return NAN;
+  const double cos = std::clamp(thumb.normalized().dot(others.normalized()), -1.0, 1.0);
+  return std::acos(cos) * 180.0 / std::numbers::pi;
+}
+
+bool closes_across_smallest(const sim::ObjectShape& shape, const Eigen::Isometry3d& X_ObjectPalm) {
+  return std::abs(shape.X_ObjectBox.linear().col(0).dot(X_ObjectPalm.linear().col(0))) >= std::sqrt(0.5);
 }
 
 GraspFigures grasp_figures(const sim::GraspMetrics& m) {
@@ -49,6 +67,17 @@ GraspFigures get_figures(const json& j) {
   f.force_closure =
       j.contains("force_closure") && j.at("force_closure").is_boolean() && j.at("force_closure").get<bool>();
   return f;
+}
+
+}  // namespace
+
+namespace {
+
+double mean(const std::vector<double>& v) {
+  if (v.empty()) return NAN;
+  double sum = 0;
+  for (double x : v) sum += x;
+  return sum / static_cast<double>(v.size());
 }
 
 }  // namespace
@@ -116,12 +145,18 @@ json figures_summary(const std::vector<const Record*>& recs) {
 json summarize(const std::vector<const Record*>& recs) {
   int grasped = 0, held = 0, capsules = 0, below = 0, blocked_count = 0;
   double time_sum = 0, he_sum = 0, he_tick_sum = 0, min_sd = 1e9;
-  std::vector<double> nd_abs, nd_abs_tick;
+  std::vector<double> nd_abs, nd_abs_tick, opposition;
+  int across_known = 0, across = 0;
   NdContactStats contact, contact_tick;
   for (const Record* r : recs) {
     grasped += r->grasped;
     held += r->held_after_lift;
     if (!r->grasped) continue;
+    if (std::isfinite(r->opposition_deg)) opposition.push_back(r->opposition_deg);
+    if (r->across_smallest) {
+      ++across_known;
+      across += *r->across_smallest;
+    }
     time_sum += r->time_to_grasp_s;
     he_sum += r->hand_error_mm;
     he_tick_sum += r->grasp_tick_hand_error_mm;
@@ -149,12 +184,14 @@ json summarize(const std::vector<const Record*>& recs) {
               {"capsules", capsules},
               {"capsules_hit", nd_abs.size()},
               {"nd_abs_median_mm", num(percentile(nd_abs, 0.5))},
+              {"nd_abs_mean_mm", num(mean(nd_abs))},
               {"nd_abs_p95_mm", num(percentile(nd_abs, 0.95))},
               {"blocked_capsules", blocked_count},
               {"min_blocked_signed_distance_mm", num(blocked_count ? min_sd : NAN)},
               {"blocked_below_minus_0_1mm", below},
               {"grasp_tick_hand_error_mean_mm", num(grasped ? he_tick_sum / grasped : NAN)},
               {"grasp_tick_nd_abs_median_mm", num(percentile(nd_abs_tick, 0.5))},
+              {"grasp_tick_nd_abs_mean_mm", num(mean(nd_abs_tick))},
               {"grasp_tick_nd_abs_p95_mm", num(percentile(nd_abs_tick, 0.95))},
               {"nd_contact_abs_median_mm", num(percentile(contact.abs_mm, 0.5))},
               {"nd_contact_abs_p95_mm", num(percentile(contact.abs_mm, 0.95))},
@@ -163,7 +200,26 @@ json summarize(const std::vector<const Record*>& recs) {
               {"grasp_tick_nd_contact_abs_p95_mm", num(percentile(contact_tick.abs_mm, 0.95))},
               {"grasp_tick_blocked_without_nd_contact", contact_tick.blocked_without}};
   out.update(figures_summary(recs));
+  if (!opposition.empty()) out["opposition_median_deg"] = percentile(opposition, 0.5);
+  if (across_known > 0) out["across_smallest_share"] = static_cast<double>(across) / across_known;
   return out;
+}
+
+void print_type_table(const std::vector<const Record*>& records) {
+  std::map<std::string, std::vector<const Record*>> by_type;
+  for (const Record* r : records)
+    if (r->grasped && !r->grasp_type.empty()) by_type[r->grasp_type].push_back(r);
+  if (by_type.empty() || (by_type.size() == 1 && by_type.begin()->first == "other")) return;  // a rig without types
+  std::printf("%-16s %6s %6s %8s %9s %9s %9s\n", "grasp type", "grasps", "held", "FC", "opp_deg", "|ND|mean",
+              "across");
+  for (const auto& [type, recs] : by_type) {
+    const json s = summarize(recs);
+    auto get = [&](const char* k) { return s.contains(k) && !s[k].is_null() ? s[k].get<double>() : NAN; };
+    std::printf("%-16s %6d %6d %8s %9s %9s %9s\n", type.c_str(), s["grasped"].get<int>(),
+                s["held_after_lift"].get<int>(), fmt(get("force_closure_share")).c_str(),
+                fmt(get("opposition_median_deg"), 0).c_str(), fmt(get("nd_abs_mean_mm"), 3).c_str(),
+                fmt(get("across_smallest_share")).c_str());
+  }
 }
 
 std::string fmt(double v, int prec) {
@@ -205,6 +261,9 @@ json record_json(const Record& r) {
                 {"capsules", capsule_json(r.grasp_tick_capsules)}}}};
   put_figures(out, r.figures, r.grasped);
   put_figures(out["grasp_tick"], r.grasp_tick_figures, r.grasped);
+  if (!r.grasp_type.empty()) out["grasp_tick"]["grasp_type"] = r.grasp_type;
+  if (std::isfinite(r.opposition_deg)) out["grasp_tick"]["opposition_deg"] = r.opposition_deg;
+  if (r.across_smallest) out["grasp_tick"]["across_smallest_axis"] = *r.across_smallest;
   if (!r.group.empty()) {
     auto vec = [](const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); };
     json contacts = json::array();
@@ -251,6 +310,10 @@ Record record_from_json(const json& j) {
     r.time_to_grasp_s = j.at("time_to_grasp_s").get<double>();
     r.hand_error_mm = j.at("hand_error_mm").get<double>();
     r.grasp_tick_hand_error_mm = j.at("grasp_tick").at("hand_error_mm").get<double>();
+    const json& tick = j.at("grasp_tick");
+    if (tick.contains("grasp_type")) r.grasp_type = tick.at("grasp_type").get<std::string>();
+    if (tick.contains("opposition_deg")) r.opposition_deg = tick.at("opposition_deg").get<double>();
+    if (tick.contains("across_smallest_axis")) r.across_smallest = tick.at("across_smallest_axis").get<bool>();
   }
   auto capsules = [](const json& arr) {
     std::vector<CapsuleMetricRecord> out;

@@ -8,6 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -67,7 +69,28 @@ struct Record {
   /// from the server's HandSkeleton of that tick; empty when unknown. Written when not empty.
   std::vector<HandFrameRecord> grasp_tick_hand;
   Eigen::Isometry3d grasp_tick_X_WorldObject = Eigen::Isometry3d::Identity();  ///< With grasp_tick_hand.
+  /// The hand's grasp type at the grasp tick (sim::grasp_type_name); "" unknown (not written).
+  std::string grasp_type;
+  /// Grasp tick: opposition_deg() of its contacts; NaN without (not written).
+  double opposition_deg = std::numeric_limits<double>::quiet_NaN();
+  /// Grasp tick: closes_across_smallest(); unknown: not written.
+  std::optional<bool> across_smallest;
 };
+
+/// The angle (degrees) between the mean contact normal of the rig's finger named "thumb" and the
+/// mean of the other fingers' contact normals (the palm left out): 180 when the thumb pushes
+/// straight against the fingers. NaN when the thumb or the other fingers touch nothing, or the
+/// rig has no thumb.
+double opposition_deg(const std::vector<sim::Contact>& contacts, const sim::HandRig& rig);
+
+/// Whether the hand closes across the object's shortest side: the palm's +x (from the thumb to
+/// the fingers) within 45 degrees of the shortest side of the object's box (sim::ObjectShape).
+bool closes_across_smallest(const sim::ObjectShape& shape, const Eigen::Isometry3d& X_ObjectPalm);
+
+/// Prints one row per grasp type among `records` that have one: grasps, held after lift, force
+/// closure share, median opposition, mean |ND| at mid-length, closing across the shortest side.
+/// Prints nothing when every type is "other" (a rig that lists no types).
+void print_type_table(const std::vector<const Record*>& records);
 
 /// The capsule metrics of a grasp, named by the rig's phalanges, in mm.
 std::vector<CapsuleMetricRecord> capsule_records(const sim::GraspMetrics& metrics, const sim::HandRig& rig);

@@ -120,6 +120,10 @@ struct HandState {
   std::vector<double> blocked_angle;  ///< Joint angle when it blocked.
   bool palm_contact = false;
   ObjectId selected;
+  /// How the fingers close: chosen from the selected object's shape and the hand's pose while no
+  /// phalanx is blocked (kOther with no object, or a type the rig does not list), then kept until
+  /// every phalanx has let go.
+  GraspType grasp_type = GraspType::kOther;
   ObjectId grasped;
   Eigen::Isometry3d X_PalmObject = Eigen::Isometry3d::Identity();  ///< While grasped.
 };
@@ -201,6 +205,9 @@ class HandController {
   // The phases of tick(), in order (interaction manager and finger movement in step_finger).
   const ObjectView* choose_object(std::span<const ObjectView> objects, ObjectView& held_view, HandTickEvents& events);
   void select_object(std::span<const ObjectView> objects);
+  void choose_type(const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm);
+  // The joints as the hand's grasp type closes them (rig().phalanges(state_.grasp_type)).
+  const std::vector<PhalanxSpec>& joints() const { return rig_->phalanges(state_.grasp_type); }
   void carry_gap_bounds(const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm);
   void step_finger(int finger, double u, double dt, const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm);
   void apply_grasp_rule(const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm, HandTickEvents& events);

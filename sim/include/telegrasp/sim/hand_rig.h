@@ -1,10 +1,12 @@
 // HandRig: the immutable description of a hand, loaded from a protobuf text file.
 #pragma once
 
+#include "telegrasp/sim/grasp_type.h"
 #include "telegrasp/sim/ids.h"
 
 #include <Eigen/Geometry>
 
+#include <array>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -93,10 +95,29 @@ class HandRig {
   const std::vector<PhalanxId>& capsule_phalanges() const { return capsule_phalanges_; }
   /// Phalanx by name, or an invalid id.
   PhalanxId find(const std::string& name) const;
+  /// Whether the rig lists grasp type `type` (its own closing and rule); kOther: always.
+  bool has_grasp_type(GraspType type) const;
+  /// Whether the rig lists any grasp type.
+  bool has_grasp_types() const;
+  /// The phalanges as grasp type `type` closes them: phalanges() with the type's open and closed
+  /// angles and closing ranges; phalanges() itself for kOther or a type the rig does not list.
+  const std::vector<PhalanxSpec>& phalanges(GraspType type) const;
+  /// The grasp rule of type `type`: its own if it has one, else grasp_rule().
+  const std::vector<std::vector<GraspTerm>>& grasp_rule(GraspType type) const;
 
  private:
   HandRig() = default;
   void finish(const std::string& source);
+  // A joint's closing under one grasp type.
+  struct JointClosing {
+    double open = 0, closed = 0, closes_from = 0, closes_until = 1;
+  };
+  // A listed grasp type: per phalanx, its closing; its own rule (empty: the rig's).
+  struct TypeClosing {
+    std::vector<JointClosing> joints;
+    std::vector<std::vector<GraspTerm>> grasp_rule;
+    std::vector<PhalanxSpec> phalanges;  // phalanges_ with `joints` applied (finish())
+  };
 
   std::string name_;
   HandSide side_ = HandSide::kUnspecified;
@@ -109,6 +130,7 @@ class HandRig {
   Eigen::Vector3d p_PalmGraspCenter_{0, 0, 0};
   double friction_ = 0.5;
   std::vector<PhalanxId> capsule_phalanges_;
+  std::array<std::optional<TypeClosing>, kGraspTypeCount> types_;  // by GraspType
 };
 
 }  // namespace telegrasp::sim

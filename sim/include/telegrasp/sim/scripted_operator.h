@@ -136,7 +136,9 @@ NdSearchResult nd_pose_search(const std::shared_ptr<const HandRig>& rig, const O
 /// (top and side approaches, both axes, offsets, heights) with precise closing, and keeping the
 /// best: a grasp with no capsule ending inside the object, then opposing contact normals (a pinch
 /// or wrap, not a press), then fingers above the table top at `table_height` (the World's is 0),
-/// then the most capsules blocked, then the least HandError. Deterministic.
+/// then the most capsules blocked, then the least HandError. For a rig with grasp types, as people
+/// plan: also along the object's box sides, and closing across its shortest side (the palm's +x
+/// within 45 degrees of it) first, then in force closure, before opposing normals. Deterministic.
 GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSettings& settings, const ObjectModel& model,
                      const Eigen::Isometry3d& X_WorldObject, double dt, double table_height = 0.0);
 

@@ -54,6 +54,7 @@ struct GraspEvent {
   /// quality_results().
   std::uint64_t quality_job = 0;
   std::vector<Contact> contacts;  ///< Grasp events.
+  GraspType grasp_type = GraspType::kOther;  ///< Grasp events: the hand's grasp type (HandState::grasp_type).
   Eigen::Vector3d v_WorldObject{0, 0, 0};  ///< Release events: velocity handed to physics.
   Eigen::Vector3d w_WorldObject{0, 0, 0};
 };

@@ -1,0 +1,57 @@
+// Grasp types from shape classes.
+#include "telegrasp/sim/grasp_type.h"
+
+#include <array>
+#include <cmath>
+
+namespace telegrasp::sim {
+namespace {
+
+constexpr std::array<const char*, kGraspTypeCount> kNames = {
+    "other", "power_sphere", "tripod", "small_wrap", "medium_wrap", "large_wrap", "disk", "prismatic", "lateral_pinch"};
+
+}  // namespace
+
+const char* grasp_type_name(GraspType type) {
+  const auto i = static_cast<std::size_t>(type);
+  return i < kNames.size() ? kNames[i] : "other";
+}
+
+std::optional<GraspType> parse_grasp_type(std::string_view name) {
+  for (std::size_t i = 0; i < kNames.size(); ++i)
+    if (name == kNames[i]) return static_cast<GraspType>(i);
+  return std::nullopt;
+}
+
+double box_width_along(const ObjectShape& shape, const Eigen::Vector3d& d_Object) {
+  const Eigen::Matrix3d& R = shape.X_ObjectBox.linear();
+  double w = 0;
+  for (int i = 0; i < 3; ++i) w += shape.half_extent[i] * std::abs(R.col(i).dot(d_Object));
+  return 2 * w;
+}
+
+GraspType choose_grasp_type(const ObjectShape& shape, const Eigen::Isometry3d& X_ObjectPalm,
+                            const GraspTypeRules& rules) {
+  const Eigen::Vector3d across = X_ObjectPalm.linear().col(0);  // palm +x, the thumb-to-fingers line
+  switch (shape.shape) {
+    case ShapeClass::kSphere:
+      return box_width_along(shape, across) <= rules.tripod_max_width ? GraspType::kTripod : GraspType::kPowerSphere;
+    case ShapeClass::kCylinder: {
+      if (shape.axis < 0) return GraspType::kOther;
+      const Eigen::Vector3d axis = shape.X_ObjectBox.linear().col(shape.axis);
+      if (std::abs(axis.dot(X_ObjectPalm.linear().col(2))) >= rules.disk_min_cos) return GraspType::kDisk;
+      const double diameter = 2 * shape.half_extent[shape.axis == 0 ? 2 : 0];
+      if (diameter <= rules.small_wrap_max_width) return GraspType::kSmallWrap;
+      return diameter <= rules.medium_wrap_max_width ? GraspType::kMediumWrap : GraspType::kLargeWrap;
+    }
+    case ShapeClass::kBox:
+      return GraspType::kPrismatic;
+    case ShapeClass::kThin:
+      return GraspType::kLateralPinch;
+    case ShapeClass::kOther:
+      break;
+  }
+  return GraspType::kOther;
+}
+
+}  // namespace telegrasp::sim
