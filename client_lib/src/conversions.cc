@@ -122,6 +122,7 @@ msg::GraspState to_msg(const client::GraspState& s) {
   m.epsilon(s.epsilon);
   m.volume(s.volume);
   m.force_closure(s.force_closure);
+  m.grasp_type(s.grasp_type);
   return m;
 }
 
@@ -138,6 +139,7 @@ client::GraspState from_msg(const msg::GraspState& m) {
   s.epsilon = m.epsilon();
   s.volume = m.volume();
   s.force_closure = m.force_closure();
+  s.grasp_type = m.grasp_type().to_string();
   return s;
 }
 
@@ -257,6 +259,7 @@ msg::GraspEvent to_msg(const client::GraspEvent& e) {
   m.force_closure(e.force_closure);
   m.release_velocity(to_msg(e.v_WorldObject));
   m.release_angular_velocity(to_msg(e.w_WorldObject));
+  m.grasp_type(e.grasp_type);
   return m;
 }
 
@@ -282,6 +285,7 @@ client::GraspEvent from_msg(const msg::GraspEvent& m) {
   e.force_closure = m.force_closure();
   e.v_WorldObject = from_msg(m.release_velocity());
   e.w_WorldObject = from_msg(m.release_angular_velocity());
+  e.grasp_type = m.grasp_type().to_string();
   return e;
 }
 

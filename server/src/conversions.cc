@@ -71,6 +71,7 @@ msg::GraspState make_grasp_state(const HandAddress& address, const sim::HandCont
   m.trigger(s.trigger);
   m.blocked().assign(s.blocked.begin(), s.blocked.end());
   m.palm_contact(s.palm_contact);
+  m.grasp_type(sim::grasp_type_name(s.grasp_type));
   if (const auto metrics = hand.hold_metrics()) {
     m.epsilon(metrics->quality.epsilon);
     m.volume(metrics->quality.volume);
@@ -164,6 +165,7 @@ msg::GraspEvent make_grasp_event(const sim::GraspEvent& e, const sim::HandRig& r
   for (const sim::Contact& c : e.contacts) m.contacts().push_back(to_msg(c));
   m.release_velocity(to_msg(e.v_WorldObject));
   m.release_angular_velocity(to_msg(e.w_WorldObject));
+  m.grasp_type(sim::grasp_type_name(e.grasp_type));
   return m;
 }
 

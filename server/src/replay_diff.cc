@@ -107,6 +107,7 @@ struct FieldDiff {
     value("epsilon", a.epsilon(), b.epsilon());
     value("volume", a.volume(), b.volume());
     value("force_closure", a.force_closure(), b.force_closure());
+    value("grasp_type", a.grasp_type(), b.grasp_type());
   }
   void fields(const msg::ContactSet& a, const msg::ContactSet& b) {
     value("client_id", a.client_id(), b.client_id());
@@ -151,6 +152,7 @@ struct FieldDiff {
              [this](const std::string& n, const auto& x, const auto& y) { contact(n, x, y); });
     vec3("release_velocity", a.release_velocity(), b.release_velocity());
     vec3("release_angular_velocity", a.release_angular_velocity(), b.release_angular_velocity());
+    value("grasp_type", a.grasp_type(), b.grasp_type());
   }
   void fields(const msg::SceneState& a, const msg::SceneState& b) {
     value("tick", a.tick(), b.tick());

@@ -265,6 +265,7 @@ TEST(ConversionsTest, GraspStateRoundTrip) {
   s.epsilon = 0.0625;
   s.volume = 0.125;
   s.force_closure = true;
+  s.grasp_type = "power_sphere";
   const client::GraspState r = from_msg(to_msg(s));
   expect_same(r.hand, s.hand);
   EXPECT_EQ(r.tick, s.tick);
@@ -277,6 +278,7 @@ TEST(ConversionsTest, GraspStateRoundTrip) {
   EXPECT_EQ(r.epsilon, s.epsilon);
   EXPECT_EQ(r.volume, s.volume);
   EXPECT_EQ(r.force_closure, s.force_closure);
+  EXPECT_EQ(r.grasp_type, "power_sphere");
 }
 
 TEST(ConversionsTest, ContactSetRoundTrip) {
@@ -330,6 +332,7 @@ TEST(ConversionsTest, GraspEventRoundTrip) {
     e.epsilon = 0.03125;
     e.volume = 0.5;
     e.force_closure = true;
+    e.grasp_type = "lateral_pinch";
     e.contacts = {make_contact(0, 1), make_contact(5, -1)};
     e.v_WorldObject = {0.1, -0.2, 0.3};
     e.w_WorldObject = {-1, 2, 0.5};
@@ -352,6 +355,7 @@ TEST(ConversionsTest, GraspEventRoundTrip) {
     EXPECT_EQ(r.epsilon, e.epsilon);
     EXPECT_EQ(r.volume, e.volume);
     EXPECT_EQ(r.force_closure, e.force_closure);
+    EXPECT_EQ(r.grasp_type, e.grasp_type);
     EXPECT_EQ(r.v_WorldObject, e.v_WorldObject);
     EXPECT_EQ(r.w_WorldObject, e.w_WorldObject);
   }

@@ -151,6 +151,7 @@ TEST(ConversionsTest, GraspEventCarriesMetricsAndNames) {
   metrics.palm_signed_distance = 0.002;
   metrics.quality = {0.125, 0.5, true};
   e.metrics = metrics;
+  e.grasp_type = sim::GraspType::kLateralPinch;
   EventContext ctx;
   ctx.hand = {"bob", 0};
   ctx.event_id = 11;
@@ -182,6 +183,7 @@ TEST(ConversionsTest, GraspEventCarriesMetricsAndNames) {
   EXPECT_EQ(m.epsilon(), 0.125);
   EXPECT_EQ(m.volume(), 0.5);
   EXPECT_TRUE(m.force_closure());
+  EXPECT_EQ(m.grasp_type().to_string(), "lateral_pinch");
 }
 
 // Quality moves republish a held hand's GraspState only beyond 5 % or 1e-3 (whichever is larger),

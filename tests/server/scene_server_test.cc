@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <set>
 
 namespace telegrasp::server {
 namespace {
@@ -153,6 +154,7 @@ TEST_F(SceneServerTest, PublishesEachGraspOnceWithConsistentContacts) {
   EXPECT_EQ(e.object_id(), can);
   EXPECT_EQ(e.object_name().to_string(), "005_tomato_soup_can");
   EXPECT_EQ(e.client_id().to_string(), "alice");
+  EXPECT_EQ(e.grasp_type().to_string(), "other");  // human_right lists no grasp types
   EXPECT_FALSE(e.capsules().empty());
   EXPECT_FALSE(e.contacts().empty());
   ASSERT_FALSE(sink.contacts.empty());
@@ -171,6 +173,27 @@ TEST_F(SceneServerTest, PublishesEachGraspOnceWithConsistentContacts) {
     }
   }
   EXPECT_GT(checked, 0);
+}
+
+// A rig with grasp types: the grasp event and the hand's states name the type the ball's shape
+// chose (a 6.7 cm ball: a power sphere grasp), and the states name it from the approach on.
+struct TypedRigSceneServerTest : SceneServerTest {
+  TypedRigSceneServerTest() { right = rig("human_right_opposable"); }
+};
+TEST_F(TypedRigSceneServerTest, GraspEventsAndStatesCarryTheGraspType) {
+  const int ball = spawn("056_tennis_ball", 0.45, 0.0);
+  for (int i = 0; i < 30; ++i) tick();
+  grasp_and_lift(ball);
+  ASSERT_EQ(sink.events.size(), 1u);
+  EXPECT_EQ(sink.events[0].grasp_type().to_string(), "power_sphere");
+  std::set<std::string> types;
+  for (const msg::GraspState& s : sink.states) types.insert(s.grasp_type().to_string());
+  EXPECT_TRUE(types.count("power_sphere")) << "states name the type";
+  for (const msg::GraspState& s : sink.states) {
+    if (s.grasped_object() >= 0) {
+      EXPECT_EQ(s.grasp_type().to_string(), "power_sphere");
+    }
+  }
 }
 
 // A hand whose client goes silent is frozen after freeze_after_s, then removed after

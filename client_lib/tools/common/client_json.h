@@ -111,7 +111,8 @@ Json grasp_state(const client::GraspState& s) {
               {"palm_contact", s.palm_contact},
               {"epsilon", s.epsilon},
               {"volume", s.volume},
-              {"force_closure", s.force_closure}};
+              {"force_closure", s.force_closure},
+              {"grasp_type", s.grasp_type}};
 }
 
 template <class Json>
@@ -150,6 +151,7 @@ Json grasp_event(const client::GraspEvent& e) {
     j["epsilon"] = e.epsilon;
     j["volume"] = e.volume;
     j["force_closure"] = e.force_closure;
+    j["grasp_type"] = e.grasp_type;
     j["capsules"] = array<Json>(e.capsules, capsule<Json>);
     j["contacts"] = array<Json>(e.contacts, contact<Json>);
   }

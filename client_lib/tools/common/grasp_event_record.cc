@@ -16,12 +16,19 @@ void record_grasp_event(const client::GraspEvent& e, double trial_start_time, co
   rec.grasp_tick_capsules = rec.capsules;
   // The event is the grasp tick's: the record's settled figures are the same.
   rec.figures = rec.grasp_tick_figures = {1000 * e.palm_signed_distance, e.epsilon, e.volume, e.force_closure};
+  rec.grasp_type = e.grasp_type;
   rec.contacts.clear();
+  std::vector<sim::Contact> contacts;  // for the thumb's opposition
   for (const client::ContactPoint& c : e.contacts) {
     const bool palm = c.phalanx < 0 || c.phalanx >= static_cast<int>(rig.phalanges().size());
     rec.contacts.push_back({palm ? std::string("palm") : rig.phalanges()[c.phalanx].name, c.p_WorldContact, c.n_World,
                             c.p_ObjectContact, c.n_Object});
+    sim::Contact k;
+    if (!palm) k.phalanx = sim::PhalanxId(c.phalanx);
+    k.n_Object = c.n_Object;
+    contacts.push_back(k);
   }
+  rec.opposition_deg = report::opposition_deg(contacts, rig);
 }
 
 }  // namespace telegrasp::tools

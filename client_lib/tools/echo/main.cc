@@ -92,13 +92,14 @@ X_WorldObject is the object's pose in the world frame.
                   minus tracked position, world frame), "resolve_angle_rad"
   GraspState      "hand", "selected_object", "grasped_object" (-1: none), "trigger" (0..1),
                   "blocked" (per phalanx), "palm_contact", "epsilon", "volume",
-                  "force_closure" (the held grasp's quality; 0 and false when not holding)
+                  "force_closure" (the held grasp's quality; 0 and false when not holding),
+                  "grasp_type" (how the hand closes; "other" for a rig without grasp types)
   ContactSet      "hand", "object_id", "X_WorldObject", "contacts"
   GraspEvent      "event_id", "kind" ("grasp"|"release"), "hand", "object_id", "object_name",
                   "object_spawn_time_s", "X_WorldObject", "input_sequence";
                   grasp: "hand_error_mm" (from nd_midlength), "capsules_without_hit",
                   "palm_signed_distance_mm" (the palm box's exact signed distance),
-                  "epsilon", "volume", "force_closure", "capsules", "contacts";
+                  "epsilon", "volume", "force_closure", "grasp_type", "capsules", "contacts";
                   release: "v_WorldObject_m_per_s", "w_WorldObject_rad_per_s"
   SceneState      "objects": {"id","name","X_WorldObject","v_WorldObject_m_per_s","held",
                   "holder" (if held: the first), "holders" (if held: every hand holding

@@ -53,6 +53,7 @@ Options:
                     a Fast DDS discovery server; repeat in id order (telegrasp-server --help)
   --group NAME      experienced | inexperienced (default experienced)
   --skills FILE     skill profiles overriding the built-in ones (see telegrasp-eval protocol --help)
+  --rig FILE        the server's right-hand rig, for planning (default: built-in human_right)
   --participant P   participant number, 1-based (default 1)
   --seed S          the run's seed (default 1)
   --mode M          the server's closing mode, written into the records (default precise)
@@ -77,7 +78,7 @@ struct Options {
   std::string scene;  // "": $TELEGRASP_SCENE, else default
   std::vector<std::string> discovery_servers;
   std::string profile = "loopback", profiles_file, group = "experienced", mode = "precise", objects_dir, json_path,
-              skills_path;
+              skills_path, rig_path;
   std::vector<sim::OperatorSkill> skills;  // from --skills
   std::uint64_t seed = 1;
   double timeout_s = 20;
@@ -120,6 +121,10 @@ Options parse(int argc, char** argv) {
       o.json_path = value();
     else if (a == "--timeout")
       o.timeout_s = cli::parse_number(a, value(), 0.1, 86400, usage_error);
+    else if (a == "--skills")
+      o.skills_path = value();
+    else if (a == "--rig")
+      o.rig_path = value();
     else
       return false;
     return true;
@@ -135,7 +140,8 @@ class Participant {
       : opt_(opt),
         client_(c),
         models_(std::move(models)),
-        rig_(std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")))),
+        rig_(std::make_shared<const sim::HandRig>(
+            sim::HandRig::load(opt.rig_path.empty() ? sim::HandRig::builtin_path("human_right") : opt.rig_path))),
         skill_(participant_skill(opt.group, opt.seed, opt.participant, &opt.skills)) {
     const auto& order = paper_object_order();
     objects_.assign(order.begin(),

@@ -96,6 +96,8 @@ Options:
   --record DIR           each server records its run (telegrasp-server --record) to
                          DIR/<mode>-p<participant>.tgrec, for telegrasp-replay
   --keep-logs DIR        keep each server's and participant's log and records in DIR
+  --rig FILE             the right-hand rig of the servers and the participants' planning
+                         (default: built-in human_right; e.g. sim/rigs/human_right_opposable.textproto)
   --skills FILE          skill profiles overriding the built-in ones: "[experienced]" then
                          "key = value" lines (OperatorSkill's fields, orientation_error_deg in
                          degrees; see README, "Calibration")
@@ -116,7 +118,8 @@ struct Options {
   int experienced = 4, inexperienced = 6, count = 30, jobs = 2, domain = -1;
   std::vector<std::string> modes{sim::closing_mode_name(sim::ClosingMode::kPrecise)};  // names, as records write them
   std::string objects_dir, json_path, csv_path, report_path, questionnaire_path, profile = "loopback", profiles_file,
-                                                                                 logs_dir, record_dir, skills_path;
+                                                                                 logs_dir, record_dir, skills_path,
+                                                                                 rig_path;
   std::uint64_t seed = 1;
   bool in_process = false;
   std::vector<sim::OperatorSkill> skills;  // from --skills
@@ -179,6 +182,8 @@ Options parse(int argc, char** argv) {
       o.record_dir = value();
     else if (a == "--skills")
       o.skills_path = value();
+    else if (a == "--rig")
+      o.rig_path = value();
     else if (a == "--in-process")
       o.in_process = true;
     else
@@ -279,8 +284,8 @@ std::optional<ReportInputs> load_report_inputs(const Options& opt) {
       for (const auto& r : in.questionnaire->rejected) std::cerr << kTool << ": --questionnaire: " << r.message << "\n";
     }
     in.paper = load_paper_rows();
-    in.pictures.rig =
-        std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")));
+    in.pictures.rig = std::make_shared<const sim::HandRig>(
+        sim::HandRig::load(opt.rig_path.empty() ? sim::HandRig::builtin_path("human_right") : opt.rig_path));
   } catch (const std::exception& e) {
     std::cerr << kTool << ": " << e.what() << "\n";
     return std::nullopt;
@@ -382,6 +387,12 @@ void start_job(Job& j, int slot, const Options& opt, const Setup& setup) {
   if (!opt.profiles_file.empty())
     for (const char* a : {"--profiles", opt.profiles_file.c_str()}) server.push_back(a), bot.push_back(a);
   if (!opt.skills_path.empty()) bot.insert(bot.end(), {"--skills", opt.skills_path});
+  if (!opt.rig_path.empty()) {  // the servers' right hand, by a configuration file
+    const fs::path config = setup.work / (name + ".config.textproto");
+    std::ofstream(config) << "right_rig: \"" << fs::absolute(opt.rig_path).string() << "\"\n";
+    server.insert(server.end(), {"--config", config.string()});
+    bot.insert(bot.end(), {"--rig", opt.rig_path});
+  }
   if (!opt.record_dir.empty())
     server.insert(server.end(), {"--record", (fs::path(opt.record_dir) / (name + ".tgrec")).string()});
   j.server.start(server, (setup.work / (name + ".server.log")).string());

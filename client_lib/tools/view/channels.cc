@@ -50,6 +50,7 @@ Json grasp_state_schema() {
               {"epsilon", number()},
               {"volume", number()},
               {"force_closure", boolean()},
+              {"grasp_type", string()},
               {"phalanges", array_of(object("telegrasp.PhalanxState", {{"name", string()}, {"blocked", boolean()}}))}});
   s["description"] = "A hand's grasp state, sent when it changes (GraspState topic); -1: no object";
   return s;
@@ -89,6 +90,7 @@ Json grasp_event_schema() {
               {"epsilon", number()},
               {"volume", number()},
               {"force_closure", boolean()},
+              {"grasp_type", string()},
               {"capsules", array_of(capsule_schema())},
               {"contacts", array_of(object("telegrasp.ContactPoint", {{"phalanx", integer()},
                                                                       {"p_WorldContact_m", vec3()},

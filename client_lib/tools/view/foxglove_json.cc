@@ -163,6 +163,7 @@ Json grasp_state_message(const client::GraspState& s, const std::vector<std::str
               {"epsilon", s.epsilon},
               {"volume", s.volume},
               {"force_closure", s.force_closure},
+              {"grasp_type", s.grasp_type},
               {"phalanges", std::move(phalanges)}};
 }
 

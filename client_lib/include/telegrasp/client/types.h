@@ -70,6 +70,7 @@ struct GraspState {
   double epsilon = 0;  ///< Held grasp's Ferrari-Canny epsilon (GRASPING.md section 4b); 0 when not holding.
   double volume = 0;  ///< Held grasp's wrench-space volume.
   bool force_closure = false;  ///< epsilon > 0.
+  std::string grasp_type;  ///< How the hand closes ("other" for a rig that lists no grasp types).
 };
 
 struct ContactPoint {
@@ -126,6 +127,7 @@ struct GraspEvent {
   bool force_closure = false;  ///< Grasp events: epsilon > 0.
   Eigen::Vector3d v_WorldObject{0, 0, 0};  ///< Release events: velocity handed to physics.
   Eigen::Vector3d w_WorldObject{0, 0, 0};
+  std::string grasp_type;  ///< Grasp events: the hand's grasp type (GraspState::grasp_type).
   /// Not on the wire: the incarnation of the server run that sent it, as the client library knows
   /// it (Client::server_incarnation() of its sender; 0 if none was known yet).
   std::uint64_t server_incarnation = 0;

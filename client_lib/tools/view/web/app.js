@@ -148,6 +148,7 @@ function drawDetail() {
     <tr><th>grasped</th><td>${s ? escape(objectName(s.grasped_object)) : "-"}</td></tr>
     <tr><th>trigger</th><td>${s ? s.trigger.toFixed(2) : "-"}</td></tr>
     <tr><th>palm contact</th><td>${s ? (s.palm_contact ? "yes" : "no") : "-"}</td></tr>
+    <tr><th>grasp type</th><td>${s && s.grasp_type ? escape(s.grasp_type.replace("_", " ")) : "-"}</td></tr>
     <tr><th>last grasp</th><td>${g ? `${escape(g.object_name)} at ${g.time_s.toFixed(2)} s` : "none yet"}</td></tr>
     <tr><th>HandError</th><td>${g ? `${mm(g.hand_error_mm)} mm` : "n/a"}</td></tr>
     <tr><th>epsilon</th><td>${g && g.epsilon !== undefined && g.epsilon !== null ? g.epsilon.toFixed(4) : "n/a"}</td></tr>
