@@ -27,29 +27,30 @@ constexpr int kJobs = 2;  // telegrasp-eval runs job k on domain --domain + k
 
 // Runs a short protocol (3 objects, 1 experienced + 1 inexperienced participant, both modes)
 // on kJobs domains leased for it; returns the exit code.
-int run_protocol(const std::string& name) {
+int run_protocol(const std::string& name, const std::vector<std::string>& extra = {}) {
   const DomainLease lease(kJobs);
-  ChildProcess eval({bin("telegrasp-eval"),
-                     "protocol",
-                     "--participants",
-                     "1,1",
-                     "--count",
-                     "3",
-                     "--mode",
-                     "both",
-                     "--jobs",
-                     std::to_string(kJobs),
-                     "--seed",
-                     "5",
-                     "--domain",
-                     std::to_string(lease.domain()),
-                     "--json",
-                     work_path(name + ".json"),
-                     "--csv",
-                     work_path(name + ".csv"),
-                     "--report",
-                     work_path(name + ".html")},
-                    work_path(name + ".log"));
+  std::vector<std::string> args = {bin("telegrasp-eval"),
+                                   "protocol",
+                                   "--participants",
+                                   "1,1",
+                                   "--count",
+                                   "3",
+                                   "--mode",
+                                   "both",
+                                   "--jobs",
+                                   std::to_string(kJobs),
+                                   "--seed",
+                                   "5",
+                                   "--domain",
+                                   std::to_string(lease.domain()),
+                                   "--json",
+                                   work_path(name + ".json"),
+                                   "--csv",
+                                   work_path(name + ".csv"),
+                                   "--report",
+                                   work_path(name + ".html")};
+  args.insert(args.end(), extra.begin(), extra.end());
+  ChildProcess eval(args, work_path(name + ".log"));
   return eval.wait(300s);  // a guard against hangs
 }
 
@@ -114,6 +115,30 @@ TEST(ProtocolRun, OneRecordPerObjectPerParticipantAndMode_Repeatable) {
     return out;
   };
   EXPECT_EQ(by_key(a), by_key(b));
+}
+
+// --rig: the servers' right hand and the participants' planning take the rig given; its grasp
+// types reach the records over DDS (the lemon is a sphere: power sphere or tripod; the boxes
+// prismatic), where the built-in human_right's grasps are all "other".
+TEST(ProtocolRun, ARigGivenByRigDrivesTheServersAndReachesTheRecords) {
+  // The build's copy of the shipped rigs lies beside its bin folder.
+  const std::string rig = (std::filesystem::path(bin("telegrasp-eval")).parent_path().parent_path() /
+                           "share/telegrasp/rigs/human_right_opposable.textproto")
+                              .string();
+  ASSERT_EQ(run_protocol("protocol_rig", {"--rig", rig, "--participants", "1,0", "--mode", "precise"}), 0)
+      << "see " << work_path("protocol_rig.log");
+  const json run = read_json(work_path("protocol_rig.json"));
+  std::map<std::string, std::string> types;
+  for (const json& g : run["grasps"])
+    if (g["grasped"].get<bool>()) types[g["object"]] = g["grasp_tick"]["grasp_type"];
+  ASSERT_FALSE(types.empty());
+  for (const auto& [object, type] : types) {
+    if (object == "014_lemon") {
+      EXPECT_TRUE(type == "power_sphere" || type == "tripod") << type;
+    } else {
+      EXPECT_EQ(type, "prismatic") << object;
+    }
+  }
 }
 
 }  // namespace
