@@ -539,7 +539,8 @@ std::string pictures_section(const ExperimentRun& run, const PageData& d, const 
       grasp_nd_abs_mean(*r, &hits);
       o << sim::render_view_svg(*snap, view) << "<figcaption><b>" << esc(object) << "</b>"
         << (standin ? " (stand-in)" : "") << "<br>" << esc(mode_name(r->mode)) << ", " << esc(r->group)
-        << " participant " << r->participant << ", " << (r->held_after_lift ? "held" : "grasped, not held") << "; "
+        << " participant " << r->participant << ", " << (r->held_after_lift ? "held" : "grasped, not held")
+        << (r->grasp_type.empty() || r->grasp_type == "other" ? "" : ", " + esc(r->grasp_type)) << "; "
         << fmt(r->time_to_grasp_s) << " s; HandError "
         << (hits ? fmt(r->grasp_tick_hand_error_mm) + " mm" : std::string(kNoData)) << "<br>" << r->contacts.size()
         << " contact(s), " << blocked << " of " << snap->capsules.size() << " capsules blocked<br>view from "
@@ -625,6 +626,38 @@ std::string force_closure_section(const ExperimentRun& run, const PageData& d) {
         body << "<td>" << cell(aggregate(select(run, mode, group, object))) << "</td>";
     body << "</tr>\n";
   }
+  body << "</table>\n";
+  return body.str();
+}
+
+// Per grasp type (a rig that lists types; nothing otherwise): how often each was used, held,
+// in force closure, how squarely the thumb opposed, and ND, per mode.
+std::string grasp_types_section(const ExperimentRun& run, const PageData& d) {
+  std::map<std::pair<std::string, std::string>, std::vector<const Record*>> by;  // (mode, type)
+  bool typed = false;
+  for (const Record& r : run.records) {
+    if (!r.grasped || r.grasp_type.empty()) continue;
+    by[{r.mode, r.grasp_type}].push_back(&r);
+    typed |= r.grasp_type != "other";
+  }
+  if (!typed) return "";
+  std::ostringstream body;
+  body << "<h2 id=\"grasp-types\">Grasp types</h2>\n<p>The type each grasp closed with (chosen from the object's "
+          "shape class, its width across the hand and the hand's pose; \"other\": the rig's own closing), at the "
+          "grasp tick: opposition is the angle between the thumb's mean contact normal and the other fingers' "
+          "(180&deg;: straight across).</p>\n<table class=\"numbers\"><tr><th>mode</th><th>grasp type</th>"
+          "<th>grasps</th><th>held after lift</th><th>in force closure</th><th>opposition median (&deg;)</th>"
+          "<th>mean |ND| at mid-length (mm)</th></tr>\n";
+  for (const std::string& mode : d.modes)
+    for (const auto& [key, records] : by) {
+      if (key.first != mode) continue;
+      const nlohmann::json sum = summarize(records);
+      auto num = [&](const char* k) { return sum.contains(k) && !sum[k].is_null() ? sum[k].get<double>() : NAN; };
+      body << "<tr><td>" << esc(mode_name(mode)) << "</td><td>" << esc(key.second) << "</td><td>"
+           << sum["grasped"].get<int>() << "</td><td>" << sum["held_after_lift"].get<int>() << "</td><td>"
+           << fmt(100.0 * num("force_closure_share"), 0) << " %</td><td>" << fmt(num("opposition_median_deg"), 0)
+           << "</td><td>" << fmt(num("nd_abs_mean_mm"), 3) << "</td></tr>\n";
+    }
   body << "</table>\n";
   return body.str();
 }
@@ -744,6 +777,7 @@ std::string html_report(const ExperimentRun& run, const std::vector<PaperRow>& p
   body += overall_section(run, d);
   body += fidelity_section(run, d);
   body += force_closure_section(run, d);
+  body += grasp_types_section(run, d);
   if (pictures) body += pictures_section(run, d, *pictures);
   body += mode_charts_section(d);
   body += paper_section(paper, d);

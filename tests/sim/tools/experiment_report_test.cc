@@ -214,6 +214,25 @@ TEST(ExperimentReportTest, AggregatesHaveTheFidelityAndForceClosureFigures) {
   EXPECT_NE(html.find("mid-length (nd_midlength"), std::string::npos);
 }
 
+// A run whose rig has grasp types gets a table per type (grasps, held, force closure, median
+// opposition, mean |ND|) and each picture's caption names the type; a run of "other" only has none.
+TEST(ExperimentReportTest, GraspTypesGetTheirOwnTable) {
+  ExperimentRun run = handmade_run();
+  EXPECT_EQ(html_report(run, {}, nullptr, nullptr).find("id=\"grasp-types\""), std::string::npos);
+  int n = 0;
+  for (Record& r : run.records) {
+    r.grasp_type = n++ % 2 ? "power_sphere" : "other";
+    r.opposition_deg = r.grasp_type == "other" ? 100.0 : 150.0;
+  }
+  const std::string html = html_report(run, {}, nullptr, nullptr);
+  ASSERT_NE(html.find("id=\"grasp-types\""), std::string::npos);
+  const std::string table = html.substr(html.find("id=\"grasp-types\""));
+  EXPECT_NE(table.find("<td>power_sphere</td>"), std::string::npos);
+  EXPECT_NE(table.find("<td>150</td>"), std::string::npos) << "the power sphere grasps' median opposition";
+  for (Record& r : run.records) r.grasp_type = "other";
+  EXPECT_EQ(html_report(run, {}, nullptr, nullptr).find("id=\"grasp-types\""), std::string::npos);
+}
+
 TEST(ExperimentReportTest, CsvHasOneRowPerGraspAndPerModeGroupObject) {
   const ExperimentRun run = handmade_run();
   const auto dir = std::filesystem::temp_directory_path() / ("telegrasp_report_test_" + std::to_string(::getpid()));
@@ -562,8 +581,14 @@ TEST(GraspRecordJsonTest, RoundTrips) {
   r.grasp_tick_hand = {
       {"palm", Eigen::Translation3d(0.01, 0.02, 0.06) * Eigen::AngleAxisd(-2.0, Eigen::Vector3d(1, 1, 0).normalized())},
       {"index_dist", Eigen::Isometry3d(Eigen::Translation3d(0.03, 0.0, 0.01))}};
+  r.grasp_type = "tripod";
+  r.opposition_deg = 152.5;
+  r.across_smallest = true;
   const Record back = record_from_json(record_json(r));
   EXPECT_EQ(record_json(back), record_json(r));
+  EXPECT_EQ(back.grasp_type, "tripod");
+  EXPECT_EQ(back.opposition_deg, 152.5);
+  EXPECT_EQ(back.across_smallest, true);
   EXPECT_EQ(back.capsules.at(0).nd_contact_mm, 0.02);
   EXPECT_EQ(back.figures.epsilon, 0.125);
   EXPECT_EQ(back.grasp_tick_figures.palm_signed_distance_mm, 0.5);
