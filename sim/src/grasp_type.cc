@@ -30,6 +30,10 @@ double box_width_along(const ObjectShape& shape, const Eigen::Vector3d& d_Object
   return 2 * w;
 }
 
+bool closes_across_shortest_side(const ObjectShape& shape, const Eigen::Isometry3d& X_ObjectPalm) {
+  return std::abs(shape.X_ObjectBox.linear().col(0).dot(X_ObjectPalm.linear().col(0))) >= std::sqrt(0.5);
+}
+
 GraspType choose_grasp_type(const ObjectShape& shape, const Eigen::Isometry3d& X_ObjectPalm,
                             const GraspTypeRules& rules) {
   const Eigen::Vector3d across = X_ObjectPalm.linear().col(0);  // palm +x, the thumb-to-fingers line

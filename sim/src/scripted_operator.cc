@@ -427,8 +427,7 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
                    (t.opposed ? 1e5 : 0) + (t.penetrating ? 0 : 5e4) + (t.below_table ? 0 : 1e4) +
                    100.0 * t.blocked - t.metrics.hand_error_mm;
     if (typed) {  // across the smallest side, then in force closure, before opposed contacts
-      const Eigen::Vector3d across = (X_WorldObject.inverse() * plan.X_WorldPalm).linear().col(0);
-      if (std::abs(model.shape.X_ObjectBox.linear().col(0).dot(across)) >= std::sqrt(0.5)) score += 1.5e5;
+      if (closes_across_shortest_side(model.shape, X_WorldObject.inverse() * plan.X_WorldPalm)) score += 1.5e5;
       if (const auto job = t.hand.quality_inputs();
           job && grasp_quality(job->contacts, job->mu, job->torque_scale).force_closure)
         score += 1.2e5;

@@ -53,6 +53,17 @@ TEST(GraspTypeTest, BoxWidthIsTheSupportWidth) {
               1e-15);
 }
 
+// Across the shortest side: the palm's +x within 45 degrees of the box's x axis, either sign.
+TEST(GraspTypeTest, ClosingAcrossTheShortestSide) {
+  const ObjectShape s = shape(ShapeClass::kBox, {0.01, 0.02, 0.03});
+  const auto turned = [](double deg) { return palm(Eigen::AngleAxisd(deg * kPi / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix()); };
+  EXPECT_TRUE(closes_across_shortest_side(s, turned(0)));
+  EXPECT_TRUE(closes_across_shortest_side(s, turned(44)));
+  EXPECT_FALSE(closes_across_shortest_side(s, turned(46)));
+  EXPECT_TRUE(closes_across_shortest_side(s, turned(180)));
+  EXPECT_FALSE(closes_across_shortest_side(s, turned(90)));
+}
+
 // Miller's rules with Feix's widths: balls by their width, cylinders by diameter and whether the
 // palm faces their end, boxes, thin objects, anything else.
 TEST(GraspTypeTest, ChoiceFollowsShapeWidthAndPose) {

@@ -211,7 +211,7 @@ Trial run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRig
       rec.grasp_type = grasp_type_name(e.grasp_type);
       rec.opposition_deg = telegrasp::report::opposition_deg(e.contacts, *rig);
       rec.across_smallest =
-          telegrasp::report::closes_across_smallest(model->shape, world.hand(hand).state().X_PalmObject.inverse());
+          closes_across_shortest_side(model->shape, world.hand(hand).state().X_PalmObject.inverse());
     }
   }
   if (held) {

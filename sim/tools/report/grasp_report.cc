@@ -38,10 +38,6 @@ double opposition_deg(const std::vector<sim::Contact>& contacts, const sim::Hand
   return std::acos(cos) * 180.0 / std::numbers::pi;
 }
 
-bool closes_across_smallest(const sim::ObjectShape& shape, const Eigen::Isometry3d& X_ObjectPalm) {
-  return std::abs(shape.X_ObjectBox.linear().col(0).dot(X_ObjectPalm.linear().col(0))) >= std::sqrt(0.5);
-}
-
 GraspFigures grasp_figures(const sim::GraspMetrics& m) {
   return {1000 * m.palm_signed_distance, m.quality.epsilon, m.quality.volume, m.quality.force_closure};
 }

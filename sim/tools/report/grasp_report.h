@@ -73,7 +73,7 @@ struct Record {
   std::string grasp_type;
   /// Grasp tick: opposition_deg() of its contacts; NaN without (not written).
   double opposition_deg = std::numeric_limits<double>::quiet_NaN();
-  /// Grasp tick: closes_across_smallest(); unknown: not written.
+  /// Grasp tick: sim::closes_across_shortest_side(); unknown: not written.
   std::optional<bool> across_smallest;
 };
 
@@ -82,10 +82,6 @@ struct Record {
 /// straight against the fingers. NaN when the thumb or the other fingers touch nothing, or the
 /// rig has no thumb.
 double opposition_deg(const std::vector<sim::Contact>& contacts, const sim::HandRig& rig);
-
-/// Whether the hand closes across the object's shortest side: the palm's +x (from the thumb to
-/// the fingers) within 45 degrees of the shortest side of the object's box (sim::ObjectShape).
-bool closes_across_smallest(const sim::ObjectShape& shape, const Eigen::Isometry3d& X_ObjectPalm);
 
 /// Prints one row per grasp type among `records` that have one: grasps, held after lift, force
 /// closure share, median opposition, mean |ND| at mid-length, closing across the shortest side.

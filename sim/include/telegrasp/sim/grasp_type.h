@@ -42,6 +42,10 @@ struct GraspTypeRules {
 /// Width of `shape`'s box along the unit direction `d` (object frame): 2 sum_i h_i |b_i . d|.
 double box_width_along(const ObjectShape& shape, const Eigen::Vector3d& d_Object);
 
+/// Whether a hand at X_ObjectPalm closes across the object's shortest side: its +x (from the
+/// thumb to the fingers) within 45 degrees of the shortest side of `shape`'s box.
+bool closes_across_shortest_side(const ObjectShape& shape, const Eigen::Isometry3d& X_ObjectPalm);
+
 /// The grasp type for a hand at X_ObjectPalm (palm frame: +x to the fingers, -z the palm normal)
 /// about to close on an object of `shape`: sphere -> tripod or power sphere by its width across
 /// the palm (along palm x); cylinder -> disk when its axis is near the palm normal, else a small,
