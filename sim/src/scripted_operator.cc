@@ -8,8 +8,10 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 namespace telegrasp::sim {
 namespace {
@@ -413,27 +415,30 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
     }
 
   GraspPlan best = candidates.front();
-  double best_score = -1e300;
+  std::optional<std::tuple<bool, bool, bool, bool, double>> best_key;
   for (GraspPlan& plan : candidates) {
     const OfflineClosing t = close_offline(rig, planning, model, X_WorldObject, plan.X_WorldPalm, dt, table_height);
     plan.predicted_grasp = t.grasped && !t.penetrating;
     plan.predicted_blocked = t.blocked;
     // A clean grasp first (no capsule in the object), then one the hand can reach (the resolved
     // pose keeps the hand out of the table: a plan whose open hand lies under the table top is
-    // held off and misses), then opposing contacts (a pinch or wrap rather than a press), then
-    // clear of the table at the end of the close, then the most capsules in contact, then the
-    // smallest HandError.
-    double score = (plan.predicted_grasp ? 1e6 : 0) + (t.open_table_depth < kReachableTableDepth ? 2e5 : 0) +
-                   (t.opposed ? 1e5 : 0) + (t.penetrating ? 0 : 5e4) + (t.below_table ? 0 : 1e4) +
-                   100.0 * t.blocked - t.metrics.hand_error_mm;
-    if (typed) {  // across the smallest side, then in force closure, before opposed contacts
-      if (closes_across_shortest_side(model.shape, X_WorldObject.inverse() * plan.X_WorldPalm)) score += 1.5e5;
-      if (const auto job = t.hand.quality_inputs();
-          job && grasp_quality(job->contacts, job->mu, job->torque_scale).force_closure)
-        score += 1.2e5;
+    // held off and misses), then (a rig with types) across the shortest side, then in force
+    // closure, then opposing contacts (a pinch or wrap rather than a press), then clear of the
+    // table at the end of the close, then the most capsules in contact, then the smallest
+    // HandError. The score's weights order its own terms; the key puts the typed ones above it.
+    const bool reachable = t.open_table_depth < kReachableTableDepth;
+    const double score = (plan.predicted_grasp ? 1e6 : 0) + (reachable ? 2e5 : 0) + (t.opposed ? 1e5 : 0) +
+                         (t.penetrating ? 0 : 5e4) + (t.below_table ? 0 : 1e4) + 100.0 * t.blocked -
+                         t.metrics.hand_error_mm;
+    bool across = false, closure = false;
+    if (typed) {
+      across = closes_across_shortest_side(model.shape, X_WorldObject.inverse() * plan.X_WorldPalm);
+      const auto job = t.hand.quality_inputs();
+      closure = job && grasp_quality(job->contacts, job->mu, job->torque_scale).force_closure;
     }
-    if (score > best_score) {
-      best_score = score;
+    const auto key = std::make_tuple(plan.predicted_grasp, reachable, across, closure, score);
+    if (!best_key || key > *best_key) {
+      best_key = key;
       best = plan;
     }
   }
