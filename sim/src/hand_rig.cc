@@ -59,6 +59,14 @@ PalmSphere to_sphere(const proto::Sphere& s, const std::string& source, const st
   return out;
 }
 
+// A joint's part of the closing input (Joint.closes_from/closes_until, or a grasp type's).
+void check_closing_range(const std::string& source, const std::string& field, double from, double until) {
+  if (!(from >= 0 && from < until && until <= 1))
+    fail(source, field + ".closes_from/closes_until",
+         "must satisfy 0 <= closes_from < closes_until <= 1 (got " + std::to_string(from) + " and " +
+             std::to_string(until) + ")");
+}
+
 // The groups of a grasp rule, each member a phalanx of `rig` with a capsule, or "palm".
 template <typename Groups>
 std::vector<std::vector<GraspTerm>> parse_rule(const HandRig& rig, const Groups& groups, const std::string& source,
@@ -171,10 +179,7 @@ HandRig HandRig::parse(const std::string& text, const std::string& source) {
       spec.max_speed = (j.max_speed_deg_s() > 0 ? j.max_speed_deg_s() : default_speed) * kDeg;
       spec.closes_from = j.has_closes_from() ? j.closes_from() : 0.0;
       spec.closes_until = j.has_closes_until() ? j.closes_until() : 1.0;
-      if (!(spec.closes_from >= 0 && spec.closes_from < spec.closes_until && spec.closes_until <= 1))
-        fail(source, field + ".joint.closes_from/closes_until",
-             "must satisfy 0 <= closes_from < closes_until <= 1 (got " + std::to_string(spec.closes_from) + " and " +
-                 std::to_string(spec.closes_until) + ")");
+      check_closing_range(source, field + ".joint", spec.closes_from, spec.closes_until);
       spec.length = ph.length();
       if (!(spec.length >= 0) || !std::isfinite(spec.length))
         fail(source, field + ".length", "must be >= 0 (0: one more axis of the next phalanx's joint)");
@@ -228,8 +233,7 @@ HandRig HandRig::parse(const std::string& text, const std::string& source) {
           fail(source, jfield + "." + n,
                "must lie within the joint's [min_deg, max_deg] = [" + std::to_string(spec.min / kDeg) + ", " +
                    std::to_string(spec.max / kDeg) + "]");
-      if (!(c.closes_from >= 0 && c.closes_from < c.closes_until && c.closes_until <= 1))
-        fail(source, jfield + ".closes_from/closes_until", "must satisfy 0 <= closes_from < closes_until <= 1");
+      check_closing_range(source, jfield, c.closes_from, c.closes_until);
     }
     if (!type_msg.grasp_rule().empty())
       closing.grasp_rule = parse_rule(rig, type_msg.grasp_rule(), source, tfield + ".grasp_rule");

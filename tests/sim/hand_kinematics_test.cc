@@ -5,20 +5,24 @@
 
 #include <cmath>
 #include <numbers>
+#include <string>
 
 namespace telegrasp::sim {
 namespace {
 
 constexpr double kExact = 1e-12;
 
-// A planar two-phalanx finger on the palm at (0.04, 0.01, 0), flexing about +y.
-constexpr const char* kTwoLinkRig = R"(
-name: "two_link"
+// What every test rig here has besides its finger.
+constexpr const char* kPalm = R"(
 palm_selection_sphere { radius: 0.1 }
 palm_contact_volume { radius: 0.01 }
 palm_half_extent { x: 0.04 y: 0.04 z: 0.01 }
 default_max_speed_deg_s: 90
 nd_sweep_beyond: 0.01
+)";
+
+// A planar two-phalanx finger on the palm at (0.04, 0.01, 0), flexing about +y.
+const std::string kTwoLinkRig = std::string("name: \"two_link\"") + kPalm + R"(
 fingers {
   name: "f"
   phalanges { name: "f_mid" rest { translation { x: 0.04 y: 0.01 } }
@@ -74,13 +78,7 @@ TEST(HandKinematicsTest, TargetAngleFollowsTheJointsPartOfTheInput) {
 // A joint with two axes: a phalanx of length 0 turning about z, then one flexing about its y.
 // The tip of the second is at R_z(a) R_y(b) (0.03, 0, 0) from the joint.
 TEST(HandKinematicsTest, ZeroLengthPhalanxIsAnotherAxisOfTheSameJoint) {
-  const HandRig rig = HandRig::parse(R"(
-name: "two_axis"
-palm_selection_sphere { radius: 0.1 }
-palm_contact_volume { radius: 0.01 }
-palm_half_extent { x: 0.04 y: 0.04 z: 0.01 }
-default_max_speed_deg_s: 90
-nd_sweep_beyond: 0.01
+  const HandRig rig = HandRig::parse(std::string("name: \"two_axis\"") + kPalm + R"(
 fingers {
   name: "f"
   phalanges { name: "f_abd" rest { translation { x: 0.04 y: 0.01 } }
