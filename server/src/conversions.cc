@@ -125,10 +125,26 @@ msg::ContactSet make_contact_set(const HandAddress& address, const sim::HandCont
   return m;
 }
 
-void set_quality(msg::GraspEvent& m, const sim::GraspQuality& q) {
-  m.epsilon(q.epsilon);
-  m.volume(q.volume);
-  m.force_closure(q.force_closure);
+void set_metrics(msg::GraspEvent& m, const sim::GraspMetrics& metrics, const sim::HandRig& rig) {
+  m.hand_error_mm(metrics.hand_error_mm);
+  m.capsules_without_hit(metrics.capsules_without_hit);
+  m.capsules().clear();
+  for (const sim::CapsuleMetric& c : metrics.capsules) {
+    msg::CapsuleReport r;
+    r.phalanx(static_cast<std::int16_t>(c.phalanx.value));
+    r.phalanx_name(rig.phalanges()[c.phalanx.value].name);
+    r.hit(c.hit);
+    r.nd(c.nd);
+    r.signed_distance(c.signed_distance);
+    r.blocked(c.blocked);
+    r.contact_hit(c.contact_hit);
+    r.nd_contact(c.nd_contact);
+    m.capsules().push_back(std::move(r));
+  }
+  m.palm_signed_distance(metrics.palm_signed_distance);
+  m.epsilon(metrics.quality.epsilon);
+  m.volume(metrics.quality.volume);
+  m.force_closure(metrics.quality.force_closure);
 }
 
 msg::GraspEvent make_grasp_event(const sim::GraspEvent& e, const sim::HandRig& rig, const EventContext& ctx) {
@@ -144,24 +160,7 @@ msg::GraspEvent make_grasp_event(const sim::GraspEvent& e, const sim::HandRig& r
   m.object_spawn_time(ctx.object_spawn_time);
   m.object_pose(to_msg(ctx.X_WorldObject));
   m.input_sequence(ctx.input_sequence);
-  if (e.metrics) {
-    m.hand_error_mm(e.metrics->hand_error_mm);
-    m.capsules_without_hit(e.metrics->capsules_without_hit);
-    for (const sim::CapsuleMetric& c : e.metrics->capsules) {
-      msg::CapsuleReport r;
-      r.phalanx(static_cast<std::int16_t>(c.phalanx.value));
-      r.phalanx_name(rig.phalanges()[c.phalanx.value].name);
-      r.hit(c.hit);
-      r.nd(c.nd);
-      r.signed_distance(c.signed_distance);
-      r.blocked(c.blocked);
-      r.contact_hit(c.contact_hit);
-      r.nd_contact(c.nd_contact);
-      m.capsules().push_back(std::move(r));
-    }
-    m.palm_signed_distance(e.metrics->palm_signed_distance);
-    set_quality(m, e.metrics->quality);
-  }
+  if (e.metrics) set_metrics(m, *e.metrics, rig);
   for (const sim::Contact& c : e.contacts) m.contacts().push_back(to_msg(c));
   m.release_velocity(to_msg(e.v_WorldObject));
   m.release_angular_velocity(to_msg(e.w_WorldObject));

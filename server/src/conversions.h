@@ -72,8 +72,8 @@ struct EventContext {
   std::uint64_t input_sequence = 0;
 };
 msg::GraspEvent make_grasp_event(const sim::GraspEvent& event, const sim::HandRig& rig, const EventContext& context);
-/// A grasp event's epsilon, volume and force closure.
-void set_quality(msg::GraspEvent& message, const sim::GraspQuality& quality);
+/// A grasp event's metrics: hand error, capsules, palm signed distance, epsilon, volume, force closure.
+void set_metrics(msg::GraspEvent& message, const sim::GraspMetrics& metrics, const sim::HandRig& rig);
 
 /// A model's shape and mass as published on the ObjectGeometry topic: its mesh in the model frame
 /// (origin at the centre of mass) with vertices rounded to float32, the content hash of that

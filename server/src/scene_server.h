@@ -106,13 +106,15 @@ class SceneServer {
   void remove_hand(std::map<HandAddress, Hand>::iterator it);
   void remove_object(sim::ObjectId id);
   // Builds the GraspEvents of the World's last step and holds them quality_delay_ticks ticks,
-  // fills in each grasp's quality when the World delivers it, and publishes those due, in order.
+  // fills in each grasp's metrics and quality when the World delivers them, and publishes those
+  // due, in order.
   void publish_events();
   msg::SceneState scene_state() const;
 
   struct HeldEvent {
     std::uint64_t due_tick = 0;  // published on this tick
     std::uint64_t quality_job = 0;  // grasp events: sim::GraspEvent::quality_job
+    const sim::HandRig* rig = nullptr;  // the hand's
     msg::GraspEvent message;
   };
   std::deque<HeldEvent> held_events_;

@@ -644,9 +644,15 @@ void HandController::apply_grasp_rule(const ObjectView* object, const Eigen::Iso
     state_.grasped = object->id;
     state_.X_PalmObject = state_.X_WorldPalm.inverse() * object->X_WorldObject;
     held_model_ = object->model;
-    metrics_ = measure(*object);
-    hold_metrics_ = metrics_;
-    hold_metrics_key_ = shape_key();
+    grasp_view_ = *object;
+    if (defer_metrics_) {
+      metrics_.reset();
+      hold_metrics_key_.clear();
+    } else {
+      metrics_ = measure(*object);
+      hold_metrics_ = metrics_;
+      hold_metrics_key_ = shape_key();
+    }
     refresh_contacts();
     ++grasp_serial_;
     hold_quality_ = metrics_->quality = hold_metrics_->quality = kPendingQuality;
@@ -662,6 +668,7 @@ void HandController::apply_grasp_rule(const ObjectView* object, const Eigen::Iso
 
 HandTickEvents HandController::tick(const ControllerInput& raw_input, double dt, std::span<const ObjectView> objects) {
   HandTickEvents events;
+  grasp_view_.reset();
   if (!(dt > 0) || !std::isfinite(dt)) return events;  // no time passes
   // An invalid input (callers should have rejected it) keeps the hand as it was.
   ControllerInput fallback;
@@ -695,6 +702,7 @@ ObjectId HandController::release() {
   state_.selected = ObjectId();
   std::fill(state_.blocked.begin(), state_.blocked.end(), 0);
   metrics_.reset();
+  grasp_view_.reset();
   return released;
 }
 
@@ -714,7 +722,6 @@ std::optional<GraspMetrics> HandController::hold_metrics() const {
   if (hold_metrics_key_ != shape_key()) {
     hold_metrics_ = measure({state_.grasped, *X_WorldObject, held_model_});
     hold_metrics_key_ = shape_key();
-    if (contacts_key_ != shape_key()) refresh_contacts();  // its own hold_metrics() call finds these
     hold_metrics_->quality = hold_quality_;
   }
   return hold_metrics_;
@@ -791,6 +798,19 @@ NdContact nd_contact(const MeshDistance& mesh, const SegmentQuery& q, double rad
 
 }  // namespace
 
+HandController::NdSweep HandController::nd_midlength(PhalanxId id, const Eigen::Isometry3d& X_ObjectPalm,
+                                                     const ObjectModel& model) const {
+  const CapsuleSpec& cap = *rig_->phalanges()[id.value].capsule;
+  const Eigen::Isometry3d X_ObjectPhalanx = X_ObjectPalm * state_.X_PalmPhalanx[id.value];
+  const Eigen::Vector3d sp = X_ObjectPhalanx * cap.p_PhalanxSp;
+  const Eigen::Vector3d ctc = X_ObjectPhalanx * cap.p_PhalanxCTc;
+  const double length = (ctc - sp).norm();
+  const Eigen::Vector3d dir = (ctc - sp) / length;
+  const SweepHit hit = model.distance.sphere_cast(sp, dir, rig_->nd_sweep_radius(), length + rig_->nd_sweep_beyond());
+  // ND = ((Ip - Sp) . (CTc - Sp)) / |CTc - Sp| - |CTc - Sp|
+  return {hit.hit, hit.hit ? (hit.point - sp).dot(dir) - length : 0.0};
+}
+
 GraspMetrics HandController::measure(const ObjectView& object) const {
   GraspMetrics out;
   const ObjectModel& model = *object.model;
@@ -802,17 +822,13 @@ GraspMetrics HandController::measure(const ObjectView& object) const {
     const PhalanxSpec& spec = rig_->phalanges()[id.value];
     const CapsuleSpec& cap = *spec.capsule;
     const Eigen::Isometry3d X_ObjectPhalanx = X_ObjectPalm * state_.X_PalmPhalanx[id.value];
-    const Eigen::Vector3d sp = X_ObjectPhalanx * cap.p_PhalanxSp;
-    const Eigen::Vector3d ctc = X_ObjectPhalanx * cap.p_PhalanxCTc;
-    const double length = (ctc - sp).norm();
-    const Eigen::Vector3d dir = (ctc - sp) / length;
+    const double length = (X_ObjectPhalanx * cap.p_PhalanxCTc - X_ObjectPhalanx * cap.p_PhalanxSp).norm();
     CapsuleMetric m;
     m.phalanx = id;
     m.blocked = state_.blocked[id.value] != 0;
-    const SweepHit hit = model.distance.sphere_cast(sp, dir, rig_->nd_sweep_radius(), length + rig_->nd_sweep_beyond());
-    m.hit = hit.hit;
-    // ND = ((Ip - Sp) . (CTc - Sp)) / |CTc - Sp| - |CTc - Sp|
-    if (hit.hit) m.nd = (hit.point - sp).dot(dir) - length;
+    const NdSweep nd = nd_midlength(id, X_ObjectPalm, model);
+    m.hit = nd.hit;
+    m.nd = nd.nd;
     // Exact capsule signed distance. Outside the solid it is the gap to the closest point (for a
     // blocked capsule, touching, a bounded search finds it fast); only a capsule reaching into the
     // solid needs the full computation.
@@ -868,22 +884,24 @@ GraspMetrics HandController::measure(const ObjectView& object) const {
 
 void HandController::refresh_contacts() const {
   const ObjectModel& model = *held_model_;
-  const auto metrics = hold_metrics();  // first: it may refresh the contacts itself
   contacts_.clear();
   contacts_.reserve(rig_->capsule_phalanges().size() + 1);
   contacts_key_ = shape_key();
   const Eigen::Isometry3d X_ObjectPalm = state_.X_PalmObject.inverse();
+  // Each contact's ND is its capsule's, as measure() takes it (bit-identical to the grasp
+  // metrics' on the grasp tick, to hold_metrics()' later).
+  const Eigen::Isometry3d X_WorldObject = grasp_view_ ? grasp_view_->X_WorldObject : *grasped_object_pose();
+  const Eigen::Isometry3d X_ObjectPalm_nd = X_WorldObject.inverse() * state_.X_WorldPalm;
   auto add = [&](PhalanxId id, const Eigen::Vector3d& p_Object, const Eigen::Vector3d& n_Object) {
     Contact c;
     c.phalanx = id;
     c.p_ObjectContact = p_Object;
     c.n_Object = n_Object;
-    if (metrics && id.valid())
-      for (const CapsuleMetric& m : metrics->capsules)
-        if (m.phalanx == id) {
-          c.nd = m.nd;
-          c.nd_hit = m.hit;
-        }
+    if (id.valid()) {
+      const NdSweep nd = nd_midlength(id, X_ObjectPalm_nd, model);
+      c.nd = nd.nd;
+      c.nd_hit = nd.hit;
+    }
     contacts_.push_back(c);
   };
   for (PhalanxId id : rig_->capsule_phalanges()) {
@@ -925,6 +943,16 @@ std::optional<QualityJob> HandController::quality_inputs() const {
   job.torque_scale = held_model_->max_radius;
   job.volume = settings_.quality_volume;
   return job;
+}
+
+std::optional<GraspMetrics> HandController::grasp_tick_metrics() const {
+  if (!grasp_view_) return std::nullopt;
+  return measure(*grasp_view_);
+}
+
+void HandController::set_grasp_metrics(std::uint64_t grasp, GraspMetrics metrics) {
+  if (grasp != grasp_serial_ || !state_.grasped.valid()) return;
+  metrics_ = std::move(metrics);
 }
 
 void HandController::set_quality(std::uint64_t grasp, const GraspQuality& quality, bool grasp_tick) {

@@ -101,6 +101,8 @@ QualityResult QualityWorker::compute(QualityJob job) {
   }
   r.quality = memo.entries.front().quality;
   r.computed = memo.computed;
+  if (job.metrics) r.metrics = job.metrics();
+  job.metrics = nullptr;  // releases the copy of the hand
   job.contacts.clear();
   job.contacts.shrink_to_fit();
   r.job = std::move(job);

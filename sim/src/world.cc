@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cassert>
 #include <deque>
+#include <functional>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -87,6 +88,7 @@ struct World::Impl {
     std::vector<QualityContact> contacts;
   };
   std::map<int, Asked> quality_asked;
+  std::map<int, std::function<std::shared_ptr<GraspMetrics>()>> metrics_of;  // this step's grasps, by hand
   std::vector<QualityResult> quality_results;
   std::map<int, std::uint64_t> quality_computed;
   std::uint64_t next_job = 1;
@@ -181,7 +183,12 @@ struct World::Impl {
     o.shared.reset();
     make_kinematic(o, true);
     GraspEvent e = event(GraspEvent::Kind::kGrasp, hand_id, oid);
-    e.metrics = hand.grasp_metrics();
+    // The metrics come with the quality (ask_qualities): taken on the worker from a copy of the
+    // hand as it grasped, which keeps the object's model alive.
+    metrics_of[hand_id.value] = [snapshot = std::make_shared<const HandController>(hand), model = o.model] {
+      const std::optional<GraspMetrics> m = snapshot->grasp_tick_metrics();
+      return m ? std::make_shared<GraspMetrics>(*m) : nullptr;
+    };
     e.contacts = hand.contacts();
     e.grasp_type = hand.state().grasp_type;
     events.push_back(std::move(e));
@@ -194,7 +201,10 @@ struct World::Impl {
     for (auto& [h, hand_entry] : hands) {
       const HandController& hand = *hand_entry.controller;
       std::optional<QualityJob> job = hand.quality_inputs();
+      const auto metrics = metrics_of.find(h);
+      if (!job && metrics != metrics_of.end()) job.emplace();  // grasped and let go within the step
       if (!job) continue;
+      if (metrics != metrics_of.end()) job->metrics = std::move(metrics->second);
       Asked& asked = quality_asked[h];
       const bool new_grasp = asked.grasp != hand.grasp_serial();
       if (!new_grasp && same_contacts(asked.contacts, job->contacts)) continue;
@@ -210,6 +220,7 @@ struct World::Impl {
           if (e.kind == GraspEvent::Kind::kGrasp && e.hand == HandId(h)) e.quality_job = job->id;
       quality->submit(std::move(*job));
     }
+    metrics_of.clear();
     if (next_job > first) quality_due.emplace_back(now, next_job - 1);
   }
 
@@ -235,10 +246,14 @@ struct World::Impl {
       if (r.job.forget) continue;
       quality_computed[r.job.hand.value] = r.computed;
       auto it = hands.find(r.job.hand.value);
-      if (it != hands.end()) it->second.controller->set_quality(r.job.grasp, r.quality, r.job.grasp_tick);
+      if (it != hands.end()) {
+        if (r.metrics) it->second.controller->set_grasp_metrics(r.job.grasp, *r.metrics);
+        it->second.controller->set_quality(r.job.grasp, r.quality, r.job.grasp_tick);
+      }
+      if (r.metrics) r.metrics->quality = r.quality;
       if (r.job.grasp_tick)  // this step's own grasp event (quality_delay_ticks 0)
         for (GraspEvent& e : events)
-          if (e.quality_job == r.job.id && e.metrics) e.metrics->quality = r.quality;
+          if (e.quality_job == r.job.id && r.metrics) e.metrics = *r.metrics;
     }
   }
 
@@ -347,8 +362,9 @@ Eigen::Isometry3d World::resting_pose(const ObjectModel& model, double x, double
 
 HandId World::add_hand(std::shared_ptr<const HandRig> rig) {
   const HandId id(impl_->next_hand++);
-  impl_->hands.emplace(id.value,
-                       Impl::Hand{std::make_unique<HandController>(std::move(rig), impl_->settings.grasp), {}});
+  auto controller = std::make_unique<HandController>(std::move(rig), impl_->settings.grasp);
+  controller->defer_grasp_metrics();  // the QualityWorker takes them (Impl::on_grasp)
+  impl_->hands.emplace(id.value, Impl::Hand{std::move(controller), {}});
   return id;
 }
 

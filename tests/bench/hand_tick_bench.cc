@@ -1,10 +1,12 @@
 // BM_HandTick/<object>/{closing,grasp,holding}: one full simulation tick of one hand (selection,
 // interaction manager, finger movement, grasping logic, metrics and contacts) against a mesh:
 // closing = the ticks of the squeeze before the grasp (averaged), grasp = the one tick the grasp
-// rule turns true (metrics and contacts taken), holding = a tick while holding. Counters:
-// tick_us and the same figure named after the kind (closing_us, grasp_us, holding_us); the
-// grasp tick also has quality_us (the grasp's quality, which the World computes on its
-// QualityWorker thread, not in this tick: wrench_epsilon() of the grasp's contacts) and contacts.
+// rule turns true (contacts taken, and the copy of the hand the World's worker takes the grasp's
+// metrics from), holding = a tick while holding. Counters: tick_us and the same figure named
+// after the kind (closing_us, grasp_us, holding_us); the grasp tick also has the worker's share,
+// which the World computes on its QualityWorker thread, not in this tick: metrics_us (every
+// capsule's ND sweep and exact signed distance, the palm's: grasp_tick_metrics()) and quality_us
+// (wrench_epsilon() of the grasp's contacts), and contacts.
 // Two sets: "ycb", the meshes of $TELEGRASP_OBJECTS_DIR (default ../shared/data/ycb; the
 // built-in stand-ins when missing), and "unseen", generated stand-ins for meshes nobody tuned
 // for (tests/bench/unseen_meshes.h: those YCB meshes under random rotations, and procedural
@@ -103,32 +105,41 @@ void BM_Closing(benchmark::State& state, const std::string& name, const ModelMak
   state.counters["model_MB"] = static_cast<double>(f.model->memory_bytes()) / 1e6;
 }
 
-// The grasp tick alone: the rule turns true, metrics (ND sweeps, exact signed distances) and
-// contacts are computed. Each iteration copies the hand as it was one tick earlier (included).
+// The grasp tick alone, as a World's hand makes it: the rule turns true, the contacts are
+// taken and the hand is copied for the worker. Each iteration also copies the hand as it was
+// one tick earlier (included).
 void BM_GraspTick(benchmark::State& state, const std::string& name, const ModelMaker& make_model) {
   const Fixture& f = fixture(name, make_model);
   const ObjectView view{ObjectId(0), f.X_WorldObject, f.model.get()};
   HandController before(rig(), {});
+  before.defer_grasp_metrics();
   for (int t = 0; t < f.grasp_tick; ++t) before.tick(squeeze(f.plan, t), kDt, {&view, 1});
   bool grasped = false;
   for (auto _ : state) {
     HandController hand = before;
     grasped = hand.tick(squeeze(f.plan, f.grasp_tick), kDt, {&view, 1}).grasped;
-    benchmark::DoNotOptimize(hand.state().q.data());
+    benchmark::DoNotOptimize(hand.contacts().data());
+    benchmark::DoNotOptimize(std::make_shared<const HandController>(hand).get());
   }
   set_tick_counters(state, "grasp_us", 1);
   state.counters["grasped"] = grasped;
-  // The other path: the grasp's quality, which the World's QualityWorker computes off the
-  // simulation thread (no memo: a new grasp's contact set), timed here outside the loop.
+  // The other path: the grasp's metrics and quality, which the World's QualityWorker computes
+  // off the simulation thread (no memo: a new grasp's contact set), timed here outside the loop.
   HandController hand = before;
   hand.tick(squeeze(f.plan, f.grasp_tick), kDt, {&view, 1});
+  constexpr int kRepetitions = 20;
+  const auto per_repetition_us = [](auto&& run) {
+    const auto t0 = std::chrono::steady_clock::now();
+    for (int i = 0; i < kRepetitions; ++i) run();
+    return std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() / kRepetitions;
+  };
+  state.counters["metrics_us"] = per_repetition_us([&] {
+    const HandController copy = hand;  // a fresh copy each time: the worker's has no cached searches
+    benchmark::DoNotOptimize(copy.grasp_tick_metrics());
+  });
   if (const std::optional<QualityJob> job = hand.quality_inputs()) {
     const Wrenches w = contact_wrenches(job->contacts, job->mu, job->torque_scale);
-    constexpr int kRepetitions = 20;
-    const auto t0 = std::chrono::steady_clock::now();
-    for (int i = 0; i < kRepetitions; ++i) benchmark::DoNotOptimize(wrench_quality(w));
-    state.counters["quality_us"] =
-        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() / kRepetitions;
+    state.counters["quality_us"] = per_repetition_us([&] { benchmark::DoNotOptimize(wrench_quality(w)); });
     state.counters["contacts"] = static_cast<double>(job->contacts.size());
   }
 }

@@ -468,6 +468,54 @@ TEST(HandControllerTest, GraspsAndReleases) {
   EXPECT_FALSE(hand.state().grasped.valid());
 }
 
+// With defer_grasp_metrics() (as a World's hands run) the grasp tick takes no metrics; a copy of
+// the hand made after that tick takes them later, bit-identical to those an eager hand took on
+// the same tick, and the contacts (their ND included) are the same; set_grasp_metrics() delivers
+// them to this grasp only. After the next tick there is no grasp tick to measure.
+TEST(HandControllerTest, DeferredGraspMetricsEqualTheGraspTicksOwn) {
+  auto sphere = make_object_model("sphere", testing::uv_sphere_mesh(0.03, 90, 180), 1.0, "test");
+  const ObjectView view{ObjectId(3), Eigen::Isometry3d(Eigen::Translation3d(0.09, 0.004, -0.045)), sphere.get()};
+  HandController eager(finger_rig(), {}), deferred(finger_rig(), {});
+  deferred.defer_grasp_metrics();
+  bool grasped = false;
+  for (int t = 0; t < 120 && !grasped; ++t) {
+    grasped = eager.tick(at_identity(1.0), kDt, {&view, 1}).grasped;
+    ASSERT_EQ(deferred.tick(at_identity(1.0), kDt, {&view, 1}).grasped, grasped);
+  }
+  ASSERT_TRUE(grasped);
+  EXPECT_FALSE(deferred.grasp_metrics().has_value());
+  const HandController copy = deferred;
+  const std::optional<GraspMetrics> later = copy.grasp_tick_metrics();
+  ASSERT_TRUE(later.has_value());
+  const GraspMetrics& now = *eager.grasp_metrics();
+  EXPECT_EQ(later->hand_error_mm, now.hand_error_mm);
+  EXPECT_EQ(later->palm_signed_distance, now.palm_signed_distance);
+  ASSERT_EQ(later->capsules.size(), now.capsules.size());
+  for (std::size_t i = 0; i < now.capsules.size(); ++i) {
+    EXPECT_EQ(later->capsules[i].hit, now.capsules[i].hit) << i;
+    EXPECT_EQ(later->capsules[i].nd, now.capsules[i].nd) << i;
+    EXPECT_EQ(later->capsules[i].signed_distance, now.capsules[i].signed_distance) << i;
+    EXPECT_EQ(later->capsules[i].nd_contact, now.capsules[i].nd_contact) << i;
+  }
+  const std::vector<Contact> ce = eager.contacts(), cd = deferred.contacts();
+  ASSERT_EQ(ce.size(), cd.size());
+  ASSERT_FALSE(ce.empty());
+  for (std::size_t i = 0; i < ce.size(); ++i) {
+    EXPECT_EQ(ce[i].p_ObjectContact, cd[i].p_ObjectContact) << i;
+    EXPECT_EQ(ce[i].nd, cd[i].nd) << i;
+    EXPECT_EQ(ce[i].nd_hit, cd[i].nd_hit) << i;
+    for (const CapsuleMetric& m : now.capsules)  // each contact's ND is its capsule's
+      if (m.phalanx == cd[i].phalanx) EXPECT_EQ(cd[i].nd, m.nd) << i;
+  }
+  deferred.set_grasp_metrics(deferred.grasp_serial() + 1, *later);
+  EXPECT_FALSE(deferred.grasp_metrics().has_value());
+  deferred.set_grasp_metrics(deferred.grasp_serial(), *later);
+  ASSERT_TRUE(deferred.grasp_metrics().has_value());
+  EXPECT_EQ(deferred.grasp_metrics()->hand_error_mm, now.hand_error_mm);
+  deferred.tick(at_identity(1.0), kDt, {&view, 1});
+  EXPECT_FALSE(deferred.grasp_tick_metrics().has_value());
+}
+
 // Capsule `id`'s segment end points in the object frame, for the hand at X_ObjectPalm.
 std::pair<Eigen::Vector3d, Eigen::Vector3d> capsule_in(const HandController& hand, PhalanxId id,
                                                        const Eigen::Isometry3d& X_ObjectPalm) {

@@ -245,8 +245,9 @@ TEST(WorldTest, EqualInputsGiveBitIdenticalRuns) {
 }
 
 // Grasp qualities on a worker (quality_delay_ticks 2) are those computed within the step (0),
-// bit for bit, delivered exactly 2 steps later; grasp events of the delayed world carry the
-// pending quality, the result of their quality_job is the other world's event quality.
+// bit for bit, delivered exactly 2 steps later; grasp events of the delayed world come without
+// metrics, and the result of their quality_job carries the other world's event metrics and
+// quality, bit for bit.
 TEST(WorldTest, DelayedQualitiesAreTheSameQualitiesDeliveredKStepsLater) {
   WorldSettings inline_settings, delayed_settings;
   delayed_settings.quality_delay_ticks = 2;
@@ -259,7 +260,7 @@ TEST(WorldTest, DelayedQualitiesAreTheSameQualitiesDeliveredKStepsLater) {
   ScriptedOperator op(human_right(), skill_profile("experienced"), 3);
   op.begin(*ball, now.object_pose(ObjectId(0)), Eigen::Isometry3d(Eigen::Translation3d(0.15, -0.2, 0.3)), now.time());
   std::vector<QualityResult> from_now, from_later;
-  std::vector<GraspQuality> event_quality_now;
+  std::vector<GraspMetrics> event_metrics_now;
   std::vector<std::uint64_t> event_jobs_later;
   while (!op.done() && now.time() < 20) {
     const ControllerInput in = op.next(now.time(), now.holder(ObjectId(0)) == hand);
@@ -276,10 +277,10 @@ TEST(WorldTest, DelayedQualitiesAreTheSameQualitiesDeliveredKStepsLater) {
       from_later.push_back(r);
     }
     for (const GraspEvent& e : now.events())
-      if (e.kind == GraspEvent::Kind::kGrasp) event_quality_now.push_back(e.metrics->quality);
+      if (e.kind == GraspEvent::Kind::kGrasp) event_metrics_now.push_back(e.metrics.value());
     for (const GraspEvent& e : later.events())
       if (e.kind == GraspEvent::Kind::kGrasp) {
-        EXPECT_EQ(e.metrics->quality.epsilon, kPendingQuality.epsilon);
+        EXPECT_FALSE(e.metrics.has_value());
         event_jobs_later.push_back(e.quality_job);
       }
   }
@@ -298,15 +299,26 @@ TEST(WorldTest, DelayedQualitiesAreTheSameQualitiesDeliveredKStepsLater) {
     EXPECT_EQ(from_now[i].quality.force_closure, from_later[i].quality.force_closure);
     EXPECT_EQ(from_now[i].computed, from_later[i].computed);
   }
-  ASSERT_EQ(event_quality_now.size(), event_jobs_later.size());
+  ASSERT_EQ(event_metrics_now.size(), event_jobs_later.size());
   ASSERT_FALSE(event_jobs_later.empty());
   for (std::size_t i = 0; i < event_jobs_later.size(); ++i) {
     auto r = std::find_if(from_later.begin(), from_later.end(),
                           [&](const QualityResult& q) { return q.job.id == event_jobs_later[i]; });
     ASSERT_NE(r, from_later.end());
     EXPECT_TRUE(r->job.grasp_tick);
-    EXPECT_EQ(r->quality.epsilon, event_quality_now[i].epsilon);
+    const GraspMetrics& expected = event_metrics_now[i];
+    EXPECT_EQ(r->quality.epsilon, expected.quality.epsilon);
     EXPECT_GT(r->quality.epsilon, 0.0);
+    ASSERT_NE(r->metrics, nullptr);
+    EXPECT_EQ(r->metrics->quality.epsilon, expected.quality.epsilon);
+    EXPECT_EQ(r->metrics->hand_error_mm, expected.hand_error_mm);
+    EXPECT_EQ(r->metrics->palm_signed_distance, expected.palm_signed_distance);
+    ASSERT_EQ(r->metrics->capsules.size(), expected.capsules.size());
+    for (std::size_t c = 0; c < expected.capsules.size(); ++c) {
+      EXPECT_EQ(r->metrics->capsules[c].nd, expected.capsules[c].nd);
+      EXPECT_EQ(r->metrics->capsules[c].signed_distance, expected.capsules[c].signed_distance);
+      EXPECT_EQ(r->metrics->capsules[c].nd_contact, expected.capsules[c].nd_contact);
+    }
   }
   EXPECT_TRUE(std::any_of(from_later.begin(), from_later.end(), [](const QualityResult& r) {
     return r.quality.epsilon > 0;

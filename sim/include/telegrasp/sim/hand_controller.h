@@ -154,8 +154,21 @@ class HandController {
   const HandState& state() const { return state_; }
   const HandRig& rig() const { return *rig_; }
   const GraspSettings& settings() const { return settings_; }
-  /// Metrics of the current grasp (taken on the grasp tick), if an object is grasped.
+  /// Metrics of the current grasp (taken on the grasp tick), if an object is grasped; with
+  /// defer_grasp_metrics(), empty until set_grasp_metrics() delivers them.
   const std::optional<GraspMetrics>& grasp_metrics() const { return metrics_; }
+  /// The grasp tick no longer takes the grasp's metrics (every capsule's ND sweep and exact
+  /// signed distance, the palm's: most of that tick's cost); grasp_tick_metrics() takes them
+  /// later, on a copy of the hand made right after the grasp tick. The World does this and has
+  /// its QualityWorker take them with the grasp's quality.
+  void defer_grasp_metrics() { defer_metrics_ = true; }
+  /// The metrics of the grasp made on the last tick (measure() against the object as the grasp
+  /// tick saw it): bit-identical to those the grasp tick takes without defer_grasp_metrics().
+  /// Only on a hand whose last tick grasped (or a copy of it); otherwise empty.
+  std::optional<GraspMetrics> grasp_tick_metrics() const;
+  /// Delivers the metrics of grasp number `grasp` (grasp_serial()) to grasp_metrics(); ignored
+  /// for another grasp than the current one.
+  void set_grasp_metrics(std::uint64_t grasp, GraspMetrics metrics);
   /// Contacts of the current grasp at the object's current pose (recomputed in the object frame
   /// only when asked after the hand's shape changed while holding).
   std::vector<Contact> contacts() const;
@@ -224,6 +237,12 @@ class HandController {
   void forget_bounds(const FingerStep& step);
   void block(int id);
   void refresh_contacts() const;
+  // The paper's ND of capsule `id` (the sweep from Sp toward CTc), X_ObjectPalm as measure() takes it.
+  struct NdSweep {
+    bool hit = false;
+    double nd = 0;
+  };
+  NdSweep nd_midlength(PhalanxId id, const Eigen::Isometry3d& X_ObjectPalm, const ObjectModel& model) const;
   // Exact closest pair between capsule `id`'s segment [a, b] (object frame) and the object's mesh:
   // the cached one while the capsule has not moved since, else searched within `reach` first (a
   // touching capsule's is near), then everywhere.
@@ -239,6 +258,8 @@ class HandController {
   GraspSettings settings_;
   HandState state_;
   std::optional<GraspMetrics> metrics_;
+  bool defer_metrics_ = false;
+  std::optional<ObjectView> grasp_view_;  // the object as the last tick grasped it
   const ObjectModel* held_model_ = nullptr;
   // Caches keyed on shape_key() (the hand-object pose is fixed while holding).
   mutable std::vector<Contact> contacts_;  // object frame only; world fields filled by contacts()

@@ -1,5 +1,6 @@
-// QualityWorker: grasp qualities computed off the simulation thread, in the order they were asked
-// for, each a pure function of a copy of one tick's inputs (contacts, friction, torque scale).
+// QualityWorker: grasp qualities (and each grasp's metrics) computed off the simulation thread, in
+// the order they were asked for, each a pure function of a copy of one tick's inputs (contacts,
+// friction, torque scale; for the metrics, a copy of the hand as it grasped).
 #pragma once
 
 #include "telegrasp/sim/grasp_quality.h"
@@ -8,12 +9,16 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <vector>
 
 namespace telegrasp::sim {
+
+struct GraspMetrics;  // hand_controller.h
 
 /// The quality of one hand's contacts on one tick.
 struct QualityJob {
@@ -27,6 +32,9 @@ struct QualityJob {
   double mu = 0;  ///< Coulomb friction.
   double torque_scale = 1;  ///< The object's radius about its centre of mass.
   QualityVolume volume = QualityVolume::kSkip;
+  /// Grasp ticks: takes the grasp's metrics (HandController::grasp_tick_metrics() of a copy of the
+  /// hand as it grasped), on the worker with the quality; empty: none.
+  std::function<std::shared_ptr<GraspMetrics>()> metrics;
 };
 
 /// A job's answer.
@@ -34,6 +42,7 @@ struct QualityResult {
   QualityJob job;  ///< Without its contacts.
   GraspQuality quality;
   std::uint64_t computed = 0;  ///< Qualities computed for the job's hand so far (not reused).
+  std::shared_ptr<GraspMetrics> metrics;  ///< The job's metrics, if it asked for them (their quality not set).
 };
 
 /// Computes QualityJobs in submission order, on a thread of its own (threaded) or in submit()

@@ -48,10 +48,11 @@ struct GraspEvent {
   ObjectId object;
   std::uint64_t tick = 0;
   double time = 0;  ///< Seconds since the world started.
-  std::optional<GraspMetrics> metrics;  ///< Grasp events (quality: see quality_job).
-  /// Grasp events: the QualityJob whose result is this grasp's quality. With quality_delay_ticks
-  /// 0 metrics->quality already holds it; with k > 0 it is pending and comes k steps later in
-  /// quality_results().
+  /// Grasp events: the grasp tick's metrics, taken by the QualityWorker with the grasp's quality
+  /// (see quality_job). With quality_delay_ticks 0 they are here, quality included; with k > 0
+  /// this is empty and they come k steps later in quality_results() (QualityResult::metrics).
+  std::optional<GraspMetrics> metrics;
+  /// Grasp events: the QualityJob whose result holds this grasp's metrics and quality.
   std::uint64_t quality_job = 0;
   std::vector<Contact> contacts;  ///< Grasp events.
   GraspType grasp_type = GraspType::kOther;  ///< Grasp events: the hand's grasp type (HandState::grasp_type).
@@ -118,8 +119,9 @@ class World {
   const std::vector<GraspEvent>& events() const;
   /// The grasp qualities the last step delivered, in job order: those of the contact sets of the
   /// step quality_delay_ticks before it (each holding hand's, when its contacts changed or it
-  /// grasped). Each is also in its hand's hold_metrics() (and grasp_metrics() for a grasp's
-  /// first) if the hand still holds that grasp.
+  /// grasped; a grasp's first also carries the grasp's metrics, their quality set). Each is also
+  /// in its hand's hold_metrics() (and, with the metrics, grasp_metrics() for a grasp's first) if
+  /// the hand still holds that grasp.
   const std::vector<QualityResult>& quality_results() const;
   /// Steps that had to wait for the quality worker (0 when it keeps up).
   std::uint64_t quality_late() const;
