@@ -655,7 +655,9 @@ void HandController::apply_grasp_rule(const ObjectView* object, const Eigen::Iso
     }
     refresh_contacts();
     ++grasp_serial_;
-    hold_quality_ = metrics_->quality = hold_metrics_->quality = kPendingQuality;
+    hold_quality_ = kPendingQuality;
+    if (metrics_) metrics_->quality = kPendingQuality;
+    if (hold_metrics_) hold_metrics_->quality = kPendingQuality;
     events.grasped = true;
   } else if (!rule && state_.grasped.valid()) {
     events.released = true;
