@@ -244,14 +244,14 @@ void SceneServer::publish_events() {
       ctx.X_WorldObject = world_->object_pose(e.object);
     if (auto h = hands_.find(ctx.hand); h != hands_.end()) ctx.input_sequence = h->second.stamp.sequence;
     const std::uint64_t due = world_->tick() + static_cast<std::uint64_t>(settings_.quality_delay_ticks);
-    const sim::HandRig& rig = *rigs_[ctx.hand.side];
-    held_events_.push_back({due, e.quality_job, &rig, make_grasp_event(e, rig, ctx)});
+    held_events_.push_back({due, e.quality_job, make_grasp_event(e, *rigs_[ctx.hand.side], ctx)});
   }
   for (const sim::QualityResult& r : world_->quality_results()) {
     if (!r.job.grasp_tick) continue;
     auto held = std::find_if(held_events_.begin(), held_events_.end(),
                              [&](const HeldEvent& h) { return h.quality_job == r.job.id; });
-    if (held != held_events_.end() && r.metrics) set_metrics(held->message, *r.metrics, *held->rig);
+    if (held != held_events_.end() && r.metrics)
+      set_metrics(held->message, *r.metrics, *rigs_[held->message.hand_side()]);
   }
   while (!held_events_.empty() && held_events_.front().due_tick <= world_->tick()) {
     sink_.publish(held_events_.front().message);

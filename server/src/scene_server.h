@@ -114,7 +114,6 @@ class SceneServer {
   struct HeldEvent {
     std::uint64_t due_tick = 0;  // published on this tick
     std::uint64_t quality_job = 0;  // grasp events: sim::GraspEvent::quality_job
-    const sim::HandRig* rig = nullptr;  // the hand's
     msg::GraspEvent message;
   };
   std::deque<HeldEvent> held_events_;

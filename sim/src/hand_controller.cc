@@ -645,14 +645,12 @@ void HandController::apply_grasp_rule(const ObjectView* object, const Eigen::Iso
     state_.X_PalmObject = state_.X_WorldPalm.inverse() * object->X_WorldObject;
     held_model_ = object->model;
     grasp_view_ = *object;
-    if (defer_metrics_) {
-      metrics_.reset();
-      hold_metrics_key_.clear();
-    } else {
-      metrics_ = measure(*object);
-      hold_metrics_ = metrics_;
-      hold_metrics_key_ = shape_key();
-    }
+    // The hold metrics start as the grasp's, for as long as the hand keeps its shape: with
+    // deferred metrics they come with set_grasp_metrics() (or hold_metrics() takes them if asked first).
+    metrics_.reset();
+    if (!defer_metrics_) metrics_ = measure(*object);
+    hold_metrics_ = metrics_;
+    hold_metrics_key_ = shape_key();
     refresh_contacts();
     ++grasp_serial_;
     hold_quality_ = kPendingQuality;
@@ -721,7 +719,7 @@ std::vector<double> HandController::shape_key() const {
 std::optional<GraspMetrics> HandController::hold_metrics() const {
   const auto X_WorldObject = grasped_object_pose();
   if (!X_WorldObject) return std::nullopt;
-  if (hold_metrics_key_ != shape_key()) {
+  if (hold_metrics_key_ != shape_key() || !hold_metrics_) {
     hold_metrics_ = measure({state_.grasped, *X_WorldObject, held_model_});
     hold_metrics_key_ = shape_key();
     hold_metrics_->quality = hold_quality_;
@@ -810,7 +808,7 @@ HandController::NdSweep HandController::nd_midlength(PhalanxId id, const Eigen::
   const Eigen::Vector3d dir = (ctc - sp) / length;
   const SweepHit hit = model.distance.sphere_cast(sp, dir, rig_->nd_sweep_radius(), length + rig_->nd_sweep_beyond());
   // ND = ((Ip - Sp) . (CTc - Sp)) / |CTc - Sp| - |CTc - Sp|
-  return {hit.hit, hit.hit ? (hit.point - sp).dot(dir) - length : 0.0};
+  return {hit.hit, hit.hit ? (hit.point - sp).dot(dir) - length : 0.0, length};
 }
 
 GraspMetrics HandController::measure(const ObjectView& object) const {
@@ -824,7 +822,6 @@ GraspMetrics HandController::measure(const ObjectView& object) const {
     const PhalanxSpec& spec = rig_->phalanges()[id.value];
     const CapsuleSpec& cap = *spec.capsule;
     const Eigen::Isometry3d X_ObjectPhalanx = X_ObjectPalm * state_.X_PalmPhalanx[id.value];
-    const double length = (X_ObjectPhalanx * cap.p_PhalanxCTc - X_ObjectPhalanx * cap.p_PhalanxSp).norm();
     CapsuleMetric m;
     m.phalanx = id;
     m.blocked = state_.blocked[id.value] != 0;
@@ -842,7 +839,7 @@ GraspMetrics HandController::measure(const ObjectView& object) const {
                             ? q.distance - cap.radius
                             : model.distance.capsule_signed_distance(a, b, cap.radius, hint_[id.value]);
     if (m.blocked) {
-      const NdContact c = nd_contact(model.distance, contact_pair(model.distance, q, a, b), cap.radius, length,
+      const NdContact c = nd_contact(model.distance, contact_pair(model.distance, q, a, b), cap.radius, nd.length,
                                      rig_->nd_sweep_radius(), rig_->nd_sweep_beyond());
       m.contact_hit = c.hit;
       m.nd_contact = c.nd;
@@ -955,6 +952,7 @@ std::optional<GraspMetrics> HandController::grasp_tick_metrics() const {
 void HandController::set_grasp_metrics(std::uint64_t grasp, GraspMetrics metrics) {
   if (grasp != grasp_serial_ || !state_.grasped.valid()) return;
   metrics_ = std::move(metrics);
+  if (!hold_metrics_) hold_metrics_ = metrics_;  // still the grasp tick's shape (else it was measured)
 }
 
 void HandController::set_quality(std::uint64_t grasp, const GraspQuality& quality, bool grasp_tick) {

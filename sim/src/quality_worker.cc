@@ -1,5 +1,7 @@
 #include "telegrasp/sim/quality_worker.h"
 
+#include "telegrasp/sim/hand_controller.h"
+
 #include <algorithm>
 #include <limits>
 #include <utility>
@@ -101,7 +103,7 @@ QualityResult QualityWorker::compute(QualityJob job) {
   }
   r.quality = memo.entries.front().quality;
   r.computed = memo.computed;
-  if (job.metrics) r.metrics = job.metrics();
+  if (job.metrics && (r.metrics = job.metrics())) r.metrics->quality = r.quality;
   job.metrics = nullptr;  // releases the copy of the hand
   job.contacts.clear();
   job.contacts.shrink_to_fit();

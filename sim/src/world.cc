@@ -250,7 +250,6 @@ struct World::Impl {
         if (r.metrics) it->second.controller->set_grasp_metrics(r.job.grasp, *r.metrics);
         it->second.controller->set_quality(r.job.grasp, r.quality, r.job.grasp_tick);
       }
-      if (r.metrics) r.metrics->quality = r.quality;
       if (r.job.grasp_tick)  // this step's own grasp event (quality_delay_ticks 0)
         for (GraspEvent& e : events)
           if (e.quality_job == r.job.id && r.metrics) e.metrics = *r.metrics;

@@ -241,6 +241,7 @@ class HandController {
   struct NdSweep {
     bool hit = false;
     double nd = 0;
+    double length = 0;  // |CTc - Sp| in the object frame
   };
   NdSweep nd_midlength(PhalanxId id, const Eigen::Isometry3d& X_ObjectPalm, const ObjectModel& model) const;
   // Exact closest pair between capsule `id`'s segment [a, b] (object frame) and the object's mesh:

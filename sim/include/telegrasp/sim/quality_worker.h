@@ -42,7 +42,7 @@ struct QualityResult {
   QualityJob job;  ///< Without its contacts.
   GraspQuality quality;
   std::uint64_t computed = 0;  ///< Qualities computed for the job's hand so far (not reused).
-  std::shared_ptr<GraspMetrics> metrics;  ///< The job's metrics, if it asked for them (their quality not set).
+  std::shared_ptr<GraspMetrics> metrics;  ///< The job's metrics, if it asked for them, with `quality`.
 };
 
 /// Computes QualityJobs in submission order, on a thread of its own (threaded) or in submit()
