@@ -204,6 +204,24 @@ TEST(CleanMesh, LargeSoupWeldsQuickly) {
   EXPECT_EQ(report.vertices_welded, soup.vertices.size() - cleaned.vertices.size());
 }
 
+TEST(CleanMesh, VerticesFarBeyondTheGridWeldOnlyWhereEqual) {
+  // Coordinates near 1e12 m lie past the weld grid's range at the 1e-7 m tolerance, where
+  // neighbouring doubles are over 1e-4 m apart: equal ones weld, distinct ones never do, on
+  // either side of the origin. (They used to share one grid cell: a quadratic weld.)
+  TriangleMesh mesh;
+  const int n = 3000;
+  for (int k = 0; k < n; ++k) {
+    const double x = (k % 2 ? -1.0 : 1.0) * (1e12 + 1e3 * k);
+    mesh.vertices.emplace_back(x, 0.0, 0.0);
+    mesh.vertices.emplace_back(x, 0.0, 0.0);  // an exact twin: welds
+    mesh.vertices.emplace_back(std::nextafter(x, 0.0), 0.0, 0.0);  // one ulp (about 1e-4 m) away: does not
+  }
+  for (std::uint32_t k = 0; k + 2 < mesh.vertices.size(); k += 3) mesh.triangles.push_back({k, k + 1, k + 2});
+  MeshCleanReport report;
+  (void)clean_mesh(mesh, 1e-7, &report);
+  EXPECT_EQ(report.vertices_welded, std::size_t(n));
+}
+
 // ------------------------------------------------------------------ load_mesh_file
 
 TEST(LoadMeshFile, ObjCubeWithQuads) {
@@ -408,6 +426,25 @@ TEST(LoadMeshFile, PlyHeaderWithAnUnknownKeywordOrAnElementDeclaredTwiceIsRefuse
   EXPECT_NO_THROW(load_mesh_file(dir.write("commented.ply", commented +
                                                                 "0 0 0\n0.1 0 0\n0 0.1 0\n0 0 0.1\n"
                                                                 "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n")));
+}
+
+TEST(LoadMeshFile, PlyHeaderWithAControlCharacterIsRefused) {
+  // Found by telegrasp-fuzz-mesh: a vertical tab touching "end_header" (either side) made assimp's
+  // header parser loop for ever; a header is plain text, so control characters are refused.
+  TempDir dir;
+  expect_load_error(dir.write("after.ply", "ply\nformat ascii 1.0\nend_header\v0.0"),
+                    "PLY header line 3: control character 0x0b");
+  expect_load_error(dir.write("before.ply", "ply\nformat ascii 1.0\n\vend_header\n"),
+                    "PLY header line 3: control character 0x0b");
+  std::string nul = ply_header("ascii", 4, 4);
+  nul.insert(nul.find("element"), std::string("comment a\0b\n", 12));
+  expect_load_error(dir.write("nul.ply", nul), "PLY header line 3: control character 0x00");
+  // Tabs and CR LF line ends are plain text.
+  std::string tabbed = ply_header("ascii", 4, 4);
+  tabbed.insert(tabbed.find("element"), "comment\tmade by hand\r\n");
+  EXPECT_NO_THROW(load_mesh_file(dir.write("tabbed.ply", tabbed +
+                                                             "0 0 0\n0.1 0 0\n0 0.1 0\n0 0 0.1\n"
+                                                             "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n")));
 }
 
 TEST(LoadMeshFile, PlyFaceIndexPastTheVerticesIsRefused) {
