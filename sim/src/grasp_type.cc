@@ -30,8 +30,18 @@ double box_width_along(const ObjectShape& shape, const Eigen::Vector3d& d_Object
   return 2 * w;
 }
 
-bool closes_across_shortest_side(const ObjectShape& shape, const Eigen::Isometry3d& X_ObjectPalm) {
-  return std::abs(shape.X_ObjectBox.linear().col(0).dot(X_ObjectPalm.linear().col(0))) >= std::sqrt(0.5);
+bool closes_across_shortest_side(const ObjectShape& shape, const Eigen::Isometry3d& X_ObjectPalm,
+                                 const ShapeRules& rules) {
+  // The shortest side and the sides as short as it (within the rules' round ratio: a ball's three,
+  // a can's two across its axis) span where closing counts as across the smallest dimension.
+  const Eigen::Matrix3d& R = shape.X_ObjectBox.linear();
+  const Eigen::Vector3d across = X_ObjectPalm.linear().col(0);
+  double in_span_sq = 0;
+  for (int i = 0; i < 3; ++i) {
+    const bool shortest = i == 0 || shape.half_extent[0] >= rules.round_ratio * shape.half_extent[i];
+    if (shortest) in_span_sq += R.col(i).dot(across) * R.col(i).dot(across);
+  }
+  return in_span_sq >= 0.5;
 }
 
 GraspType choose_grasp_type(const ObjectShape& shape, const Eigen::Isometry3d& X_ObjectPalm,

@@ -53,7 +53,8 @@ TEST(GraspTypeTest, BoxWidthIsTheSupportWidth) {
               1e-15);
 }
 
-// Across the shortest side: the palm's +x within 45 degrees of the box's x axis, either sign.
+// Across the shortest side: the palm's +x within 45 degrees of the box's x axis (and of the sides
+// as short as it), either sign.
 TEST(GraspTypeTest, ClosingAcrossTheShortestSide) {
   const ObjectShape s = shape(ShapeClass::kBox, {0.01, 0.02, 0.03});
   const auto turned = [](double deg) { return palm(Eigen::AngleAxisd(deg * kPi / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix()); };
@@ -62,6 +63,26 @@ TEST(GraspTypeTest, ClosingAcrossTheShortestSide) {
   EXPECT_FALSE(closes_across_shortest_side(s, turned(46)));
   EXPECT_TRUE(closes_across_shortest_side(s, turned(180)));
   EXPECT_FALSE(closes_across_shortest_side(s, turned(90)));
+  // Sides as short as the shortest (shorter / longer >= 0.88, the round ratio) count with it: a
+  // standing can is closed across from any side, not along its axis; a ball whatever the turn.
+  const auto tilted = [](double deg) {  // +x turned from the x axis toward z
+    return palm(Eigen::AngleAxisd(-deg * kPi / 180, Eigen::Vector3d::UnitY()).toRotationMatrix());
+  };
+  const ObjectShape can = shape(ShapeClass::kCylinder, {0.03, 0.03, 0.06}, 2);
+  for (double deg : {0.0, 30.0, 45.0, 60.0, 90.0, 135.0}) EXPECT_TRUE(closes_across_shortest_side(can, turned(deg))) << deg;
+  EXPECT_TRUE(closes_across_shortest_side(can, tilted(44)));
+  EXPECT_FALSE(closes_across_shortest_side(can, tilted(46)));
+  EXPECT_FALSE(closes_across_shortest_side(can, tilted(90)));
+  const ObjectShape ball = shape(ShapeClass::kSphere, {0.04, 0.04, 0.04});
+  for (double deg : {0.0, 45.0, 90.0}) {
+    EXPECT_TRUE(closes_across_shortest_side(ball, turned(deg))) << deg;
+    EXPECT_TRUE(closes_across_shortest_side(ball, tilted(deg))) << deg;
+  }
+  // The ratio's edge: 0.02 / 0.0227 = 0.881 ties, 0.02 / 0.0228 = 0.877 does not.
+  EXPECT_TRUE(closes_across_shortest_side(shape(ShapeClass::kBox, {0.02, 0.0227, 0.05}), turned(90)));
+  EXPECT_FALSE(closes_across_shortest_side(shape(ShapeClass::kBox, {0.02, 0.0228, 0.05}), turned(90)));
+  // Between two tied sides at 45 degrees: fully in their span.
+  EXPECT_TRUE(closes_across_shortest_side(shape(ShapeClass::kBox, {0.02, 0.021, 0.05}), turned(45)));
 }
 
 // Miller's rules with Feix's widths: balls by their width, cylinders by diameter and whether the

@@ -504,8 +504,11 @@ TEST(HandControllerTest, DeferredGraspMetricsEqualTheGraspTicksOwn) {
     EXPECT_EQ(ce[i].p_ObjectContact, cd[i].p_ObjectContact) << i;
     EXPECT_EQ(ce[i].nd, cd[i].nd) << i;
     EXPECT_EQ(ce[i].nd_hit, cd[i].nd_hit) << i;
-    for (const CapsuleMetric& m : now.capsules)  // each contact's ND is its capsule's
-      if (m.phalanx == cd[i].phalanx) EXPECT_EQ(cd[i].nd, m.nd) << i;
+    for (const CapsuleMetric& m : now.capsules) {  // each contact's ND is its capsule's
+      if (m.phalanx == cd[i].phalanx) {
+        EXPECT_EQ(cd[i].nd, m.nd) << i;
+      }
+    }
   }
   deferred.set_grasp_metrics(deferred.grasp_serial() + 1, *later);
   EXPECT_FALSE(deferred.grasp_metrics().has_value());

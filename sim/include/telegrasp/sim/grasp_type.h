@@ -42,9 +42,12 @@ struct GraspTypeRules {
 /// Width of `shape`'s box along the unit direction `d` (object frame): 2 sum_i h_i |b_i . d|.
 double box_width_along(const ObjectShape& shape, const Eigen::Vector3d& d_Object);
 
-/// Whether a hand at X_ObjectPalm closes across the object's shortest side: its +x (from the
-/// thumb to the fingers) within 45 degrees of the shortest side of `shape`'s box.
-bool closes_across_shortest_side(const ObjectShape& shape, const Eigen::Isometry3d& X_ObjectPalm);
+/// Whether a hand at X_ObjectPalm closes across the object's smallest dimension: its +x (from the
+/// thumb to the fingers) within 45 degrees of the span of the shortest side of `shape`'s box and
+/// of every side as short (shorter / longer >= rules.round_ratio, as a round cross-section): a
+/// ball is closed across whatever the direction, a can across any line square to its axis.
+bool closes_across_shortest_side(const ObjectShape& shape, const Eigen::Isometry3d& X_ObjectPalm,
+                                 const ShapeRules& rules = {});
 
 /// The grasp type for a hand at X_ObjectPalm (palm frame: +x to the fingers, -z the palm normal)
 /// about to close on an object of `shape`: sphere -> tripod or power sphere by its width across
