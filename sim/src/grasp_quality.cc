@@ -1,4 +1,4 @@
-// Grasp quality (GRASPING.md section 4b): the wrenches of the contacts' friction cones, epsilon by
+// Grasp quality (sim/README.md, section 5 Grasp quality): the wrenches of the contacts' friction cones, epsilon by
 // the expanding polytope (wrench_epsilon.cc), and the full hull with Qhull's reentrant API (the
 // volume, and the reference the tests hold the expanding polytope to).
 #include "grasp_quality_internal.h"

@@ -753,7 +753,7 @@ SegmentQuery HandController::closest_pair(PhalanxId id, ObjectId object, const M
 
 namespace {
 
-// nd_contact (GRASPING.md section 4, "Where ND is taken"): the paper's sweep moved to the contact.
+// nd_contact (sim/README.md, section 4.2 "Where ND is taken"): the paper's sweep moved to the contact.
 // From the capsule's exact closest pair (axis point A, surface point M): u is the unit direction
 // from A to M (or minus the surface normal at M when A is not outside the solid), the sweep
 // starts at Sp' = A - (|CTc - Sp| - r) u, so that the skin point CTc' = A + r u lies as CTc does

@@ -16,7 +16,7 @@ TEST(GraspRuleTest, HumanRuleTruthTable) {
     for (int i = 0; i < 8; ++i) blocked[rig.find(names[i]).value] = (bits >> i) & 1;
     const bool palm = (bits >> 8) & 1;
     const bool th = (bits & 1) || (bits & 2), in = (bits & 4) || (bits & 8), mi = (bits & 16) || (bits & 32);
-    const bool expected = (th || palm) && (in || mi);  // ../shared/docs/GRASPING.md section 3.4
+    const bool expected = (th || palm) && (in || mi);  // sim/README.md, section 3.4 Grasping logic
     EXPECT_EQ(evaluate_grasp_rule(rig.grasp_rule(), blocked, palm), expected) << "bits " << bits;
   }
 }

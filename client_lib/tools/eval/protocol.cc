@@ -49,7 +49,7 @@ using Clock = std::chrono::steady_clock;
 
 constexpr const char* kUsage = R"(Usage: telegrasp-eval protocol [options]
 
-Runs the paper's experiment (GRASPING.md section 6) through telegrasp servers over DDS: the 30
+Runs the paper's experiment (sim/README.md, section 10) through telegrasp servers over DDS: the 30
 protocol objects are spawned one at a time with SceneCommand, in the paper's order, resting at a
 random place and yaw in a bounded area in front of the operator (x 0.40..0.55 m, y -0.10..0.10 m);
 a bot participant reacts, reaches, grasps, lifts 10 cm, holds 1 s and releases each. Each grasp's

@@ -1,5 +1,5 @@
 // telegrasp-eval questionnaire FILE.csv: scores the paper's questionnaire
-// (../shared/docs/GRASPING.md section 6) per participant and per group, beside the paper's Table 2.
+// (sim/README.md, section 10 The evaluation protocol) per participant and per group, beside the paper's Table 2.
 #include "offline_commands.h"
 
 #include "cli.h"

@@ -276,7 +276,7 @@ json aggregate_json(const ExperimentRun& run) {
        "nd_midlength (the paper's ND, at the capsule's mid-length): per grasp, mean |ND| over the capsules that hit "
        "at the grasp tick; then mean and sample sd over grasps (this is what the charts plot)"},
       {"nd_contact_abs_median_mm",
-       "nd_contact (ND toward the contact, GRASPING.md section 4): median and p95 of |nd_contact| over the blocked "
+       "nd_contact (ND toward the contact, sim/README.md section 4): median and p95 of |nd_contact| over the blocked "
        "capsules at the grasp tick; blocked_without_nd_contact counts those without one (must be 0)"},
       {"palm_signed_distance_min_mm", "the palm box's exact signed distance to the object at the grasp tick, minimum"},
       {"held_force_closure_share",

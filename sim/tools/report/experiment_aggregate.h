@@ -24,7 +24,7 @@ double grasp_nd_abs_mean(const Record& r, int* hits = nullptr);
 // The smallest exact signed distance of a blocked capsule at the grasp tick; NaN when none is.
 double grasp_min_signed_distance(const Record& r);
 
-// The fidelity figures of some grasps at the grasp tick (GRASPING.md section 4): nd_contact and
+// The fidelity figures of some grasps at the grasp tick (sim/README.md, section 4): nd_contact and
 // the exact signed distances of the blocked capsules, the palm's exact signed distance.
 struct Fidelity {
   std::vector<double> nd_contact_abs;  // |nd_contact| of every blocked capsule that has one, mm

@@ -274,7 +274,7 @@ std::string unit_caveat(const ExperimentRun& run) {
       "once-per-frame overlap test stopped the fingers; a per-hand sum in millimetres. The paper does not say on "
       "which frame it was taken. "
       "Ours, in the error charts, is the <b>mean |ND| over the capsules that hit</b> (a per-capsule mean, not a "
-      "sum over fingers), in mm, by the exact metric of GRASPING.md section 4 (sphere sweep against the exact "
+      "sum over fingers), in mm, by the exact metric of sim/README.md section 4 (sphere sweep against the exact "
       "mesh), taken at the grasp tick and averaged per grasp, then over the grasps of the object and group. "
       "Our HandError (the paper's per-hand sum, same tick) is in the tables for the paper-vs-ours charts. "
       "The two error columns therefore differ in metric, geometry and closing method: compare their shape across "
@@ -579,7 +579,7 @@ std::string overall_section(const ExperimentRun& run, const PageData& d) {
   return body.str() + mode_times_section(run, d) + worst_objects_paragraph(run) + unit_caveat(run);
 }
 
-// The fidelity figures per mode and group (GRASPING.md section 4): nd_contact, the exact signed
+// The fidelity figures per mode and group (sim/README.md, section 4): nd_contact, the exact signed
 // distances of blocked capsules and of the palm, at the grasp tick. Targets are set on these.
 std::string fidelity_section(const ExperimentRun& run, const PageData& d) {
   std::ostringstream body;
@@ -607,7 +607,7 @@ std::string fidelity_section(const ExperimentRun& run, const PageData& d) {
 std::string force_closure_section(const ExperimentRun& run, const PageData& d) {
   std::ostringstream body;
   body << "<h2 id=\"force-closure\">Held grasps in force closure</h2>\n<p>Per object: held grasps whose contacts "
-          "are in force closure (Ferrari-Canny epsilon &gt; 0 with the rig's friction, GRASPING.md section 4b) / "
+          "are in force closure (Ferrari-Canny epsilon &gt; 0 with the rig's friction, sim/README.md section 5) / "
           "held grasps, and the share.</p>\n<table class=\"numbers\"><tr><th>object</th>";
   for (const std::string& mode : d.modes)
     for (const std::string& group : d.groups) body << "<th>" << esc(mode_name(mode)) << ", " << esc(group) << "</th>";

@@ -1,4 +1,4 @@
-// Reports of a protocol run (the paper's experiment, ../shared/docs/GRASPING.md section 6):
+// Reports of a protocol run (the paper's experiment, sim/README.md section 10):
 // aggregates per mode, operator group and object as JSON; the per-grasp and per-object CSV
 // tables; and one self-contained HTML page (inline CSS and SVG, nothing fetched) with a picture of
 // one grasp per object, the paper's bar charts, the paper's published per-object numbers beside

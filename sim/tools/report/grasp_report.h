@@ -26,7 +26,7 @@ struct CapsuleMetricRecord {
   double nd_contact_mm = 0;
 };
 
-/// A grasp's hand-level figures (GRASPING.md sections 4 and 4b): the palm volume's exact signed
+/// A grasp's hand-level figures (sim/README.md, sections 4 and 5): the palm volume's exact signed
 /// distance to the object (mm), Ferrari-Canny epsilon, the wrench hull's volume, force closure.
 struct GraspFigures {
   double palm_signed_distance_mm = 0;

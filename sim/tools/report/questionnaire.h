@@ -1,4 +1,4 @@
-// The paper's questionnaire (Oprea et al. 2019, Table 1; ../shared/docs/GRASPING.md section 6):
+// The paper's questionnaire (Oprea et al. 2019, Table 1; sim/README.md, section 10):
 // 14 answers on a 7-point Likert scale (-3..3) per participant, scored into Motor Control, Finger
 // Movement Realism, Interaction Realism and the Embodiment score, per participant and per group.
 #pragma once

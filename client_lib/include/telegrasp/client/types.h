@@ -67,7 +67,7 @@ struct GraspState {
   double trigger = 0;
   std::vector<bool> blocked;  ///< Per phalanx, rig order.
   bool palm_contact = false;
-  double epsilon = 0;  ///< Held grasp's Ferrari-Canny epsilon (GRASPING.md section 4b); 0 when not holding.
+  double epsilon = 0;  ///< Held grasp's Ferrari-Canny epsilon (sim/README.md, section 5); 0 when not holding.
   double volume = 0;  ///< Held grasp's wrench-space volume.
   bool force_closure = false;  ///< epsilon > 0.
   std::string grasp_type;  ///< How the hand closes ("other" for a rig that lists no grasp types).

@@ -1,4 +1,4 @@
-// Grasp quality for robots (GRASPING.md section 4b): the grasp wrench space of a
+// Grasp quality for robots (sim/README.md, section 5 Grasp quality): the grasp wrench space of a
 // set of frictional point contacts, its Ferrari-Canny epsilon and its volume, as GraspIt! computes them.
 #pragma once
 

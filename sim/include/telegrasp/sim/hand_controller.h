@@ -1,4 +1,4 @@
-// HandController: the grasp system of ../shared/docs/GRASPING.md for one hand, advanced one tick
+// HandController: the grasp system of sim/README.md (sections 3-6) for one hand, advanced one tick
 // at a time.
 #pragma once
 
@@ -74,7 +74,7 @@ struct ObjectView {
   const ObjectModel* model = nullptr;
 };
 
-/// ND of one capsule taken two ways (GRASPING.md section 4), and the exact signed distance of its volume.
+/// ND of one capsule taken two ways (sim/README.md, section 4), and the exact signed distance of its volume.
 struct CapsuleMetric {
   PhalanxId phalanx;
   bool hit = false;  ///< nd_midlength: the sweep toward CTc found the object within its length.
