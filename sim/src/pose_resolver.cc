@@ -2,7 +2,7 @@
 // bounded speed.
 #include "telegrasp/sim/pose_resolver.h"
 
-#include "telegrasp/sim/hand_controller.h"
+#include "telegrasp/sim/object_view.h"
 
 #include <algorithm>
 #include <cmath>

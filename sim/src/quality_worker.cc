@@ -1,6 +1,6 @@
 #include "telegrasp/sim/quality_worker.h"
 
-#include "telegrasp/sim/hand_controller.h"
+#include "telegrasp/sim/grasp_metrics.h"
 
 #include <algorithm>
 #include <limits>

@@ -1,11 +1,18 @@
 // HandController: the grasp system of sim/README.md (sections 3-6) for one hand, advanced one tick
-// at a time.
+// at a time. Its inputs, state and outputs have headers of their own: controller_input.h,
+// object_view.h, grasp_settings.h, hand_state.h, grasp_metrics.h, contact.h.
 #pragma once
 
+#include "telegrasp/sim/contact.h"
+#include "telegrasp/sim/controller_input.h"
+#include "telegrasp/sim/grasp_metrics.h"
 #include "telegrasp/sim/grasp_quality.h"
+#include "telegrasp/sim/grasp_settings.h"
 #include "telegrasp/sim/hand_rig.h"
+#include "telegrasp/sim/hand_state.h"
 #include "telegrasp/sim/ids.h"
 #include "telegrasp/sim/object_model.h"
+#include "telegrasp/sim/object_view.h"
 #include "telegrasp/sim/pose_resolver.h"
 #include "telegrasp/sim/quality_worker.h"
 
@@ -20,113 +27,6 @@
 #include <vector>
 
 namespace telegrasp::sim {
-
-/// How a closing finger finds the surface.
-enum class ClosingMode {
-  kPrecise,  ///< Conservative advancement within each step: contact within the tolerance, no tunnelling.
-  kDiscrete,  ///< The paper's: move a whole step, then test overlap (may sink by up to one step).
-};
-
-/// The mode named "precise" or "discrete" (as configuration files, flags and records write it);
-/// nothing for any other name.
-std::optional<ClosingMode> parse_closing_mode(std::string_view name);
-/// The name parse_closing_mode reads: "precise" or "discrete".
-const char* closing_mode_name(ClosingMode mode);
-
-/// How "nearest object" is measured for object selection.
-enum class SelectionMetric {
-  kSurface,  ///< Distance from the selection sphere's centre to the object's surface (default).
-  kOrigin,  ///< Distance to the object's origin (centre of mass), as in the paper.
-};
-
-/// Tunables of the grasp system (not of the hand: those live in the HandRig).
-struct GraspSettings {
-  ClosingMode mode = ClosingMode::kPrecise;
-  SelectionMetric selection = SelectionMetric::kSurface;
-  double contact_tolerance = 0.05e-3;  ///< Precise mode: a blocked capsule's gap lies in [0, this] (m).
-  double speed_scale = 1.0;  ///< Multiplies every joint's max speed.
-  /// Keep the resolved pose (HandState::X_WorldPalm) outside every object and the table while the
-  /// tracked pose goes through them (pose_resolver.h); false: the resolved pose is the tracked one.
-  bool resolve_pose = true;
-  double table_half_extent = 0;  ///< > 0: the table top z = 0 over [-this, this]^2 is an obstacle (m).
-  double rejoin_speed = 1.0;  ///< The resolved pose closes its offset to the tracked one at most this fast (m/s).
-  double rejoin_turn = 6.283185307179586;  ///< ... and its turn at most this fast (rad/s).
-  /// Whether grasp qualities include the wrench hull's volume (the full Qhull hull: milliseconds
-  /// per contact set); kSkip: GraspQuality::volume is kVolumeNotComputed.
-  QualityVolume quality_volume = QualityVolume::kSkip;
-};
-
-/// One controller sample for one hand.
-struct ControllerInput {
-  Eigen::Isometry3d X_WorldPalm = Eigen::Isometry3d::Identity();
-  double trigger = 0;  ///< 0 open .. 1 closed.
-  std::vector<double> curls;  ///< Empty, or one value in [0, 1] per finger of the rig.
-  bool tracking_valid = true;  ///< False: keep the last pose, still apply trigger and curls.
-};
-
-/// Returns "" for a usable input, else the reason it is not (names the field).
-std::string validate_input(const ControllerInput& input, const HandRig& rig);
-
-/// A dynamic object as the grasp system sees it this tick.
-struct ObjectView {
-  ObjectId id;
-  Eigen::Isometry3d X_WorldObject = Eigen::Isometry3d::Identity();
-  const ObjectModel* model = nullptr;
-};
-
-/// ND of one capsule taken two ways (sim/README.md, section 4), and the exact signed distance of its volume.
-struct CapsuleMetric {
-  PhalanxId phalanx;
-  bool hit = false;  ///< nd_midlength: the sweep toward CTc found the object within its length.
-  double nd = 0;  ///< nd_midlength (the paper's ND) in metres (> 0 gap, < 0 penetration); meaningful only if hit.
-  bool contact_hit = false;  ///< nd_contact was taken (blocked capsules always have it).
-  double nd_contact = 0;  ///< ND toward the axis point nearest the capsule's contact, metres; only if contact_hit.
-  double signed_distance = 0;  ///< Exact capsule-to-solid signed distance, metres.
-  bool blocked = false;
-};
-
-/// ND of every capsule and the HandError, taken on the tick of the grasp.
-struct GraspMetrics {
-  std::vector<CapsuleMetric> capsules;
-  double hand_error_mm = 0;  ///< Sum over fingers of mean |ND| over the finger's capsules that hit.
-  int capsules_without_hit = 0;  ///< Capsules whose sweep found nothing (left out of HandError).
-  double palm_signed_distance = 0;  ///< Exact signed distance of the palm volume to the object, metres.
-  /// Ferrari-Canny epsilon, wrench-space volume, force closure (section 4b); kPendingQuality
-  /// until the World delivers it (HandController::set_quality()).
-  GraspQuality quality = kPendingQuality;
-};
-
-/// A contact between a blocked phalanx (or the palm) and the grasped object.
-struct Contact {
-  PhalanxId phalanx;  ///< Invalid for the palm.
-  Eigen::Vector3d p_WorldContact{0, 0, 0}, n_World{0, 0, 0};
-  Eigen::Vector3d p_ObjectContact{0, 0, 0}, n_Object{0, 0, 0};
-  double nd = 0;
-  bool nd_hit = false;
-};
-
-/// The mutable per-tick state of one hand.
-struct HandState {
-  Eigen::Isometry3d X_WorldPalm = Eigen::Isometry3d::Identity();  ///< Resolved: the pose that grasps and is shown.
-  Eigen::Isometry3d X_WorldTracked = Eigen::Isometry3d::Identity();  ///< The controller's pose, as last tracked.
-  Eigen::Vector3d v_WorldPalm{0, 0, 0};  ///< Linear velocity, m/s.
-  Eigen::Vector3d w_WorldPalm{0, 0, 0};  ///< Angular velocity, rad/s.
-  bool has_pose = false;
-  double trigger = 0;
-  std::vector<double> curls;
-  std::vector<double> q;  ///< Joint angle per phalanx, rad.
-  std::vector<Eigen::Isometry3d> X_PalmPhalanx;  ///< Forward kinematics of q.
-  std::vector<std::uint8_t> blocked;  ///< Per phalanx.
-  std::vector<double> blocked_angle;  ///< Joint angle when it blocked.
-  bool palm_contact = false;
-  ObjectId selected;
-  /// How the fingers close: chosen from the selected object's shape and the hand's pose while no
-  /// phalanx is blocked (kOther with no object, or a type the rig does not list), then kept until
-  /// every phalanx has let go.
-  GraspType grasp_type = GraspType::kOther;
-  ObjectId grasped;
-  Eigen::Isometry3d X_PalmObject = Eigen::Isometry3d::Identity();  ///< While grasped.
-};
 
 /// What happened on a tick.
 struct HandTickEvents {

@@ -18,7 +18,7 @@
 
 namespace telegrasp::sim {
 
-struct GraspMetrics;  // hand_controller.h
+struct GraspMetrics;  // grasp_metrics.h
 
 /// The quality of one hand's contacts on one tick.
 struct QualityJob {
