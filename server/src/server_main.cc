@@ -10,6 +10,7 @@
 #include "snapshot.h"
 
 #include "cli.h"
+#include "telegrasp/idl/network_flags.h"
 #include "telegrasp/sim/mesh_loading.h"
 
 #include <pthread.h>
@@ -135,21 +136,22 @@ void export_security_flags(const Flags& f) {
 // collects the --config files into `configs`.
 void apply_flags(int argc, char** argv, Flags& f, std::vector<std::string>& configs) {
   ServerSettings& s = f.settings;
+  // The network flags set the settings, but --discovery-server replaces the configuration file's
+  // list (f.discovery_servers) instead of adding to it.
+  struct {
+    int& domain;
+    std::string& profile;
+    std::string& profiles_file;
+    std::string& scene;
+    std::vector<std::string>& discovery_servers;
+  } network{s.domain, s.profile, s.profiles_file, s.scene, f.discovery_servers};
   cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
     if (a == "--config")
       configs.push_back(value());
-    else if (a == "--domain")
-      s.domain = cli::parse_domain(a, value(), usage_error);
-    else if (a == "--profile")
-      s.profile = cli::parse_profile(a, value(), usage_error);
-    else if (a == "--profiles")
-      s.profiles_file = value();
-    else if (a == "--scene")
-      s.scene = value();
+    else if (idl::parse_network_flag(a, value, network, usage_error))
+      ;
     else if (a == "--claim-wait")
       s.claim_wait_s = cli::parse_number(a, value(), 0, 60, usage_error);
-    else if (a == "--discovery-server")
-      f.discovery_servers.push_back(value());
     else if (a == "--security")
       f.security_dir = value();
     else if (a == "--identity")

@@ -2,8 +2,8 @@
 // over DDS. It grasps every object of the server's scene --trials times, records each grasp
 // from the server's GraspEvent, and prints the same table and JSON records as telegrasp-eval.
 #include "bot.h"
-#include "network_flags.h"
 #include "cli.h"
+#include "telegrasp/idl/network_flags.h"
 #include "telegrasp/sim/standin_objects.h"
 
 #include <algorithm>
@@ -135,13 +135,7 @@ Options parse(int argc, char** argv) {
       o.objects_dir = value();
     else if (a == "--json")
       o.json_path = value();
-    else if (a == "--domain")
-      o.domain = telegrasp::cli::parse_domain(a, value(), usage_error);
-    else if (a == "--profile")
-      o.profile = telegrasp::cli::parse_profile(a, value(), usage_error);
-    else if (a == "--profiles")
-      o.profiles_file = value();
-    else if (telegrasp::tools::parse_network_flag(a, value, o, usage_error))
+    else if (telegrasp::idl::parse_network_flag(a, value, o, usage_error))
       ;
     else if (a == "--timeout")
       o.timeout_s = telegrasp::cli::parse_number(a, value(), 0.1, 86400, usage_error);

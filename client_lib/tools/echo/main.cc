@@ -5,8 +5,8 @@
 // of positions in metres (_m), the grasp metrics in millimetres (nd_mm, signed_distance_mm,
 // hand_error_mm), times in seconds (_s); the format is printed by --help (kUsage).
 #include "client_json.h"
-#include "network_flags.h"
 #include "telegrasp/client/client.h"
+#include "telegrasp/idl/network_flags.h"
 
 #include "cli.h"
 
@@ -193,18 +193,12 @@ Args parse_args(int argc, char** argv) {
   cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
     if (a == "--topics")
       args.options.topics = parse_topics(value());
-    else if (a == "--domain")
-      args.options.domain = cli::parse_domain(a, value(), usage_error);
-    else if (a == "--profile")
-      args.options.profile = cli::parse_profile(a, value(), usage_error);
-    else if (a == "--profiles")
-      args.options.profiles_file = value();
+    else if (telegrasp::idl::parse_network_flag(a, value, args.options, usage_error))
+      ;
     else if (a == "--count")
       args.count = static_cast<std::uint64_t>(cli::parse_whole(a, value(), 1, 1'000'000'000'000, usage_error));
     else if (a == "--seconds")
       args.seconds = cli::parse_number(a, value(), 0.001, 1e9, usage_error);
-    else if (telegrasp::tools::parse_network_flag(a, value, args.options, usage_error))
-      ;
     else if (a == "--scenes")
       args.scenes = true;
     else if (a == "--json")

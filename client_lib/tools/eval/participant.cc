@@ -7,12 +7,12 @@
 // Each record also keeps the hand at the grasp tick (the server's HandSkeleton of that tick, in the
 // object's frame), so the report can draw the grasp.
 #include "cli.h"
-#include "network_flags.h"
 #include "commands.h"
 #include "grasp_event_record.h"
 #include "grasp_report.h"
 #include "protocol_common.h"
 #include "telegrasp/client/client.h"
+#include "telegrasp/idl/network_flags.h"
 #include "telegrasp/sim/hand_controller.h"
 #include "telegrasp/sim/hand_rig.h"
 
@@ -91,13 +91,7 @@ constexpr const char* kTool = "telegrasp-eval participant";
 Options parse(int argc, char** argv) {
   Options o;
   cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
-    if (a == "--domain")
-      o.domain = cli::parse_domain(a, value(), usage_error);
-    else if (a == "--profile")
-      o.profile = cli::parse_profile(a, value(), usage_error);
-    else if (a == "--profiles")
-      o.profiles_file = value();
-    else if (telegrasp::tools::parse_network_flag(a, value, o, usage_error))
+    if (telegrasp::idl::parse_network_flag(a, value, o, usage_error))
       ;
     else if (a == "--group") {
       o.group = value();

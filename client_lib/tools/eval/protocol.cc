@@ -12,6 +12,7 @@
 #include "protocol_common.h"
 #include "protocol_in_process.h"
 #include "questionnaire.h"
+#include "telegrasp/idl/network_flags.h"
 #include "telegrasp/sim/hand_controller.h"
 #include "telegrasp/sim/hand_rig.h"
 #include "telegrasp/sim/standin_objects.h"
@@ -93,6 +94,11 @@ Options:
                          participant that finds a used scene on its domain fails the run)
   --profile NAME         Fast DDS participant profile (default loopback)
   --profiles FILE        Fast DDS XML profiles (default: the shipped file)
+  --scene NAME           the scene (room) of the servers and participants (default
+                         $TELEGRASP_SCENE, else default)
+  --discovery-server HOST[:PORT]
+                         a Fast DDS discovery server for servers and participants; repeat in
+                         server-id order
   --record DIR           each server records its run (telegrasp-server --record) to
                          DIR/<mode>-p<participant>.tgrec, for telegrasp-replay
   --keep-logs DIR        keep each server's and participant's log and records in DIR
@@ -119,7 +125,8 @@ struct Options {
   std::vector<std::string> modes{sim::closing_mode_name(sim::ClosingMode::kPrecise)};  // names, as records write them
   std::string objects_dir, json_path, csv_path, report_path, questionnaire_path, profile = "loopback", profiles_file,
                                                                                  logs_dir, record_dir, skills_path,
-                                                                                 rig_path;
+                                                                                 rig_path, scene;
+  std::vector<std::string> discovery_servers;
   std::uint64_t seed = 1;
   bool in_process = false;
   std::vector<sim::OperatorSkill> skills;  // from --skills
@@ -170,12 +177,8 @@ Options parse(int argc, char** argv) {
       o.report_path = value();
     else if (a == "--questionnaire")
       o.questionnaire_path = value();
-    else if (a == "--domain")
-      o.domain = cli::parse_domain(a, value(), usage_error);
-    else if (a == "--profile")
-      o.profile = cli::parse_profile(a, value(), usage_error);
-    else if (a == "--profiles")
-      o.profiles_file = value();
+    else if (telegrasp::idl::parse_network_flag(a, value, o, usage_error))
+      ;
     else if (a == "--keep-logs")
       o.logs_dir = value();
     else if (a == "--record")
@@ -367,13 +370,12 @@ std::string job_name(const Job& j) { return j.mode + "-p" + std::to_string(j.par
 void start_job(Job& j, int slot, const Options& opt, const Setup& setup) {
   j.slot = slot;
   const std::string name = job_name(j);
-  const std::string domain = std::to_string(opt.domain + slot);
-  std::vector<std::string> server = {setup.server_bin, "--lockstep",  "--empty-scene", "--mode",
-                                     j.mode,           "--domain",    domain,          "--profile",
-                                     opt.profile,      "--quality-delay-ticks", "0",   "--quality-volume"};
+  const std::vector<std::string> network =
+      idl::network_args(idl::NetworkFlags{opt.domain + slot, opt.profile, opt.profiles_file, opt.scene,
+                                          opt.discovery_servers});
+  std::vector<std::string> server = {setup.server_bin, "--lockstep", "--empty-scene", "--mode", j.mode,
+                                     "--quality-delay-ticks", "0", "--quality-volume"};
   std::vector<std::string> bot = {setup.self_bin,  "participant",
-                                  "--domain",      domain,
-                                  "--profile",     opt.profile,
                                   "--group",       j.group,
                                   "--participant", std::to_string(j.participant),
                                   "--seed",        std::to_string(opt.seed),
@@ -384,8 +386,8 @@ void start_job(Job& j, int slot, const Options& opt, const Setup& setup) {
     for (const char* a : {"--objects", opt.objects_dir.c_str()}) server.push_back(a), bot.push_back(a);
     server.push_back("--fill-standins");
   }
-  if (!opt.profiles_file.empty())
-    for (const char* a : {"--profiles", opt.profiles_file.c_str()}) server.push_back(a), bot.push_back(a);
+  server.insert(server.end(), network.begin(), network.end());
+  bot.insert(bot.end(), network.begin(), network.end());
   if (!opt.skills_path.empty()) bot.insert(bot.end(), {"--skills", opt.skills_path});
   if (!opt.rig_path.empty()) {  // the servers' right hand, by a configuration file
     const fs::path config = setup.work / (name + ".config.textproto");

@@ -3,9 +3,9 @@
 // already running), runs telegrasp-bot processes (two hands each) and restarts each bot when it
 // ends, samples every --sample-s seconds and prints the samples and a verdict as JSON.
 #include "child_process.h"
-#include "network_flags.h"
 #include "cli.h"
 #include "telegrasp/client/client.h"
+#include "telegrasp/idl/network_flags.h"
 
 #include <nlohmann/json.hpp>
 
@@ -132,13 +132,7 @@ Options parse(int argc, char** argv) {
       o.max_growth_pct = telegrasp::cli::parse_number(a, value(), 0, 1000, usage_error);
     else if (a == "--max-rss-growth-pct")
       o.max_rss_growth_pct = telegrasp::cli::parse_number(a, value(), 0, 1000, usage_error);
-    else if (a == "--domain")
-      o.domain = telegrasp::cli::parse_domain(a, value(), usage_error);
-    else if (a == "--profile")
-      o.profile = telegrasp::cli::parse_profile(a, value(), usage_error);
-    else if (a == "--profiles")
-      o.profiles_file = value();
-    else if (telegrasp::tools::parse_network_flag(a, value, o, usage_error))
+    else if (telegrasp::idl::parse_network_flag(a, value, o, usage_error))
       ;
     else if (a == "--server-pid")
       o.server_pid = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 1L << 30, usage_error));
@@ -267,10 +261,7 @@ int main(int argc, char** argv) {
   }
   std::cerr << "telegrasp-soak: logs in " << log_dir << "\n";
 
-  std::vector<std::string> dds = {"--domain", std::to_string(opt.domain), "--profile", opt.profile};
-  if (!opt.profiles_file.empty()) dds.insert(dds.end(), {"--profiles", opt.profiles_file});
-  if (!opt.scene.empty()) dds.insert(dds.end(), {"--scene", opt.scene});
-  for (const std::string& server : opt.discovery_servers) dds.insert(dds.end(), {"--discovery-server", server});
+  const std::vector<std::string> dds = telegrasp::idl::network_args(opt);
 
   // The server: started here (and stopped at the end), or one already running.
   ChildProcess server;

@@ -4,11 +4,11 @@
 // (http://host:8765/) speaking the same protocol. See client_lib/tools/view/README.md.
 #include "channels.h"
 #include "drive.h"
-#include "network_flags.h"
 #include "cli.h"
 #include "mcap_recorder.h"
 #include "step_messages.h"
 #include "telegrasp/client/client.h"
+#include "telegrasp/idl/network_flags.h"
 #include "telegrasp/sim/data_paths.h"
 #include "telegrasp/sim/hand_rig.h"
 #include "view_model.h"
@@ -129,13 +129,7 @@ Args parse(int argc, char** argv) {
       a.address = value();
     else if (flag == "--rate")
       a.rate_hz = cli::parse_number(flag, value(), 1, 240, usage_error);
-    else if (flag == "--domain")
-      a.client.domain = cli::parse_domain(flag, value(), usage_error);
-    else if (flag == "--profile")
-      a.client.profile = cli::parse_profile(flag, value(), usage_error);
-    else if (flag == "--profiles")
-      a.client.profiles_file = value();
-    else if (telegrasp::tools::parse_network_flag(flag, value, a.client, usage_error))
+    else if (telegrasp::idl::parse_network_flag(flag, value, a.client, usage_error))
       ;
     else if (flag == "--web")
       a.web_dir = value();
