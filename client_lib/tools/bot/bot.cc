@@ -265,11 +265,7 @@ void Bot::server_restarted(const client::SceneState& scene) {
     r.reason = "server restarted";
     r.interrupted = true;
     --h.target->started;  // run again
-    h.target = nullptr;
-    h.op.reset();
-    h.stage = Stage::kIdle;
-    h.input = {};
-    h.input.X_WorldPalm = h.X_WorldStart;
+    h.leave_target();
     add_record(std::move(r));
     ++interrupted;
   }
@@ -720,11 +716,7 @@ void Bot::abandon(Hand& h, const client::HandKey& other) {
   std::cerr << side_name(h.key.side) << " hand leaves " << h.target->label << " to " << hand_name(other)
             << " for now\n";
   --h.target->started;
-  h.target = nullptr;
-  h.op.reset();
-  h.stage = Stage::kIdle;
-  h.input = {};
-  h.input.X_WorldPalm = h.X_WorldStart;
+  h.leave_target();
 }
 
 void Bot::finish_trial(Hand& h) {
@@ -746,12 +738,7 @@ void Bot::finish_trial(Hand& h) {
   }
   if (h.seen_grasped && !h.got_grasp_event && r.reason.empty()) r.reason = "no grasp event received";
   ++h.target->finished;
-  h.target = nullptr;
-  h.op.reset();
-  h.stage = Stage::kIdle;
-  // Back to where it started, clear of the object, so that other people's hands may take it.
-  h.input = {};
-  h.input.X_WorldPalm = h.X_WorldStart;
+  h.leave_target();
   add_record(std::move(r));
 }
 

@@ -122,6 +122,16 @@ struct Hand {
   // skeleton), before our squeeze: every bot sees the same skeletons, so they agree who came first.
   std::optional<double> near_time;
   std::map<client::HandKey, double> others_near_time;
+
+  /// Done with its target (finished, left to another hand or cut short): idle, and back where it
+  /// started, clear of the object, so that other people's hands may take it.
+  void leave_target() {
+    target = nullptr;
+    op.reset();
+    stage = Stage::kIdle;
+    input = {};
+    input.X_WorldPalm = X_WorldStart;
+  }
 };
 
 // The bot's hands, its work list (every object of the first SceneState, --trials times) and its

@@ -336,12 +336,7 @@ class Participant {
 
 int run_participant(int argc, char** argv) {
   Options opt = parse(argc, argv);
-  try {
-    if (!opt.skills_path.empty()) opt.skills = load_skill_file(opt.skills_path);
-  } catch (const std::exception& e) {
-    std::cerr << kTool << ": --skills " << e.what() << "\n";
-    return cli::kExitFailure;
-  }
+  if (!load_skills_flag(opt.skills_path, opt.skills, kTool)) return cli::kExitFailure;
   std::map<std::string, sim::ObjectModelPtr> models;
   try {
     models = protocol_models(opt.objects_dir, nullptr);

@@ -614,12 +614,7 @@ bool write_reports(const report::ExperimentRun& run, const json& summaries, cons
 
 int run_protocol(int argc, char** argv) {
   Options opt = parse(argc, argv);
-  try {
-    if (!opt.skills_path.empty()) opt.skills = load_skill_file(opt.skills_path);
-  } catch (const std::exception& e) {
-    std::cerr << kTool << ": --skills " << e.what() << "\n";
-    return cli::kExitFailure;
-  }
+  if (!load_skills_flag(opt.skills_path, opt.skills, kTool)) return cli::kExitFailure;
   const std::optional<ReportInputs> inputs = load_report_inputs(opt);
   if (!inputs) return cli::kExitFailure;
   std::optional<Setup> setup;

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <iostream>
 #include <numbers>
 #include <optional>
 #include <random>
@@ -68,6 +69,16 @@ std::vector<sim::OperatorSkill> load_skill_file(const std::string& path) {
     return sim::parse_skill_profiles(text.str());
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(path + ": " + e.what());
+  }
+}
+
+bool load_skills_flag(const std::string& path, std::vector<sim::OperatorSkill>& skills, const std::string& tool) {
+  try {
+    if (!path.empty()) skills = load_skill_file(path);
+    return true;
+  } catch (const std::exception& e) {
+    std::cerr << tool << ": --skills " << e.what() << "\n";
+    return false;
   }
 }
 

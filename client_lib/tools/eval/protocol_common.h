@@ -38,6 +38,10 @@ sim::OperatorSkill participant_skill(const std::string& group, std::uint64_t see
 /// naming the file when it cannot be read or parsed.
 std::vector<sim::OperatorSkill> load_skill_file(const std::string& path);
 
+/// The --skills flag: the profiles of `path` into `skills` (nothing when `path` is empty); false,
+/// with "<tool>: --skills <why>" on stderr, when the file cannot be read or parsed.
+bool load_skills_flag(const std::string& path, std::vector<sim::OperatorSkill>& skills, const std::string& tool);
+
 /// Where object number `index` (0-based, protocol order) is spawned for `participant`: resting on
 /// the table at a uniform random (x, y) in the reach area (x 0.40..0.55 m, y -0.10..0.10 m in
 /// front of the operator) with a uniform random yaw. The same in every mode.
