@@ -66,14 +66,15 @@ Options:
   --scenes         instead of samples: list the live servers of every scene from the scene
                    directory after --seconds (default 3) of listening, one line each (scene,
                    host, serving, clients, hands, objects, tick p99, missed ticks, CPU, host
-                   load); exit 3 when there is none
-  --json           with --scenes: one JSON array instead, an object per server ("scene",
+                   load); exit 1 when there is none
+  --format F       with --scenes: text (default, a line per server) or json: one JSON array
+                   instead, an object per server ("scene",
                    "host", "version", "incarnation", "started_unix_s", "serving", "clients",
                    "hands", "objects", "tick_rate_hz", "tick_us_p99", "missed_ticks",
                    "cpu_percent", "host_cores", "host_load")
   --pick NAME      with --scenes: print only the host to run scene NAME on: the host that
                    serves it, else the least loaded host (lowest load per core, then fewest
-                   hands); exit 3 when no server is live
+                   hands); exit 1 when no server is live
   -h, --help       this text
 
 Output: one object per sample, "topic" first, field names as in the client library's types
@@ -125,8 +126,8 @@ NaN prints as null.
 
 Stops cleanly on SIGINT or SIGTERM, or when stdout is closed (e.g. piped into head).
 Exit status: 0 done (count, seconds, a signal or a closed stdout), 1 a runtime failure (DDS could
-not start, e.g. an unknown --profile), 2 a usage error (a bad or missing option or value), 3 with
---scenes: no live server found.
+not start, e.g. an unknown --profile; with --scenes --pick: no live server found), 2 a usage error
+(a bad or missing option or value).
 )";
 
 // ---------------------------------------------------------------------------------------------
@@ -201,8 +202,14 @@ Args parse_args(int argc, char** argv) {
       args.seconds = cli::parse_number(a, value(), 0.001, 1e9, usage_error);
     else if (a == "--scenes")
       args.scenes = true;
-    else if (a == "--json")
+    else if (a == "--format") {
+      const std::string f = value();
+      if (f != "json" && f != "text") usage_error("--format expects text or json, got '" + f + "'");
+      args.json = f == "json";
+    } else if (a == "--json") {  // the old spelling: every other tool's --json takes a file
+      std::cerr << "telegrasp-echo: --json is deprecated, use --format json (every other tool's --json names a file)\n";
       args.json = true;
+    }
     else if (a == "--pick") {
       args.pick = value();
       if (const std::string e = tc::scene_name_error(*args.pick); !e.empty()) usage_error("--pick: " + e);
@@ -210,7 +217,7 @@ Args parse_args(int argc, char** argv) {
       return false;
     return true;
   });
-  if ((args.json || args.pick) && !args.scenes) usage_error("--json and --pick go with --scenes");
+  if ((args.json || args.pick) && !args.scenes) usage_error("--format and --pick go with --scenes");
   if (args.scenes) args.options.topics = tc::kSceneDirectory;
   return args;
 }
@@ -246,7 +253,7 @@ int list_scenes(const Args& args, tc::Client& client) {
     if (!host) host = tc::least_loaded_host(scenes);
     if (!host) {
       std::cerr << "telegrasp-echo: no live server on the scene directory\n";
-      return 3;
+      return telegrasp::cli::kExitFailure;
     }
     std::cout << *host << "\n";
     return 0;
