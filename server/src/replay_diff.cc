@@ -76,6 +76,15 @@ struct FieldDiff {
     value(n + ".nd_hit", a.nd_hit(), b.nd_hit());
   }
 
+  // The fields that open GraspState and ContactSet: the hand, then the tick and its time.
+  template <class M>
+  void hand_and_tick(const M& a, const M& b) {
+    value("client_id", a.client_id(), b.client_id());
+    value("hand_side", a.hand_side(), b.hand_side());
+    value("tick", a.tick(), b.tick());
+    value("time", a.time(), b.time());
+  }
+
   void fields(const msg::HandSkeleton& a, const msg::HandSkeleton& b) {
     value("client_id", a.client_id(), b.client_id());
     value("hand_side", a.hand_side(), b.hand_side());
@@ -95,10 +104,7 @@ struct FieldDiff {
     value("resolve_angle", a.resolve_angle(), b.resolve_angle());
   }
   void fields(const msg::GraspState& a, const msg::GraspState& b) {
-    value("client_id", a.client_id(), b.client_id());
-    value("hand_side", a.hand_side(), b.hand_side());
-    value("tick", a.tick(), b.tick());
-    value("time", a.time(), b.time());
+    hand_and_tick(a, b);
     value("selected_object", a.selected_object(), b.selected_object());
     value("grasped_object", a.grasped_object(), b.grasped_object());
     value("trigger", a.trigger(), b.trigger());
@@ -110,10 +116,7 @@ struct FieldDiff {
     value("grasp_type", a.grasp_type(), b.grasp_type());
   }
   void fields(const msg::ContactSet& a, const msg::ContactSet& b) {
-    value("client_id", a.client_id(), b.client_id());
-    value("hand_side", a.hand_side(), b.hand_side());
-    value("tick", a.tick(), b.tick());
-    value("time", a.time(), b.time());
+    hand_and_tick(a, b);
     value("object_id", a.object_id(), b.object_id());
     pose("object_pose", a.object_pose(), b.object_pose());
     sequence("contacts", a.contacts(), b.contacts(),

@@ -85,11 +85,32 @@ std::unique_ptr<Client> observe(int domain, Observed& seen, const std::string& i
   return c;
 }
 
+// Options for a client `id` on `domain` that publishes and subscribes to no topic.
+ClientOptions publisher_options(const std::string& id, int domain) {
+  ClientOptions o;
+  o.client_id = id;
+  o.domain = domain;
+  o.topics = 0;
+  return o;
+}
+
 std::unique_ptr<ChildProcess> start_server(int domain, const std::string& config, const std::string& name) {
   std::vector<std::string> args{bin("telegrasp-server"), "--domain", std::to_string(domain), "--profile", "loopback"};
   if (!config.empty()) args.insert(args.end(), {"--config", config});
   return std::make_unique<ChildProcess>(args, work_path(name + "_server.log"));
 }
+
+// A leased domain served by a telegrasp-server (with `config` if not empty), watched by an
+// observer made before the server.
+struct ServedDomain {
+  explicit ServedDomain(const std::string& name, const std::string& config = "")
+      : server(start_server(domain, config, name)) {}
+  const DomainLease lease;
+  const int domain = lease.domain();
+  Observed seen;
+  std::unique_ptr<Client> observer = observe(domain, seen);
+  std::unique_ptr<ChildProcess> server;
+};
 
 std::unique_ptr<ChildProcess> start_bot(int domain, const std::string& id, const std::string& hands, int trials,
                                         const std::string& json, const std::string& profile = "loopback") {
@@ -144,12 +165,10 @@ std::string check_grasp_release_order(const std::vector<GraspEvent>& events, boo
 // saw, and contacts in object coordinates moved by the object pose published for the same tick
 // give the world contacts.
 TEST(LoopbackTest, TwoBotsFourHandsEveryEventOnceContactsConsistent) {
-  const DomainLease lease;
-  const int domain = lease.domain();
-  Observed seen;
-  auto observer = observe(domain, seen);
-  auto server = start_server(domain, write_config("four", kFourObjects), "four");
-  ASSERT_TRUE(observer->wait_for_server(kStartGuard)) << "no server on domain " << domain;
+  ServedDomain served("four", write_config("four", kFourObjects));
+  const int domain = served.domain;
+  Observed& seen = served.seen;
+  ASSERT_TRUE(served.observer->wait_for_server(kStartGuard)) << "no server on domain " << domain;
   const std::string json_a = work_path("bot_a.json"), json_b = work_path("bot_b.json");
   auto a = start_bot(domain, "bot-a", "both", 1, json_a);
   auto b = start_bot(domain, "bot-b", "both", 1, json_b);
@@ -237,12 +256,10 @@ TEST(LoopbackTest, TwoBotsFourHandsEveryEventOnceContactsConsistent) {
 // its object with a release event after the grasp event, physics takes the object back, and the
 // other bot carries on to the end of its trials. The release delay is printed, not asserted.
 TEST(LoopbackTest, KilledBotsObjectIsReleasedAndFalls) {
-  const DomainLease lease;
-  const int domain = lease.domain();
-  Observed seen;
-  auto observer = observe(domain, seen);
-  auto server = start_server(domain, write_config("kill", kFourObjects), "kill");
-  ASSERT_TRUE(observer->wait_for_server(kStartGuard));
+  ServedDomain served("kill", write_config("kill", kFourObjects));
+  const int domain = served.domain;
+  Observed& seen = served.seen;
+  ASSERT_TRUE(served.observer->wait_for_server(kStartGuard));
   // The victim speaks UDP only: a participant SIGKILLed while on Fast DDS's shared-memory transport
   // can leave its mutexes locked, and the server then stalls on them ("Interprocess mutex timeout",
   // seen under ASan): that is Fast DDS's matter, not what this test is about.
@@ -312,18 +329,11 @@ TEST(LoopbackTest, KilledBotsObjectIsReleasedAndFalls) {
 // Every kind of bad input is dropped and counted once per sample under its reason, and the server
 // keeps serving: a valid sample afterwards is reflected in a skeleton.
 TEST(LoopbackTest, BadInputsAreRejectedAndCounted) {
-  const DomainLease lease;
-  const int domain = lease.domain();
-  Observed seen;
-  auto observer = observe(domain, seen);
-  auto server = start_server(domain, "", "bad");
-  ASSERT_TRUE(observer->wait_for_server(kStartGuard));
-  ClientOptions o;
-  o.client_id = "eve";
-  o.domain = domain;
-  o.topics = 0;
-  Client eve(o);
+  ServedDomain served("bad");
+  ASSERT_TRUE(served.observer->wait_for_server(kStartGuard));
+  Client eve(publisher_options("eve", served.domain));
   ASSERT_TRUE(eve.wait_for_server(kStartGuard));
+  Observed& seen = served.seen;
 
   client::ControllerSample good;
   good.X_WorldPalm.translation() = Eigen::Vector3d(0, -0.5, 0.5);  // above the table, far from objects
@@ -419,21 +429,15 @@ TEST(LoopbackTest, BadInputsAreRejectedAndCounted) {
   // Still serving: a valid sample at a new height shows up in eve's skeleton.
   good.X_WorldPalm.translation().z() = 0.6;
   EXPECT_TRUE(publish_until_shown(good)) << "the server stopped taking eve's samples";
-  EXPECT_TRUE(server->running());
+  EXPECT_TRUE(served.server->running());
 }
 
 // A second participant claiming another client's id cannot move that client's hand.
 TEST(LoopbackTest, ASpoofedClientIdCannotMoveAnotherClientsHand) {
-  const DomainLease lease;
-  const int domain = lease.domain();
-  Observed seen;
-  auto observer = observe(domain, seen);
-  auto server = start_server(domain, "", "spoof");
-  ASSERT_TRUE(observer->wait_for_server(kStartGuard));
-  ClientOptions o;
-  o.client_id = "alice";
-  o.domain = domain;
-  o.topics = 0;
+  ServedDomain served("spoof");
+  ASSERT_TRUE(served.observer->wait_for_server(kStartGuard));
+  Observed& seen = served.seen;
+  const ClientOptions o = publisher_options("alice", served.domain);
   Client alice(o);
   Client mallory(o);  // same client id, another participant
   ASSERT_TRUE(alice.wait_for_server(kStartGuard));

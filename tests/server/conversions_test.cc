@@ -3,6 +3,7 @@
 
 #include "telegrasp/idl/geometry_hash.h"
 #include "telegrasp/sim/hand_rig.h"
+#include "test_scene.h"
 
 #include <gtest/gtest.h>
 
@@ -78,7 +79,7 @@ TEST(ConversionsTest, ContactRoundTrips) {
 // Every phalanx is published in the world frame: X_WorldPhalanx = X_WorldPalm * X_PalmPhalanx; a
 // late-latched skeleton moves the whole hand to the new palm pose and keeps the fingers.
 TEST(ConversionsTest, SkeletonIsTheHandInTheWorldFrame) {
-  auto rig = std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")));
+  auto rig = server::rig("human_right");
   sim::HandController hand(rig, {});
   sim::ControllerInput in;
   in.X_WorldPalm = some_pose();
@@ -114,14 +115,7 @@ TEST(ConversionsTest, SkeletonIsTheHandInTheWorldFrame) {
 TEST(ConversionsTest, HoldersAreTheFirstHolderAndEveryHolder) {
   msg::ObjectState two;
   set_holders(two, {{"alice", 1}, {"bob", 0}});
-  EXPECT_TRUE(two.held());
-  EXPECT_EQ(two.holder_client().to_string(), "alice");
-  EXPECT_EQ(two.holder_hand(), 1);
-  ASSERT_EQ(two.holders().size(), 2u);
-  EXPECT_EQ(two.holders()[0].client_id().to_string(), "alice");
-  EXPECT_EQ(two.holders()[0].hand_side(), 1);
-  EXPECT_EQ(two.holders()[1].client_id().to_string(), "bob");
-  EXPECT_EQ(two.holders()[1].hand_side(), 0);
+  expect_held_by(two, {{"alice", 1}, {"bob", 0}});
   msg::ObjectState free;
   set_holders(free, {});
   EXPECT_FALSE(free.held());
@@ -129,7 +123,7 @@ TEST(ConversionsTest, HoldersAreTheFirstHolderAndEveryHolder) {
 }
 
 TEST(ConversionsTest, GraspEventCarriesMetricsAndNames) {
-  auto rig = std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")));
+  auto rig = server::rig("human_right");
   sim::GraspEvent e;
   e.kind = sim::GraspEvent::Kind::kGrasp;
   e.hand = sim::HandId(3);

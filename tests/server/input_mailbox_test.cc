@@ -127,14 +127,23 @@ TEST_F(MailboxTest, WaitReturnsFalseAtTheDeadline) {
       << "a past deadline returns at once";
 }
 
+// A mailbox for five-finger hands under `limits`, its log quiet, keeping the refusals it notifies in
+// `told`.
+struct ToldMailbox {
+  explicit ToldMailbox(const InputLimits& limits) : box({5, 5}, limits, [](const std::string&) {}) {
+    box.set_notifier([this](const Refusal& r) { told.push_back(r); });
+  }
+  std::vector<Refusal> told;
+  InputMailbox box;
+};
+
 // A hand flooding at 5 kHz for 2 s gets its rate (250/s) plus one burst (a second's worth) through; the rest are
 // counted as rate_limited, and the client is told at most once a second.
 TEST(MailboxLimitsTest, AFloodingHandIsRateLimitedAndTold) {
   InputLimits limits;
   limits.max_input_rate_hz = 250;
-  std::vector<Refusal> told;
-  InputMailbox box({5, 5}, limits, [](const std::string&) {});
-  box.set_notifier([&](const Refusal& r) { told.push_back(r); });
+  ToldMailbox mailbox(limits);
+  auto& [told, box] = mailbox;
   int accepted = 0;
   const std::int64_t period_ns = 200'000;  // 5 kHz
   for (int i = 0; i < 10'000; ++i) accepted += box.offer(sample("flood", 1, i + 1), kAlicePc, i * period_ns);
@@ -175,9 +184,8 @@ TEST(MailboxLimitsTest, ARelayOwnsItsPrefixUpToItsOwnLimit) {
   InputLimits limits;
   limits.max_hands_per_participant = 2;
   limits.relays = {{"xr-", 5}};
-  std::vector<Refusal> told;
-  InputMailbox box({5, 5}, limits, [](const std::string&) {});
-  box.set_notifier([&](const Refusal& r) { told.push_back(r); });
+  ToldMailbox mailbox(limits);
+  auto& [told, box] = mailbox;
   int accepted = 0;
   for (int i = 0; i < 8; ++i) accepted += box.offer(sample("xr-" + std::to_string(i), 1, 1), kBridge, i);
   EXPECT_EQ(accepted, 5);  // the relay's limit, above the participant limit of 2
@@ -211,9 +219,8 @@ TEST(MailboxLimitsTest, ARelayOwnsItsPrefixUpToItsOwnLimit) {
 TEST(MailboxLimitsTest, CommandsAreAdmittedByOwnerAndRate) {
   InputLimits limits;
   limits.max_command_rate_hz = 20;
-  std::vector<Refusal> told;
-  InputMailbox box({5, 5}, limits, [](const std::string&) {});
-  box.set_notifier([&](const Refusal& r) { told.push_back(r); });
+  ToldMailbox mailbox(limits);
+  auto& [told, box] = mailbox;
   msg::SceneCommand c;
   c.client_id("alice");
   EXPECT_TRUE(box.offer(sample("alice", 1, 1), kAlicePc, 0));

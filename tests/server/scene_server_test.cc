@@ -6,6 +6,7 @@
 
 #include "telegrasp/sim/scripted_operator.h"
 #include "telegrasp/sim/standin_objects.h"
+#include "test_scene.h"
 
 #include <gtest/gtest.h>
 
@@ -35,16 +36,6 @@ struct RecordingSink : OutputSink {
   void publish(const msg::ClientNotice& m) override { notices.push_back(m); }
   void hand_removed(const HandAddress& hand) override { removed.push_back(hand); }
 };
-
-std::shared_ptr<const sim::HandRig> rig(const char* name) {
-  return std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path(name)));
-}
-
-std::vector<sim::ObjectModelPtr> standins() {
-  std::vector<sim::ObjectModelPtr> out;
-  for (const auto& o : sim::protocol_objects()) out.push_back(sim::make_standin_model(o));
-  return out;
-}
 
 // A server with an empty scene, driven by hand with explicit clock values.
 struct SceneServerTest : ::testing::Test {
@@ -380,14 +371,7 @@ TEST_F(SceneServerTest, TwoHandsOfOneClientShareAnObjectAndTheSceneListsBoth) {
   EXPECT_EQ(scene->world().holders(sim::ObjectId(id)).size(), 2u);
   ASSERT_EQ(sink.events.size(), 2u) << "two grasps, no release";
   const msg::ObjectState& o = sink.scenes.back().objects().at(0);
-  EXPECT_TRUE(o.held());
-  EXPECT_EQ(o.holder_client().to_string(), "alice");
-  EXPECT_EQ(o.holder_hand(), 1);
-  ASSERT_EQ(o.holders().size(), 2u);
-  EXPECT_EQ(o.holders()[0].client_id().to_string(), "alice");
-  EXPECT_EQ(o.holders()[0].hand_side(), 1);
-  EXPECT_EQ(o.holders()[1].client_id().to_string(), "alice");
-  EXPECT_EQ(o.holders()[1].hand_side(), 0);
+  expect_held_by(o, {{"alice", 1}, {"alice", 0}});
 }
 
 // two_hand_mode takeover: the left hand's grasp takes the box and the right hand lets go.

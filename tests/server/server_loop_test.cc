@@ -7,6 +7,7 @@
 #include "server_loop.h"
 
 #include "telegrasp/sim/standin_objects.h"
+#include "test_scene.h"
 
 #include <gtest/gtest.h>
 
@@ -113,15 +114,6 @@ struct Trace : OutputSink, SceneCallObserver {
     return out;
   }
 };
-
-std::vector<sim::ObjectModelPtr> standins() {
-  std::vector<sim::ObjectModelPtr> out;
-  for (const auto& o : sim::protocol_objects()) out.push_back(sim::make_standin_model(o));
-  return out;
-}
-std::shared_ptr<const sim::HandRig> rig(const char* name) {
-  return std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path(name)));
-}
 
 // An empty scene at 90 Hz driven by a ServerLoop on the fake clock; scene calls and outputs go to
 // the trace.

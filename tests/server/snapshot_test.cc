@@ -10,6 +10,7 @@
 #include "scene_server.h"
 #include "scene_setup.h"
 #include "telegrasp/sim/standin_objects.h"
+#include "test_scene.h"
 
 #include <gtest/gtest.h>
 
@@ -22,16 +23,6 @@ namespace telegrasp::server {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::vector<sim::ObjectModelPtr> standins() {
-  std::vector<sim::ObjectModelPtr> out;
-  for (const auto& o : sim::protocol_objects()) out.push_back(sim::make_standin_model(o));
-  return out;
-}
-
-std::shared_ptr<const sim::HandRig> rig(const char* name) {
-  return std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path(name)));
-}
 
 msg::ObjectState object(int id, const std::string& name, const Eigen::Vector3d& p, const Eigen::Quaterniond& q) {
   msg::ObjectState o;

@@ -141,8 +141,8 @@ TEST(GraspQuality, ThreeContactsOnTheEquator) {
   }
 }
 
-TEST(GraspQuality, SixFrictionlessContactsAtCubeFaceCentresResistNoTorque) {
-  // A normal force at a face centre points through the centre: no contact gives any torque.
+// One contact at each face centre of the unit cube, its normal pointing in.
+Contacts cube_face_centre_contacts() {
   Contacts c;
   for (double s : {1.0, -1.0})
     for (int axis = 0; axis < 3; ++axis) {
@@ -150,6 +150,12 @@ TEST(GraspQuality, SixFrictionlessContactsAtCubeFaceCentresResistNoTorque) {
       n[axis] = s;
       c.push_back({0.5 * n, n});
     }
+  return c;
+}
+
+TEST(GraspQuality, SixFrictionlessContactsAtCubeFaceCentresResistNoTorque) {
+  // A normal force at a face centre points through the centre: no contact gives any torque.
+  const Contacts c = cube_face_centre_contacts();
   expect_zero(quiet_quality(c, 0.0, std::sqrt(3.0) / 2));
 }
 
@@ -162,13 +168,7 @@ TEST(GraspQuality, SixContactsWithFrictionAtCubeFaceCentres) {
   // hyperplane at distance k mu sqrt(2/3) = mu sqrt(2) / 3; over pure twists no b does better
   // (max over faces of the octagon norm of b x n is smallest at the diagonal). Qhull's nearest
   // facet is that one.
-  Contacts c;
-  for (double s : {1.0, -1.0})
-    for (int axis = 0; axis < 3; ++axis) {
-      Eigen::Vector3d n = Eigen::Vector3d::Zero();
-      n[axis] = s;
-      c.push_back({0.5 * n, n});
-    }
+  const Contacts c = cube_face_centre_contacts();
   const double mu = 0.5;
   const GraspQuality q = quiet_quality(c, mu, std::sqrt(3.0) / 2);
   EXPECT_NEAR(q.epsilon, mu * std::sqrt(2.0) / 3, 1e-9);

@@ -309,33 +309,33 @@ TEST(MeshDistance, CountsTrianglesAndMemory) {
 
 // ---------------------------------------------------------------- closest point on a box
 
-TEST(MeshDistance, BoxClosestPointOnFace) {
+// Expects the point of the kBoxHalf box closest to `p` at `on_mesh`, `distance` away (and as
+// much outside, if `check_signed`), with normal `normal`.
+void expect_box_closest(const Vector3d& p, const Vector3d& on_mesh, double distance, const Vector3d& normal,
+                        bool check_signed) {
   const MeshDistance md(make_box(kBoxHalf));
-  const PointQuery q = md.closest_point(Vector3d(0.08, 0.01, -0.005));
+  const PointQuery q = md.closest_point(p);
   ASSERT_TRUE(q.found);
-  expect_vec_near(q.point_on_mesh, Vector3d(0.05, 0.01, -0.005), kExact);
-  EXPECT_NEAR(q.distance, 0.03, kExact);
-  EXPECT_NEAR(q.signed_distance, 0.03, kExact);
-  expect_vec_near(q.normal, Vector3d::UnitX(), kExact);
+  expect_vec_near(q.point_on_mesh, on_mesh, kExact);
+  EXPECT_NEAR(q.distance, distance, kExact);
+  if (check_signed) {
+    EXPECT_NEAR(q.signed_distance, distance, kExact);
+  }
+  expect_vec_near(q.normal, normal, kExact);
+}
+
+TEST(MeshDistance, BoxClosestPointOnFace) {
+  expect_box_closest(Vector3d(0.08, 0.01, -0.005), Vector3d(0.05, 0.01, -0.005), 0.03, Vector3d::UnitX(), true);
 }
 
 TEST(MeshDistance, BoxClosestPointOnEdgeUsesEdgePseudoNormal) {
-  const MeshDistance md(make_box(kBoxHalf));
-  const PointQuery q = md.closest_point(Vector3d(0.07, 0.05, 0.004));
-  ASSERT_TRUE(q.found);
-  expect_vec_near(q.point_on_mesh, Vector3d(0.05, 0.03, 0.004), kExact);
-  EXPECT_NEAR(q.distance, 0.02 * std::sqrt(2.0), kExact);
-  EXPECT_NEAR(q.signed_distance, 0.02 * std::sqrt(2.0), kExact);
-  expect_vec_near(q.normal, Vector3d(1, 1, 0).normalized(), kExact);
+  expect_box_closest(Vector3d(0.07, 0.05, 0.004), Vector3d(0.05, 0.03, 0.004), 0.02 * std::sqrt(2.0),
+                     Vector3d(1, 1, 0).normalized(), true);
 }
 
 TEST(MeshDistance, BoxClosestPointOnVertexUsesAngleWeightedNormal) {
-  const MeshDistance md(make_box(kBoxHalf));
-  const PointQuery q = md.closest_point(Vector3d(0.06, 0.04, 0.03));
-  ASSERT_TRUE(q.found);
-  expect_vec_near(q.point_on_mesh, Vector3d(0.05, 0.03, 0.02), kExact);
-  EXPECT_NEAR(q.distance, 0.01 * std::sqrt(3.0), kExact);
-  expect_vec_near(q.normal, Vector3d(1, 1, 1).normalized(), kExact);
+  expect_box_closest(Vector3d(0.06, 0.04, 0.03), Vector3d(0.05, 0.03, 0.02), 0.01 * std::sqrt(3.0),
+                     Vector3d(1, 1, 1).normalized(), false);
 }
 
 TEST(MeshDistance, TriangleIndexRefersToInputMesh) {
@@ -754,6 +754,19 @@ TEST(MeshDistance, SphereCastAgainstIcosphereMatchesAnalyticSphere) {
 
 // ---------------------------------------------------------------- brute-force cross-checks
 
+// A capsule from `a`: b up to 30 mm away in a random direction, radius up to 10 mm (drawn in
+// that order from `rng`).
+struct RandomCapsule {
+  Vector3d a, b;
+  double r;
+};
+RandomCapsule random_capsule(const Vector3d& a, std::mt19937& rng) {
+  std::uniform_real_distribution<double> len(0.0, 0.03);
+  std::uniform_real_distribution<double> rad(0.0, 0.01);
+  const Vector3d b = a + len(rng) * random_unit(rng);
+  return {a, b, rad(rng)};
+}
+
 class IcosphereBruteForce : public ::testing::Test {
  protected:
   static constexpr double kRadius = 0.04;
@@ -810,13 +823,9 @@ TEST_F(IcosphereBruteForce, ClosestToSegmentMatchesBruteForce) {
 }
 
 TEST_F(IcosphereBruteForce, CapsuleOverlapsMatchesBruteForce) {
-  std::uniform_real_distribution<double> len(0.0, 0.03);
-  std::uniform_real_distribution<double> rad(0.0, 0.01);
   int overlaps = 0;
   for (int i = 0; i < 2000; ++i) {
-    const Vector3d a = random_point();
-    const Vector3d b = a + len(rng_) * random_unit(rng_);
-    const double r = rad(rng_);
+    const auto [a, b, r] = random_capsule(random_point(), rng_);
     const double d = brute_segment_distance(mesh_, a, b);
     if (std::abs(d - r) < 1e-9) continue;  // too close to call
     // With no surface within r the segment is all inside or all outside; decide at a from the
@@ -982,14 +991,10 @@ TEST_F(TiltedThinPlateBruteForce, ClosestToSegmentMatchesBruteForce) {
 }
 
 TEST_F(TiltedThinPlateBruteForce, CapsuleOverlapsMatchesBruteForce) {
-  std::uniform_real_distribution<double> len(0.0, 0.03);
-  std::uniform_real_distribution<double> rad(0.0, 0.01);
   int overlaps = 0;
   int checked = 0;
   for (int i = 0; i < 1000; ++i) {
-    const Vector3d a = random_point();
-    const Vector3d b = a + len(rng_) * random_unit(rng_);
-    const double r = rad(rng_);
+    const auto [a, b, r] = random_capsule(random_point(), rng_);
     const double d = brute_segment_distance(mesh_, a, b);
     if (std::abs(d - r) < 1e-9) continue;  // too close to call
     if (d > r && !outside_ellipsoid(a)) continue;  // not classified analytically

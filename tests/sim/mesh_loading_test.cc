@@ -68,6 +68,15 @@ class TempDir {
   fs::path path_;
 };
 
+/// Loads `path` and checks its vertex and triangle counts and that it is closed and consistent.
+TriangleMesh expect_closed_mesh(const std::string& path, std::size_t vertices, std::size_t triangles) {
+  TriangleMesh mesh = load_mesh_file(path);
+  EXPECT_EQ(mesh.vertices.size(), vertices);
+  EXPECT_EQ(mesh.triangles.size(), triangles);
+  EXPECT_TRUE(is_closed_and_consistent(mesh));
+  return mesh;
+}
+
 /// Expects load_mesh_file(path) to throw MeshLoadError naming the path (and `fragment`).
 void expect_load_error(const std::string& path, const std::string& fragment = "") {
   try {
@@ -82,6 +91,13 @@ void expect_load_error(const std::string& path, const std::string& fragment = ""
 
 // ------------------------------------------------------------------ clean_mesh
 
+// Expects what clean_mesh reports: vertices welded, degenerate and duplicate triangles dropped.
+void expect_report(const MeshCleanReport& report, std::size_t welded, std::size_t degenerate, std::size_t duplicate) {
+  EXPECT_EQ(report.vertices_welded, welded);
+  EXPECT_EQ(report.degenerate_dropped, degenerate);
+  EXPECT_EQ(report.duplicate_dropped, duplicate);
+}
+
 TEST(CleanMesh, WeldsCoincidentVertices) {
   // Two triangles of a unit square, stored as a soup: the shared edge's corners are doubled.
   TriangleMesh soup;
@@ -89,9 +105,7 @@ TEST(CleanMesh, WeldsCoincidentVertices) {
   soup.triangles = {{0, 1, 2}, {3, 4, 5}};
   MeshCleanReport report;
   const TriangleMesh cleaned = clean_mesh(soup, 1e-7, &report);
-  EXPECT_EQ(report.vertices_welded, 2u);
-  EXPECT_EQ(report.degenerate_dropped, 0u);
-  EXPECT_EQ(report.duplicate_dropped, 0u);
+  expect_report(report, 2u, 0u, 0u);
   ASSERT_EQ(cleaned.vertices.size(), 4u);
   ASSERT_EQ(cleaned.triangles.size(), 2u);
   EXPECT_EQ(cleaned.triangles[1][0], cleaned.triangles[0][0]);
@@ -153,9 +167,7 @@ TEST(CleanMesh, BackToBackFinFromWeldIsDropped) {
   mesh.triangles = {{0, 2, 1}, {0, 1, 3}, {1, 0, 4}};
   MeshCleanReport report;
   const TriangleMesh cleaned = clean_mesh(mesh, 1e-7, &report);
-  EXPECT_EQ(report.vertices_welded, 1u);
-  EXPECT_EQ(report.degenerate_dropped, 2u);
-  EXPECT_EQ(report.duplicate_dropped, 0u);
+  expect_report(report, 1u, 2u, 0u);
   ASSERT_EQ(cleaned.triangles.size(), 1u);
   EXPECT_EQ(cleaned.vertices.size(), 3u);
   EXPECT_GT(triangle_normal(cleaned, 0).z(), 0);  // The surviving triangle keeps its winding.
@@ -232,10 +244,7 @@ TEST(LoadMeshFile, ObjCubeWithQuads) {
                                      "v 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
                                      "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\n"
                                      "f 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n");
-  const TriangleMesh mesh = load_mesh_file(path);
-  EXPECT_EQ(mesh.vertices.size(), 8u);
-  EXPECT_EQ(mesh.triangles.size(), 12u);
-  EXPECT_TRUE(is_closed_and_consistent(mesh));
+  const TriangleMesh mesh = expect_closed_mesh(path, 8u, 12u);
   EXPECT_TRUE(mesh.max_corner().isApprox(Eigen::Vector3d(1, 1, 1)));
 }
 
@@ -248,10 +257,7 @@ TEST(LoadMeshFile, AsciiStlTetrahedron) {
   const char *o = "0 0 0", *x = "0.1 0 0", *y = "0 0.1 0", *z = "0 0 0.1";
   const std::string path = dir.write(
       "tet.stl", "solid tet\n" + facet(o, y, x) + facet(o, x, z) + facet(o, z, y) + facet(x, y, z) + "endsolid tet\n");
-  const TriangleMesh mesh = load_mesh_file(path);
-  EXPECT_EQ(mesh.vertices.size(), 4u);  // 12 corners in the file, welded by clean_mesh.
-  EXPECT_EQ(mesh.triangles.size(), 4u);
-  EXPECT_TRUE(is_closed_and_consistent(mesh));
+  expect_closed_mesh(path, 4u, 4u);  // 12 corners in the file, welded by clean_mesh.
 }
 
 TEST(LoadMeshFile, AsciiPlyPyramidWithQuadBase) {
@@ -262,10 +268,7 @@ TEST(LoadMeshFile, AsciiPlyPyramidWithQuadBase) {
                                      "element face 5\nproperty list uchar int vertex_indices\nend_header\n"
                                      "0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.5 1\n"
                                      "4 0 3 2 1\n3 0 1 4\n3 1 2 4\n3 2 3 4\n3 3 0 4\n");
-  const TriangleMesh mesh = load_mesh_file(path);
-  EXPECT_EQ(mesh.vertices.size(), 5u);
-  EXPECT_EQ(mesh.triangles.size(), 6u);
-  EXPECT_TRUE(is_closed_and_consistent(mesh));
+  expect_closed_mesh(path, 5u, 6u);
 }
 
 TEST(LoadMeshFile, ColladaNodeTransformsAreApplied) {
@@ -353,6 +356,13 @@ std::string binary_tetrahedron_ply() {
   return out;
 }
 
+/// A closed tetrahedron in ASCII PLY, with `header_lines` inserted before the first element line.
+std::string ascii_tetrahedron_ply(const std::string& header_lines) {
+  std::string out = ply_header("ascii", 4, 4);
+  out.insert(out.find("element"), header_lines);
+  return out + "0 0 0\n0.1 0 0\n0 0.1 0\n0 0 0.1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+}
+
 // The file of the issue: 1.1 KB whose header declares 2e9 vertices and 2e9 faces. assimp reserved
 // what it declared (9.45 GB before it failed); the header check refuses it before assimp reads it.
 TEST(LoadMeshFile, PlyDeclaringMoreElementsThanItsSizeIsRefused) {
@@ -421,11 +431,8 @@ TEST(LoadMeshFile, PlyHeaderWithAnUnknownKeywordOrAnElementDeclaredTwiceIsRefuse
   expect_load_error(dir.write("twice.ply", twice + "0 0 0\n0.1 0 0\n0 0.1 0\n0 0 0.1\n"),
                     "element 'face' is declared twice");
   // Comments and obj_info lines are fine.
-  std::string commented = ply_header("ascii", 4, 4);
-  commented.insert(commented.find("element"), "comment made by hand\nobj_info a tetrahedron\n");
-  EXPECT_NO_THROW(load_mesh_file(dir.write("commented.ply", commented +
-                                                                "0 0 0\n0.1 0 0\n0 0.1 0\n0 0 0.1\n"
-                                                                "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n")));
+  EXPECT_NO_THROW(load_mesh_file(
+      dir.write("commented.ply", ascii_tetrahedron_ply("comment made by hand\nobj_info a tetrahedron\n"))));
 }
 
 TEST(LoadMeshFile, PlyHeaderWithAControlCharacterIsRefused) {
@@ -440,11 +447,7 @@ TEST(LoadMeshFile, PlyHeaderWithAControlCharacterIsRefused) {
   nul.insert(nul.find("element"), std::string("comment a\0b\n", 12));
   expect_load_error(dir.write("nul.ply", nul), "PLY header line 3: control character 0x00");
   // Tabs and CR LF line ends are plain text.
-  std::string tabbed = ply_header("ascii", 4, 4);
-  tabbed.insert(tabbed.find("element"), "comment\tmade by hand\r\n");
-  EXPECT_NO_THROW(load_mesh_file(dir.write("tabbed.ply", tabbed +
-                                                             "0 0 0\n0.1 0 0\n0 0.1 0\n0 0 0.1\n"
-                                                             "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n")));
+  EXPECT_NO_THROW(load_mesh_file(dir.write("tabbed.ply", ascii_tetrahedron_ply("comment\tmade by hand\r\n"))));
 }
 
 TEST(LoadMeshFile, PlyFaceIndexPastTheVerticesIsRefused) {

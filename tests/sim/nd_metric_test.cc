@@ -43,6 +43,26 @@ fingers {
 grasp_rule { members: ["f_mid"] }
 )";
 
+std::shared_ptr<const HandRig> one_phalanx_rig() {
+  return std::make_shared<const HandRig>(HandRig::parse(kOnePhalanxRig, "one_phalanx"));
+}
+
+// A box 400 x 400 mm wide and 2 * half_height tall under the phalanx, its top face at z = z_face.
+struct Slab {
+  Slab(const std::string& name, double z_face, double half_height)
+      : model(make_object_model(name, testing::box_mesh({0.2, 0.2, half_height}), 1.0, "test")),
+        view{ObjectId(1), Eigen::Isometry3d(Eigen::Translation3d(0.1, 0, z_face - half_height)), model.get()} {}
+  ObjectModelPtr model;
+  ObjectView view;
+};
+
+// Pulls the trigger until the capsule is blocked by `view`, for at most 90 ticks.
+void close_until_blocked(HandController& hand, const ObjectView& view) {
+  ControllerInput in;
+  in.trigger = 1.0;
+  for (int t = 0; t < 90 && !hand.state().blocked[0]; ++t) hand.tick(in, kDt, {&view, 1});
+}
+
 // The face z = -12 mm lies 7 mm below the bottom of the open capsule, under all of it. Closing,
 // the tip's centre b = 27 mm (cos q, -sin q) reaches the face when 0.027 sin q + 0.005 = 0.012:
 // q = asin(7/27) = 15.03 deg. There the ND sweep runs along n = (-sin q, 0, -cos q) from
@@ -51,22 +71,19 @@ grasp_rule { members: ["f_mid"] }
 // centre, so ND = t + rs cos q - r: about 3.3 mm, while the capsule touches within 0.05 mm.
 TEST(NdMetricTest, TipContactOnAFlatFaceReadsTheTiltGapAtMidLength) {
   const double z_face = -0.012, r = 0.005, rs = 0.001;
-  auto rig = std::make_shared<const HandRig>(HandRig::parse(kOnePhalanxRig, "one_phalanx"));
-  auto model = make_object_model("slab", testing::box_mesh({0.2, 0.2, 0.01}), 1.0, "test");
-  const ObjectView view{ObjectId(1), Eigen::Isometry3d(Eigen::Translation3d(0.1, 0, z_face - 0.01)), model.get()};
+  auto rig = one_phalanx_rig();
+  const Slab slab("slab", z_face, 0.01);
   for (double speed : {1.0, 8.0}) {
     SCOPED_TRACE(speed);
     GraspSettings settings;
     settings.speed_scale = speed;
     HandController hand(rig, settings);
-    ControllerInput in;
-    in.trigger = 1.0;
-    for (int t = 0; t < 90 && !hand.state().blocked[0]; ++t) hand.tick(in, kDt, {&view, 1});
+    close_until_blocked(hand, slab.view);
     ASSERT_TRUE(hand.state().blocked[0]);
 
     const double q = hand.state().q[0];
     EXPECT_NEAR(q, std::asin(0.007 / 0.027), kTol / 0.027 + 1e-9);  // the tip touches
-    const GraspMetrics m = hand.measure(view);
+    const GraspMetrics m = hand.measure(slab.view);
     ASSERT_EQ(m.capsules.size(), 1u);
     const CapsuleMetric& c = m.capsules[0];
     EXPECT_GE(c.signed_distance, 0.0);
@@ -92,22 +109,19 @@ TEST(NdMetricTest, TipContactOnAFlatFaceReadsTheTiltGapAtMidLength) {
 // the same formula, now with b_z < z_face.
 TEST(NdMetricTest, DiscreteSinkingReadsTheDepthAtTheTip) {
   const double z_face = -0.012, r = 0.005;
-  auto rig = std::make_shared<const HandRig>(HandRig::parse(kOnePhalanxRig, "one_phalanx"));
+  auto rig = one_phalanx_rig();
   // 100 mm thick: the face is the surface nearest every point the tip can reach.
-  auto model = make_object_model("block", testing::box_mesh({0.2, 0.2, 0.05}), 1.0, "test");
-  const ObjectView view{ObjectId(1), Eigen::Isometry3d(Eigen::Translation3d(0.1, 0, z_face - 0.05)), model.get()};
+  const Slab block("block", z_face, 0.05);
   for (double speed : {8.0, 30.0}) {
     SCOPED_TRACE(speed);
     GraspSettings settings;
     settings.mode = ClosingMode::kDiscrete;
     settings.speed_scale = speed;
     HandController hand(rig, settings);
-    ControllerInput in;
-    in.trigger = 1.0;
-    for (int t = 0; t < 90 && !hand.state().blocked[0]; ++t) hand.tick(in, kDt, {&view, 1});
+    close_until_blocked(hand, block.view);
     ASSERT_TRUE(hand.state().blocked[0]);
     const double b_z = -0.027 * std::sin(hand.state().q[0]);
-    const CapsuleMetric c = hand.measure(view).capsules.at(0);
+    const CapsuleMetric c = hand.measure(block.view).capsules.at(0);
     ASSERT_TRUE(c.contact_hit);
     EXPECT_NEAR(c.nd_contact, b_z - z_face - r, 1e-9);
     EXPECT_NEAR(c.signed_distance, b_z - z_face - r, 1e-9);
@@ -122,13 +136,11 @@ TEST(NdMetricTest, DiscreteSinkingReadsTheDepthAtTheTip) {
 // swept along the line through the axis point and the contact, reads that gap: within the
 // contact tolerance and equal to the exact signed distance.
 TEST(NdMetricTest, CapsuleTouchingASphereReadsItsGap) {
-  auto rig = std::make_shared<const HandRig>(HandRig::parse(kOnePhalanxRig, "one_phalanx"));
+  auto rig = one_phalanx_rig();
   auto model = make_object_model("ball", testing::uv_sphere_mesh(0.015, 48, 96), 1.0, "test");
   const ObjectView view{ObjectId(1), Eigen::Isometry3d(Eigen::Translation3d(0.06, 0.004, -0.03)), model.get()};
   HandController hand(rig, GraspSettings{});
-  ControllerInput in;
-  in.trigger = 1.0;
-  for (int t = 0; t < 90 && !hand.state().blocked[0]; ++t) hand.tick(in, kDt, {&view, 1});
+  close_until_blocked(hand, view);
   ASSERT_TRUE(hand.state().blocked[0]);
   const CapsuleMetric c = hand.measure(view).capsules.at(0);
   ASSERT_TRUE(c.contact_hit);
@@ -179,7 +191,7 @@ class PalmDistanceTest : public ::testing::Test {
     hand.tick(in, kDt, {});
     return hand.measure(view).palm_signed_distance;
   }
-  std::shared_ptr<const HandRig> rig_ = std::make_shared<const HandRig>(HandRig::parse(kOnePhalanxRig, "one_phalanx"));
+  std::shared_ptr<const HandRig> rig_ = one_phalanx_rig();
   TriangleMesh slab_ = testing::box_mesh({0.2, 0.2, 0.01});  // top face at +10 mm
 };
 

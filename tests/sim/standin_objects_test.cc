@@ -62,19 +62,18 @@ TEST(ProtocolObjects, ThirtyInProtocolOrder) {
   }
 }
 
+// Expects find_protocol_object(query) to find an object whose `field` is `expected`.
+void expect_found(const std::string& query, std::string ProtocolObject::*field, const std::string& expected) {
+  const auto found = find_protocol_object(query);
+  ASSERT_TRUE(found.has_value());
+  EXPECT_EQ((*found).*field, expected);
+}
+
 TEST(ProtocolObjects, FindByIdFullNameShortName) {
-  const auto by_id = find_protocol_object("032");
-  ASSERT_TRUE(by_id.has_value());
-  EXPECT_EQ(by_id->name, "032_knife");
-  const auto by_name = find_protocol_object("005_Tomato_Soup_Can");
-  ASSERT_TRUE(by_name.has_value());
-  EXPECT_EQ(by_name->id, "005");
-  const auto by_short = find_protocol_object("power_drill");
-  ASSERT_TRUE(by_short.has_value());
-  EXPECT_EQ(by_short->id, "035");
-  const auto airplane = find_protocol_object("072-A");
-  ASSERT_TRUE(airplane.has_value());
-  EXPECT_EQ(airplane->name, "072-a_toy_airplane");
+  ASSERT_NO_FATAL_FAILURE(expect_found("032", &ProtocolObject::name, "032_knife"));
+  ASSERT_NO_FATAL_FAILURE(expect_found("005_Tomato_Soup_Can", &ProtocolObject::id, "005"));
+  ASSERT_NO_FATAL_FAILURE(expect_found("power_drill", &ProtocolObject::id, "035"));
+  ASSERT_NO_FATAL_FAILURE(expect_found("072-A", &ProtocolObject::name, "072-a_toy_airplane"));
   EXPECT_EQ(find_protocol_object("knife")->id, "032");
   EXPECT_FALSE(find_protocol_object("099_rubber_duck").has_value());
   EXPECT_FALSE(find_protocol_object("").has_value());

@@ -25,16 +25,23 @@ namespace {
 
 constexpr double kTol = 1e-9;
 
-// A grasp record; `nd_hit` are the ND (mm, signed) of capsules that hit at the grasp tick, and a
-// capsule that did not hit is added to check it is left out of every |ND| mean.
-Record grasp(const std::string& mode, const std::string& group, int participant, const std::string& object, int trial,
-             double time_s, double hand_error_mm, std::vector<double> nd_hit) {
+// A trial not grasped in 3 attempts.
+Record miss(const std::string& mode, const std::string& group, int participant, const std::string& object, int trial) {
   Record r;
   r.mode = mode;
   r.group = group;
   r.participant = participant;
   r.object = object;
   r.trial = trial;
+  r.attempts = 3;
+  return r;
+}
+
+// A grasp record; `nd_hit` are the ND (mm, signed) of capsules that hit at the grasp tick, and a
+// capsule that did not hit is added to check it is left out of every |ND| mean.
+Record grasp(const std::string& mode, const std::string& group, int participant, const std::string& object, int trial,
+             double time_s, double hand_error_mm, std::vector<double> nd_hit) {
+  Record r = miss(mode, group, participant, object, trial);
   r.attempts = 1;
   r.grasped = r.held_after_lift = true;
   r.time_to_grasp_s = time_s;
@@ -49,17 +56,6 @@ Record grasp(const std::string& mode, const std::string& group, int participant,
   r.grasp_tick_figures = {-time_s / 10, trial == 0 ? 0.125 : 0.0, 0.5, trial == 0};
   r.figures = r.grasp_tick_figures;
   r.contacts.resize(2);
-  return r;
-}
-
-Record miss(const std::string& mode, const std::string& group, int participant, const std::string& object, int trial) {
-  Record r;
-  r.mode = mode;
-  r.group = group;
-  r.participant = participant;
-  r.object = object;
-  r.trial = trial;
-  r.attempts = 3;
   return r;
 }
 

@@ -28,11 +28,24 @@ struct FakeClock {
   ProgressLine::Clock::time_point operator()() const { return t; }
 };
 
-TEST(ProgressLineTest, LogGetsALineAtMostEveryPeriodAndTheLastOne) {
+// A temporary file for the line, closed after the test, and a clock the test moves.
+class ProgressLineTest : public ::testing::Test {
+ protected:
+  void SetUp() override { ASSERT_NE(out, nullptr); }
+  void TearDown() override {
+    if (out != nullptr) std::fclose(out);
+  }
+  // The clock for a ProgressLine: reads `clock`.
+  auto fake_clock() {
+    return [this] { return clock(); };
+  }
+
   std::FILE* out = std::tmpfile();
-  ASSERT_NE(out, nullptr);
   FakeClock clock;
-  ProgressLine progress(out, false, 200ms, 5s, [&clock] { return clock(); });
+};
+
+TEST_F(ProgressLineTest, LogGetsALineAtMostEveryPeriodAndTheLastOne) {
+  ProgressLine progress(out, false, 200ms, 5s, fake_clock());
   progress.show("1/4");  // the first is written
   clock.t += 1s;
   EXPECT_FALSE(progress.due());
@@ -41,24 +54,17 @@ TEST(ProgressLineTest, LogGetsALineAtMostEveryPeriodAndTheLastOne) {
   progress.show("3/4");  // 5 s after the first: written
   progress.finish("4/4");
   EXPECT_EQ(contents(out), "1/4\n3/4\n4/4\n");
-  std::fclose(out);
 }
 
-TEST(ProgressLineTest, LogDoesNotRepeatALastLineItAlreadyHolds) {
-  std::FILE* out = std::tmpfile();
-  ASSERT_NE(out, nullptr);
+TEST_F(ProgressLineTest, LogDoesNotRepeatALastLineItAlreadyHolds) {
   ProgressLine progress(out, false, 200ms, 5s);
   progress.show("done");
   progress.finish("done");
   EXPECT_EQ(contents(out), "done\n");
-  std::fclose(out);
 }
 
-TEST(ProgressLineTest, TerminalRewritesOneLineAndEndsItAtTheFinish) {
-  std::FILE* out = std::tmpfile();
-  ASSERT_NE(out, nullptr);
-  FakeClock clock;
-  ProgressLine progress(out, true, 200ms, 5s, [&clock] { return clock(); });
+TEST_F(ProgressLineTest, TerminalRewritesOneLineAndEndsItAtTheFinish) {
+  ProgressLine progress(out, true, 200ms, 5s, fake_clock());
   progress.show("1/10 long");
   clock.t += 300ms;
   progress.show("2/10");  // padded over the longer line before it
@@ -66,7 +72,6 @@ TEST(ProgressLineTest, TerminalRewritesOneLineAndEndsItAtTheFinish) {
   progress.break_line();  // only one line end
   progress.finish("10/10");
   EXPECT_EQ(contents(out), "\r1/10 long\r2/10     \n\r10/10\n");
-  std::fclose(out);
 }
 
 }  // namespace

@@ -51,29 +51,23 @@ const Answers kIdeal = {3, 3, -3, -3, 3, 3, 3, 3, 3, -3, -3, 3, 3, 3};
 //   E   = (1 + 2 + 2 * 10/7) / 4 = (21/7 + 20/7) / 4 = 41/28
 const Answers kMixed = {1, 2, -1, 0, 2, 3, 1, 0, 1, -2, -1, 2, 1, 3};
 
+// Expects the four aspect scores of `answers`.
+void expect_scores(const Answers& answers, double motor_control, double finger_movement_realism,
+                   double interaction_realism, double embodiment) {
+  const QuestionnaireScores s = score_answers(answers);
+  EXPECT_NEAR(s.motor_control, motor_control, kTol);
+  EXPECT_NEAR(s.finger_movement_realism, finger_movement_realism, kTol);
+  EXPECT_NEAR(s.interaction_realism, interaction_realism, kTol);
+  EXPECT_NEAR(s.embodiment, embodiment, kTol);
+}
+
 TEST(QuestionnaireScoreTest, AllThreeCancelsTheReversedItems) {
-  const QuestionnaireScores s = score_answers(kAllThree);
-  EXPECT_NEAR(s.motor_control, 0.0, kTol);
-  EXPECT_NEAR(s.finger_movement_realism, 3.0, kTol);
-  EXPECT_NEAR(s.interaction_realism, 9.0 / 7.0, kTol);
-  EXPECT_NEAR(s.embodiment, 39.0 / 28.0, kTol);
+  expect_scores(kAllThree, 0.0, 3.0, 9.0 / 7.0, 39.0 / 28.0);
 }
 
-TEST(QuestionnaireScoreTest, IdealRespondentScoresThreeEverywhere) {
-  const QuestionnaireScores s = score_answers(kIdeal);
-  EXPECT_NEAR(s.motor_control, 3.0, kTol);
-  EXPECT_NEAR(s.finger_movement_realism, 3.0, kTol);
-  EXPECT_NEAR(s.interaction_realism, 3.0, kTol);
-  EXPECT_NEAR(s.embodiment, 3.0, kTol);
-}
+TEST(QuestionnaireScoreTest, IdealRespondentScoresThreeEverywhere) { expect_scores(kIdeal, 3.0, 3.0, 3.0, 3.0); }
 
-TEST(QuestionnaireScoreTest, MixedAnswers) {
-  const QuestionnaireScores s = score_answers(kMixed);
-  EXPECT_NEAR(s.motor_control, 1.0, kTol);
-  EXPECT_NEAR(s.finger_movement_realism, 2.0, kTol);
-  EXPECT_NEAR(s.interaction_realism, 10.0 / 7.0, kTol);
-  EXPECT_NEAR(s.embodiment, 41.0 / 28.0, kTol);
-}
+TEST(QuestionnaireScoreTest, MixedAnswers) { expect_scores(kMixed, 1.0, 2.0, 10.0 / 7.0, 41.0 / 28.0); }
 
 TEST(QuestionnaireScoreTest, EachReversedItemLowersItsAspect) {
   // From all zeros, +1 on a reversed item lowers its aspect by 1/4 (MC) or 1/7 (IR), and the

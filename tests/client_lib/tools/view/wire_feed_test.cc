@@ -12,10 +12,17 @@ namespace {
 constexpr std::uint8_t kLeft = msg::HAND_LEFT;
 constexpr std::uint8_t kRight = msg::HAND_RIGHT;
 
-msg::HandSkeleton skeleton(const std::string& client, std::uint8_t side, std::uint64_t tick, double x) {
-  msg::HandSkeleton m;
+// A message of type M from hand (`client`, `side`).
+template <class M>
+M of_hand(const std::string& client, std::uint8_t side) {
+  M m;
   m.client_id(client);
   m.hand_side(side);
+  return m;
+}
+
+msg::HandSkeleton skeleton(const std::string& client, std::uint8_t side, std::uint64_t tick, double x) {
+  auto m = of_hand<msg::HandSkeleton>(client, side);
   m.rig(side == kLeft ? "human_left" : "human_right");
   m.tick(tick);
   m.palm().position().x(x);
@@ -24,18 +31,14 @@ msg::HandSkeleton skeleton(const std::string& client, std::uint8_t side, std::ui
 }
 
 msg::GraspState grasp_state(const std::string& client, std::uint8_t side, std::int32_t grasped) {
-  msg::GraspState m;
-  m.client_id(client);
-  m.hand_side(side);
+  auto m = of_hand<msg::GraspState>(client, side);
   m.selected_object(grasped);
   m.grasped_object(grasped);
   return m;
 }
 
 msg::ContactSet contact_set(const std::string& client, std::uint8_t side, std::int32_t object) {
-  msg::ContactSet m;
-  m.client_id(client);
-  m.hand_side(side);
+  auto m = of_hand<msg::ContactSet>(client, side);
   m.object_id(object);
   m.object_pose().orientation().w(1);
   return m;
