@@ -154,8 +154,8 @@ std::string ReplayResult::summary() const {
 }
 
 int ReplayResult::exit_code() const {
-  if (divergence) return 1;
-  if (damage) return 3;
+  if (divergence) return cli::kExitDiverged;
+  if (damage) return cli::kExitDamaged;
   return 0;
 }
 

@@ -39,7 +39,8 @@ struct ReplayResult {
 
   /// "identical: N outputs over T ticks" or the divergence, then the damage, one per line.
   std::string summary() const;
-  /// 0 identical, 1 divergence, 3 damaged (and identical up to the damage).
+  /// 0 identical, cli::kExitDiverged (6) a divergence, cli::kExitDamaged (3) damaged (and
+  /// identical up to the damage).
   int exit_code() const;
 };
 

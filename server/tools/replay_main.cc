@@ -42,16 +42,23 @@ Options:
   --json FILE              also write the result as JSON
   -h, --help               this text
 
-Exit status (1 is a divergence here, not a runtime failure as for the other tools):
+Exit status (the same meanings in every telegrasp tool):
   0  identical (or exported)
-  1  the replay diverges from the recording
-  2  a usage error (a bad or missing option or value), or the recording's header cannot be
-     read, the scene rebuilt or an output file written
+  1  a runtime failure: the recording's header cannot be read, the scene rebuilt or an output
+     file written
+  2  a usage error (a bad or missing option or value)
   3  the recording is truncated or corrupt: everything before the damage was replayed
      (exported) and reported
+  6  the replay diverges from the recording
 )";
 
 [[noreturn]] void usage_error(const std::string& what) { telegrasp::cli::usage_exit("telegrasp-replay", what); }
+
+// An export's exit status: damaged, or done.
+template <class Damage>
+int exported_status(const Damage& damage) {
+  return damage ? telegrasp::cli::kExitDamaged : 0;
+}
 
 // Progress on stderr for files big enough to take a while.
 class Progress {
@@ -84,7 +91,7 @@ void write_json(const std::string& path, const nlohmann::json& j) {
   out << j.dump(2) << "\n";
   if (!out) {
     std::cerr << "telegrasp-replay: " << path << ": cannot write the JSON result\n";
-    std::exit(2);
+    std::exit(telegrasp::cli::kExitFailure);
   }
 }
 
@@ -130,8 +137,8 @@ int main(int argc, char** argv) {
                                {"grasps", e.events},
                                {"contacts", e.rows},
                                {"damage", damage_json(e.damage)},
-                               {"exit_code", e.damage ? 3 : 0}});
-      return e.damage ? 3 : 0;
+                               {"exit_code", exported_status(e.damage)}});
+      return exported_status(e.damage);
     }
     if (!mcap_path.empty()) {
       const McapExport e = export_mcap(recording, mcap_path, mcap_options);
@@ -151,8 +158,8 @@ int main(int argc, char** argv) {
                                {"start_time_ns", e.start_time_ns},
                                {"end_time_ns", e.end_time_ns},
                                {"damage", damage_json(e.damage)},
-                               {"exit_code", e.damage ? 3 : 0}});
-      return e.damage ? 3 : 0;
+                               {"exit_code", exported_status(e.damage)}});
+      return exported_status(e.damage);
     }
     ReplayOptions options;
     options.objects_dir = objects_dir;
@@ -178,6 +185,6 @@ int main(int argc, char** argv) {
     return r.exit_code();
   } catch (const std::exception& e) {  // RecordingError: the header, the assets, the CSV or MCAP file
     std::cerr << "telegrasp-replay: " << e.what() << "\n";
-    return 2;
+    return telegrasp::cli::kExitFailure;
   }
 }

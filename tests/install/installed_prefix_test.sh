@@ -49,9 +49,9 @@ P=$prefix
 \$P/bin/telegrasp-server --config $work/server.textproto >$work/server.log 2>&1 &
 server=\$!
 trap 'kill \$server 2>/dev/null || true' EXIT
-# Exit status 3: every trial done, some not held (the records are checked below).
+# Exit status 5: every trial done, some not held (the records are checked below).
 \$P/bin/telegrasp-bot --domain $domain --trials 1 --timeout 30 --json $work/bot.json >$work/bot.out 2>$work/bot.err ||
-  [ \$? -eq 3 ]
+  [ \$? -eq 5 ]
 kill -INT \$server
 wait \$server
 \$P/bin/telegrasp-eval run --trials 1 --objects $work/objects --json $work/eval.json >$work/eval.out 2>$work/eval.err

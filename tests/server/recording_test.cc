@@ -2,6 +2,7 @@
 // Recorder (no DDS) replays with zero divergence; an altered input diverges where it should;
 // truncated and corrupted files keep exactly the records before the damage; the header carries
 // the settings; the contacts CSV holds every grasp contact; fill_standins completes a mesh folder.
+#include "cli.h"
 #include "recorded_session.h"
 #include "scratch_dir.h"
 #include "recording.h"
@@ -133,7 +134,7 @@ TEST_F(RecordingTest, AnAlteredInputDivergesAtItsFirstOutput) {
   EXPECT_EQ(result.divergence->field, "palm.position.x");
   EXPECT_NE(result.divergence->message.find("record " + std::to_string(k + 1)), std::string::npos)
       << result.divergence->message;
-  EXPECT_EQ(result.exit_code(), 1);
+  EXPECT_EQ(result.exit_code(), cli::kExitDiverged);
 }
 
 // Cut at a frame boundary, inside a length, inside a payload, inside the End record: the reader
@@ -188,7 +189,7 @@ TEST_F(RecordingTest, ATruncatedRecordingIsReadUpToTheCut) {
   ASSERT_TRUE(result.damage);
   EXPECT_EQ(result.records, mid);
   EXPECT_EQ(result.ticks, count_ticks(rec.records, mid));
-  EXPECT_EQ(result.exit_code(), 3);
+  EXPECT_EQ(result.exit_code(), cli::kExitDamaged);
 
   // Inside the header nothing can be kept: an error naming the file.
   write_bytes(cut_path, original.substr(0, kRecordingMagicSize + 10));
@@ -229,7 +230,7 @@ TEST_F(RecordingTest, AFlippedByteIsReportedAsCorruptWithTheRecordsBeforeKept) {
   const ReplayResult result = replay_recording(path);
   EXPECT_FALSE(result.divergence) << result.summary();
   EXPECT_EQ(result.records, k);
-  EXPECT_EQ(result.exit_code(), 3);
+  EXPECT_EQ(result.exit_code(), cli::kExitDamaged);
 }
 
 // One row per contact of every grasp event, numbers read back exactly.

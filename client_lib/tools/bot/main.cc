@@ -33,8 +33,9 @@ using telegrasp::bot::kRate;
 using telegrasp::bot::kStaleScene;
 using Options = telegrasp::bot::Options;
 
-constexpr int kExitNotHeld = 3;  // every trial done, some not held
-constexpr int kExitRefused = 4;  // the server refused this bot's hands or a command (ClientNotice)
+using telegrasp::cli::kExitInterrupted;
+using telegrasp::cli::kExitNotHeld;
+using telegrasp::cli::kExitRefused;
 
 // Input refusals after which no grasp can happen: the bot stops at once.
 bool fatal_refusal(const client::Notice& n) {
@@ -93,10 +94,11 @@ every trial with its count, e.g. "held 88/90 trials on 30 objects; not held ever
 Exit status: 0 every trial done and every object held after the lift in every trial, 1 a runtime
 failure (the --objects folder or a mesh in it missing or unreadable, the --json file not
 writable, DDS could not start, no server found or it went silent), 2 a usage error (a bad or
-missing option or value), 3 every trial done but some object not held in every trial (or the
-scene had no object: nothing grasped), 4 the server refused this bot's hands (the client id
-taken or no hand slot left: the bot stops at once) or one of its commands; every ClientNotice is
-printed, and other dropped inputs (e.g. rate_limited) do not change the status, 130 stopped by SIGINT or SIGTERM (the table shows the trials
+missing option or value), 4 the server refused this bot's hands (the client id taken or no hand
+slot left: the bot stops at once) or one of its commands; every ClientNotice is printed, and
+other dropped inputs (e.g. rate_limited) do not change the status, 5 every trial done but some
+object not held in every trial (or the scene had no object: nothing grasped), 130 stopped by
+SIGINT or SIGTERM (the table shows the trials
 done).
 )";
 
@@ -205,7 +207,7 @@ int main(int argc, char** argv) {
   std::optional<client::SceneState> scene;
   const bool found = wait_until([&] { return c->wait_for_server(std::chrono::milliseconds(0)); }, opt.timeout_s) &&
                      wait_until([&] { return (scene = c->latest_scene_state()).has_value(); }, opt.timeout_s);
-  if (g_stop) return 130;
+  if (g_stop) return kExitInterrupted;
   if (!found) {
     std::cerr << "telegrasp-bot: no telegrasp server found on domain " << opt.domain << " with profile " << opt.profile
               << " within " << opt.timeout_s << " s (--timeout)\n";
@@ -215,7 +217,7 @@ int main(int argc, char** argv) {
   // Objects with no local mesh are planned on the geometry the server publishes: wait for it (a
   // server that publishes none leaves the built-in stand-ins).
   wait_until([&] { return telegrasp::bot::geometry_complete(*c, *scene, models); }, std::min(opt.timeout_s, 10.0));
-  if (g_stop) return 130;
+  if (g_stop) return kExitInterrupted;
   // The server says why it refuses us (ClientNotice): reported, and the exit status says so.
   std::mutex refusal_mutex;
   std::optional<client::Notice> refusal;
@@ -253,7 +255,7 @@ int main(int argc, char** argv) {
   int status = 0;
   for (std::int64_t tick = 0; !bot.all_done();) {
     if (g_stop) {
-      status = 130;
+      status = kExitInterrupted;
       break;
     }
     if (refused_fatally()) {

@@ -194,9 +194,9 @@ Options parse(int argc, char** argv) {
     return true;
   });
   if (o.domain < 0) o.domain = 100 + static_cast<int>(getpid() % 101);
-  if (o.domain + o.jobs - 1 > cli::kMaxDomain)
+  if (o.domain + o.jobs - 1 > idl::kMaxDomain)
     usage_error("--domain " + std::to_string(o.domain) + " + --jobs " + std::to_string(o.jobs) + " exceeds domain " +
-                std::to_string(cli::kMaxDomain));
+                std::to_string(idl::kMaxDomain));
   return o;
 }
 

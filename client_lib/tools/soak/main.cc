@@ -36,8 +36,9 @@ using telegrasp::tools::ChildProcess;
 using json = nlohmann::ordered_json;
 using Clock = std::chrono::steady_clock;
 
-constexpr int kExitGrowth = 3;  // the run completed but memory was not flat
-constexpr int kExitIdle = 4;  // memory flat, but fewer grasps than --min-grasps
+using telegrasp::cli::kExitInterrupted;
+using telegrasp::cli::kExitMemoryGrew;
+using telegrasp::cli::kExitTooFewGrasps;
 
 constexpr const char* kUsage = R"(Usage: telegrasp-soak --hands N --minutes M [options]
 
@@ -88,7 +89,7 @@ Options:
   --skill NAME        the bots' skill: perfect | experienced | inexperienced (default experienced)
   --log-dir DIR       where the server's and bots' logs go (default: a new folder in $TMPDIR,
                       printed on stderr)
-  --min-grasps N      fail (exit 4) when fewer grasp events than N arrived over the run
+  --min-grasps N      fail (exit 8) when fewer grasp events than N arrived over the run
                       (default 0): the hands were not grasping
   --json FILE         also write the JSON result to FILE
   -h, --help          this text
@@ -96,8 +97,8 @@ Options:
 Progress goes to stderr, one line per sample. The programs telegrasp-server and telegrasp-bot are
 taken from the folder of this executable.
 
-Exit status: 0 the run completed and memory was flat, 3 the run completed but memory grew past
-a limit, 4 memory was flat but fewer than --min-grasps grasps happened, 1 a
+Exit status: 0 the run completed and memory was flat, 7 the run completed but memory grew past
+a limit, 8 memory was flat but fewer than --min-grasps grasps happened, 1 a
 runtime failure (a program missing, the server did not start or died, no ServerStatus,
 /proc/PID/status unreadable), 2 a usage error, 130 stopped by SIGINT or SIGTERM (the samples so
 far are printed).
@@ -491,7 +492,7 @@ int main(int argc, char** argv) {
     std::cerr << "telegrasp-soak: " << failure << "\n";
     return telegrasp::cli::kExitFailure;
   }
-  if (interrupted) return 130;
+  if (interrupted) return kExitInterrupted;
   if (verdict["flat_memory"].is_null()) {
     std::cerr << "telegrasp-soak: no verdict: " << verdict["why"].get<std::string>() << "\n";
     return telegrasp::cli::kExitFailure;
@@ -506,10 +507,10 @@ int main(int argc, char** argv) {
               << (g["flat"].get<bool>() ? ";" : " EXCEEDED;");
   }
   std::cerr << " " << grasps << " grasps, " << missed << " missed ticks\n";
-  if (!flat) return kExitGrowth;
+  if (!flat) return kExitMemoryGrew;
   if (grasps < opt.min_grasps) {
     std::cerr << "telegrasp-soak: only " << grasps << " grasps, --min-grasps " << opt.min_grasps << "\n";
-    return kExitIdle;
+    return kExitTooFewGrasps;
   }
   return 0;
 }

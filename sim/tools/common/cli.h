@@ -1,7 +1,6 @@
 // Command-line parsing shared by the tools, and the conventions every tool follows:
-//   exit status 0 on success, 1 for a runtime failure (a missing file or folder, no server found,
-//   an I/O error), 2 for a usage error (a bad or missing option or value), each written in the
-//   tool's --help with any special case of its own;
+//   exit statuses mean the same in every tool (kExit* below: 0 success, 1 a runtime failure, 2 a
+//   usage error, 3 and up one meaning each), and each tool's --help states those it uses;
 //   a usage error is two lines on stderr, "<tool>: <what is wrong>" and "(see <tool> --help)";
 //   numbers in messages are written as people write them (format_number).
 #pragma once
@@ -17,12 +16,27 @@
 
 namespace telegrasp::cli {
 
-/// Exit status of a runtime failure (missing file or folder, no server found, I/O error).
+// Exit statuses: one meaning each, in every tool.
+/// A runtime failure: a missing or unreadable file or folder, no server found, DDS could not
+/// start, an I/O error.
 constexpr int kExitFailure = 1;
-/// Exit status of a usage error (bad or missing option or value).
+/// A usage error: a bad or missing option or value.
 constexpr int kExitUsage = 2;
-/// The highest DDS domain whose UDP ports fit in 16 bits; --domain takes 0..kMaxDomain.
-constexpr long kMaxDomain = 232;
+/// An input file is truncated or corrupt; what came before the damage was used and reported
+/// (telegrasp-replay).
+constexpr int kExitDamaged = 3;
+/// The server refused this client's hands or one of its commands (telegrasp-bot).
+constexpr int kExitRefused = 4;
+/// Every trial ran, but some object was not held in every trial (telegrasp-bot).
+constexpr int kExitNotHeld = 5;
+/// A replay differs from its recording (telegrasp-replay).
+constexpr int kExitDiverged = 6;
+/// A soak ran to its end but memory grew past a limit (telegrasp-soak).
+constexpr int kExitMemoryGrew = 7;
+/// A soak's memory stayed flat but fewer grasps happened than asked for (telegrasp-soak).
+constexpr int kExitTooFewGrasps = 8;
+/// Stopped by SIGINT or SIGTERM (what was done so far is reported).
+constexpr int kExitInterrupted = 130;
 
 /// A tool's usage error: prints `what` and does not return.
 using Fail = void (*)(const std::string& what);
@@ -71,17 +85,6 @@ using Fail = void (*)(const std::string& what);
   if (!v.empty() && *end == '\0' && std::isfinite(x) && x >= lo && x <= hi) return x;
   fail(flag + " expects a number in [" + format_number(lo) + ", " + format_number(hi) + "], got '" + v + "'");
   throw std::logic_error("cli::parse_number: fail returned");
-}
-
-/// The DDS domain given to `flag`: a whole number in [0, kMaxDomain].
-[[nodiscard]] inline int parse_domain(const std::string& flag, const std::string& v, Fail fail) {
-  return static_cast<int>(parse_whole(flag, v, 0, kMaxDomain, fail));
-}
-
-/// The Fast DDS participant profile name given to `flag`: any name but the empty one.
-[[nodiscard]] inline std::string parse_profile(const std::string& flag, const std::string& v, Fail fail) {
-  if (v.empty()) fail(flag + " expects a participant profile name (loopback, udp, lan, wan, secure), got ''");
-  return v;
 }
 
 /// Whether `arg` is an option ("-x", "--name") rather than a positional argument ("FILE", "-").
