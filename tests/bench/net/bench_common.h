@@ -8,6 +8,7 @@
 #include "test_domain.h"
 
 #include "telegrasp/idl/dds_participant.h"
+#include "telegrasp/idl/network_flags.h"
 #include "telegrasp/idl/telegrasp.h"
 
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
@@ -90,12 +91,8 @@ bool parse_common_option(const char* tool, const std::string& f, const Value& va
     o.tick_hz = cli::parse_number(f, value(), 1, 2000, usage_error);
   else if (f == "--json")
     o.json = value();
-  else if (f == "--profile")
-    o.profile = cli::parse_profile(f, value(), usage_error);
-  else if (f == "--profiles")
-    o.profiles_file = value();
-  else if (f == "--domain")
-    o.domain = cli::parse_domain(f, value(), usage_error);
+  else if (idl::parse_network_flag(f, value, o, usage_error))
+    ;
   else if (f == "--server")
     o.server = value();
   else if (f == "--server-arg")

@@ -145,16 +145,15 @@ class EchoListener : public dds::DataReaderListener {
 // The echo role's command line: `self_exe() --echo-role --domain D --profile P [--profiles F]
 // [--ping-topic T --pong-topic T]`.
 int echo_main(int argc, char** argv) {
-  int domain = 120;
-  std::string profile = "loopback", profiles_file, ping_topic = "bench/Ping", pong_topic = "bench/Pong";
+  struct {
+    int domain = 120;
+    std::string profile = "loopback", profiles_file;
+  } network;
+  std::string ping_topic = "bench/Ping", pong_topic = "bench/Pong";
   cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& f, const auto& value) {
     if (f == "--echo-role") return true;
-    if (f == "--domain")
-      domain = cli::parse_domain(f, value(), usage_error);
-    else if (f == "--profile")
-      profile = cli::parse_profile(f, value(), usage_error);
-    else if (f == "--profiles")
-      profiles_file = value();
+    if (idl::parse_network_flag(f, value, network, usage_error))
+      ;
     else if (f == "--ping-topic")
       ping_topic = value();
     else if (f == "--pong-topic")
@@ -164,12 +163,12 @@ int echo_main(int argc, char** argv) {
     return true;
   });
   install_signal_handlers();
-  load_profiles(profiles_file, profile);
+  load_profiles(network.profiles_file, network.profile);
   EchoListener listener;
-  idl::DdsParticipant p(domain, profile, profiles_file);
+  idl::DdsParticipant p(network.domain, network.profile, network.profiles_file);
   listener.pong = p.writer<msg::ControllerStatePubSubType>(pong_topic, idl::kHandSkeletonTopic);
   p.reader<msg::ControllerStatePubSubType>(ping_topic, &listener, idl::kControllerStateTopic);
-  std::cerr << "telegrasp-bench-latency echo: domain " << domain << ", profile " << profile << "\n";
+  std::cerr << "telegrasp-bench-latency echo: domain " << network.domain << ", profile " << network.profile << "\n";
   while (sleep_unless_stopped(0.2)) {}
   return 0;
 }

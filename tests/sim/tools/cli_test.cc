@@ -40,9 +40,6 @@ TEST(CliTest, FormatsNumbersAsPeopleWriteThem) {
 
 TEST(CliTest, ReadsWholeNumbersInRangeAndNamesTheMistake) {
   EXPECT_EQ(parse_whole("--trials", "12", 1, 100, refuse), 12);
-  EXPECT_EQ(parse_domain("--domain", "232", refuse), 232);
-  EXPECT_EQ(refusal([] { (void)parse_domain("--domain", "999", refuse); }),
-            "--domain expects a whole number in [0, 232], got '999'");
   for (const char* bad : {"", "1.5", "7x", " 7", "99999999999999999999999"})
     EXPECT_NE(refusal([&] { (void)parse_whole("--n", bad, 0, 100, refuse); }), "") << "'" << bad << "'";
 }
@@ -53,8 +50,6 @@ TEST(CliTest, ReadsFiniteNumbersInRangeAndNamesTheMistake) {
             "--timeout expects a number in [0.1, 86400], got '0'");
   for (const char* bad : {"", "nan", "inf", "1e400", "3s"})
     EXPECT_NE(refusal([&] { (void)parse_number("--x", bad, -1e9, 1e9, refuse); }), "") << "'" << bad << "'";
-  EXPECT_EQ(refusal([] { (void)parse_profile("--profile", "", refuse); }),
-            "--profile expects a participant profile name (loopback, udp, lan, wan, secure), got ''");
 }
 
 // argv as the option loop gets it: a program name, then the arguments.

@@ -30,6 +30,8 @@ struct NetworkFlags {
 /// Applies `flag` onto `options` (a NetworkFlags, or any options with its members) if it is one of
 /// the network flags and returns true (`value()` gives its value); false for any other flag. A bad
 /// value goes to `fail` (the program's usage error, which does not return), naming the flag.
+/// Options without `scene` or `discovery_servers` members (a benchmark that joins no scene) do not
+/// take --scene or --discovery-server.
 template <class Options, class Value, class Fail>
 bool parse_network_flag(const std::string& flag, const Value& value, Options& options, Fail fail) {
   if (flag == "--domain") {
@@ -51,19 +53,23 @@ bool parse_network_flag(const std::string& flag, const Value& value, Options& op
     options.profiles_file = value();
     return true;
   }
-  if (flag == "--scene") {
-    options.scene = value();
-    if (const std::string e = scene_name_error(options.scene); !e.empty()) fail(flag + ": " + e);
-    return true;
-  }
-  if (flag == "--discovery-server") {
-    options.discovery_servers.push_back(value());
-    try {
-      (void)resolve_network({kDefaultScene, {options.discovery_servers.back()}});
-    } catch (const std::exception& e) {
-      fail(flag + ": " + e.what());
+  if constexpr (requires { options.scene; }) {
+    if (flag == "--scene") {
+      options.scene = value();
+      if (const std::string e = scene_name_error(options.scene); !e.empty()) fail(flag + ": " + e);
+      return true;
     }
-    return true;
+  }
+  if constexpr (requires { options.discovery_servers; }) {
+    if (flag == "--discovery-server") {
+      options.discovery_servers.push_back(value());
+      try {
+        (void)resolve_network({kDefaultScene, {options.discovery_servers.back()}});
+      } catch (const std::exception& e) {
+        fail(flag + ": " + e.what());
+      }
+      return true;
+    }
   }
   return false;
 }
@@ -74,8 +80,11 @@ template <class Options>
 std::vector<std::string> network_args(const Options& options) {
   std::vector<std::string> args = {"--domain", std::to_string(options.domain), "--profile", options.profile};
   if (!options.profiles_file.empty()) args.insert(args.end(), {"--profiles", options.profiles_file});
-  if (!options.scene.empty()) args.insert(args.end(), {"--scene", options.scene});
-  for (const std::string& server : options.discovery_servers) args.insert(args.end(), {"--discovery-server", server});
+  if constexpr (requires { options.scene; })
+    if (!options.scene.empty()) args.insert(args.end(), {"--scene", options.scene});
+  if constexpr (requires { options.discovery_servers; })
+    for (const std::string& server : options.discovery_servers)
+      args.insert(args.end(), {"--discovery-server", server});
   return args;
 }
 
