@@ -87,6 +87,13 @@ using Fail = void (*)(const std::string& what);
   throw std::logic_error("cli::parse_number: fail returned");
 }
 
+/// Notes on stderr that `tool`'s flag `old_name` is now `new_name`: the old spelling still works
+/// for one release.
+inline void warn_renamed(const std::string& tool, const std::string& old_name, const std::string& new_name) {
+  std::cerr << tool << ": deprecated: " << old_name << " is now " << new_name << " (" << old_name
+            << " goes in the next release)\n";
+}
+
 /// Whether `arg` is an option ("-x", "--name") rather than a positional argument ("FILE", "-").
 [[nodiscard]] inline bool is_option(const std::string& arg) { return arg.size() > 1 && arg[0] == '-'; }
 

@@ -57,7 +57,7 @@ Options:
   --rig FILE          hand rig text file (default: built-in human_right)
   --json FILE         write every grasp record and the summaries as JSON
   --svg DIR           draw each object's first held grasp (three views) as DIR/<object>_<mode>.svg
-  --threads N         worker threads (default 2)
+  --jobs N            worker threads (default 2; --threads, its old name, still works)
   -h, --help          this text
 
 Progress goes to stderr (in place on a terminal, a line every few seconds in a log), the
@@ -108,8 +108,10 @@ Options parse(int argc, char** argv) {
         usage_error("--selection expects surface or origin, got '" + m + "'");
     } else if (a == "--trials")
       o.trials = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 100000, usage_error));
-    else if (a == "--threads")
+    else if (a == "--jobs" || a == "--threads") {  // --threads: the old name
+      if (a == "--threads") telegrasp::cli::warn_renamed(kTool, a, "--jobs");
       o.threads = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 64, usage_error));
+    }
     else if (a == "--seed")
       o.seed = static_cast<std::uint64_t>(telegrasp::cli::parse_whole(a, value(), 0, 1L << 62, usage_error));
     else if (a == "--mode") {

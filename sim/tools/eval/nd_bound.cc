@@ -57,7 +57,7 @@ Options:
   --seed S         random seed (default 1)
   --json FILE      write each object's kept grasp (capsules as in telegrasp-eval) and the summary
   --svg DIR        draw each object's kept grasp as DIR/<object>_nd_bound.svg
-  --threads N      worker threads (default 2)
+  --jobs N         worker threads (default 2; --threads, its old name, still works)
   -h, --help       this text
 
 Progress goes to stderr (in place on a terminal, a line every few seconds in a log), the table
@@ -94,8 +94,10 @@ Options parse(int argc, char** argv) {
       o.refine = static_cast<int>(parse_whole(a, value(), 0, 1000000, usage_error));
     else if (a == "--min-hits")
       o.min_hits = static_cast<int>(parse_whole(a, value(), 1, 1000, usage_error));
-    else if (a == "--threads")
+    else if (a == "--jobs" || a == "--threads") {  // --threads: the old name
+      if (a == "--threads") telegrasp::cli::warn_renamed(kTool, a, "--jobs");
       o.threads = static_cast<int>(parse_whole(a, value(), 1, 64, usage_error));
+    }
     else if (a == "--seed")
       o.seed = static_cast<std::uint64_t>(parse_whole(a, value(), 0, 1L << 62, usage_error));
     else
