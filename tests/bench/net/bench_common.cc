@@ -38,13 +38,6 @@ std::int64_t now_ns() {
 
 // ---------------------------------------------------------------------------------------------
 
-void warn_deprecated_hz(const char* tool) {
-  std::cerr << tool << ": deprecated: --hz is now --sample-hz (the controller sample rate per hand; "
-            << "--hz goes in the next release)\n";
-}
-
-// ---------------------------------------------------------------------------------------------
-
 namespace {
 std::atomic<bool> g_stop{false};
 extern "C" void on_stop_signal(int) { g_stop = true; }

@@ -40,10 +40,6 @@ std::int64_t now_ns();
 // ---------------------------------------------------------------------------------------------
 // Command line (the option loop is cli::for_each_option).
 
-/// The controller sample rate per hand was --hz until it became --sample-hz (the server's tick
-/// rate is --tick-hz everywhere): says so on stderr, naming `tool`. --hz goes in the next release.
-void warn_deprecated_hz(const char* tool);
-
 /// The options both network benchmarks take: the controller rate, the server they start, how they
 /// reach it and where the results go. Each benchmark's Options extends it.
 struct CommonOptions {
@@ -86,7 +82,8 @@ bool parse_common_option(const char* tool, const std::string& f, const Value& va
   if (f == "--sample-hz")
     o.sample_hz = cli::parse_number(f, value(), 1, 1000, usage_error);
   else if (f == "--hz")
-    warn_deprecated_hz(tool), o.sample_hz = cli::parse_number(f, value(), 1, 1000, usage_error);
+    // --hz was the controller sample rate per hand until --sample-hz (the tick rate is --tick-hz).
+    cli::warn_renamed(tool, f, "--sample-hz"), o.sample_hz = cli::parse_number(f, value(), 1, 1000, usage_error);
   else if (f == "--tick-hz")
     o.tick_hz = cli::parse_number(f, value(), 1, 2000, usage_error);
   else if (f == "--json")
