@@ -28,7 +28,7 @@ command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 supp="$root/tests/sanitizers"
 # Tests of targets not built here (view, MCAP, install, DDS Security, faults, multihost: their
 # programs) are listed by ctest but not run.
-not_here='_NOT_BUILT$|^security\.|^faults\.|^multihost\.|^server\.replay_mcap\.|^client_lib\.installed_package_consumer$|^client_lib\.view\.|^mcap\.|^install\.'
+not_here='_NOT_BUILT$|^security\.|^faults\.|^multihost\.|^tools\.replay_mcap\.|^client_lib\.installed_package_consumer$|^client_lib\.view\.|^mcap\.|^install\.'
 
 step() { echo "run-sanitizers: $* ($(date +%T))" >&2; }
 configure_and_build() {

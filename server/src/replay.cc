@@ -1,6 +1,6 @@
 #include "replay.h"
 
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 #include "recorded_feed.h"
 #include "scene_server.h"
 #include "server_loop.h"

@@ -1,6 +1,6 @@
 #include "scene_directory.h"
 
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 
 #include <cstdio>
 #include <sstream>

@@ -2,7 +2,7 @@
 
 #include "server_config.pb.h"
 
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 #include "telegrasp/idl/network.h"
 
 #include <google/protobuf/io/tokenizer.h>

@@ -9,7 +9,7 @@
 #include "server_loop.h"
 #include "snapshot.h"
 
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 #include "telegrasp/idl/network_flags.h"
 #include "telegrasp/sim/mesh_loading.h"
 

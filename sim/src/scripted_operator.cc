@@ -191,7 +191,7 @@ namespace {
 // The paper's two groups of people (README, "Calibration"): the pose errors are the previous
 // profiles'; the timing constants are assumed typical human values, except the Fitts slopes,
 // the size terms and the practice gains, which were fitted to the paper's mean times per group
-// and per-object order with sim/tools/eval/fit_skill_profiles.py.
+// and per-object order with client_lib/tools/eval/fit_skill_profiles.py.
 OperatorSkill human_profile(bool experienced) {
   OperatorSkill s;
   s.name = experienced ? "experienced" : "inexperienced";

@@ -1,4 +1,4 @@
-// Fuzzes the questionnaire answers CSV of telegrasp-eval (sim/tools/report/questionnaire.cc):
+// Fuzzes the questionnaire answers CSV of telegrasp-eval (client_lib/tools/report/questionnaire.cc):
 // score_questionnaire, then its JSON and the printed tables (what telegrasp-eval questionnaire
 // writes).
 #include "fuzz_common.h"

@@ -1,5 +1,5 @@
 // What the integration tests share about the programs they start: where they are, where their
-// files go, and ChildProcess (sim/tools/common) to run them.
+// files go, and ChildProcess (client_lib/tools/common) to run them.
 #pragma once
 
 #include "child_process.h"

@@ -1,4 +1,4 @@
-// Reads the files of telegrasp-mcap-sample (tests/sim/tools/mcap/mcap_sample.cc) with the reference
+// Reads the files of telegrasp-mcap-sample (tests/client_lib/tools/mcap/mcap_sample.cc) with the reference
 // TypeScript MCAP reader, @mcap/core, and checks them against the sample's JSON sidecar:
 //   sample.mcap      McapIndexedReader (footer, summary CRC, statistics, chunk indexes, summary
 //                    offsets, messages through the message indexes with chunk CRCs) and

@@ -15,7 +15,7 @@
 //      in the statistics and in the messages; every /tf stamp equals its message's log time;
 //   5. every palm pose on /tf is the newest pose the recording holds for that hand up to the
 //      message's log time (within 1e-6: /tf rounds to 1e-7).
-// Usage: node tests/js/mcap_export_check.mjs DIR   (ctest: server.replay_mcap.reference_reader)
+// Usage: node tests/js/mcap_export_check.mjs DIR   (ctest: tools.replay_mcap.reference_reader)
 import fs from "node:fs";
 import path from "node:path";
 import { Checks, fatal } from "./view_common.mjs";
@@ -30,7 +30,7 @@ const dir = process.argv[2];
 if (!dir) fatal("usage: node mcap_export_check.mjs DIR");
 const expected = JSON.parse(fs.readFileSync(path.join(dir, "expected.json"), "utf8"));
 const bytes = new Uint8Array(fs.readFileSync(path.join(dir, expected.file)));
-const checks = new Checks("server.replay_mcap.reference_reader");
+const checks = new Checks("tools.replay_mcap.reference_reader");
 
 // 1. Indexed: footer, summary and chunk CRCs; messages in log-time order through the indexes.
 const reader = await McapIndexedReader.Initialize({ readable: readableOf(bytes), decompressHandlers });

@@ -1,13 +1,12 @@
 // Tests server/src/recording and server/src/replay: a SceneServer run recorded through the
 // Recorder (no DDS) replays with zero divergence; an altered input diverges where it should;
 // truncated and corrupted files keep exactly the records before the damage; the header carries
-// the settings; the contacts CSV holds every grasp contact; fill_standins completes a mesh folder.
-#include "cli.h"
+// the settings; fill_standins completes a mesh folder.
+#include "telegrasp/idl/cli.h"
 #include "recorded_session.h"
 #include "scratch_dir.h"
 #include "recording.h"
 #include "replay.h"
-#include "replay_export.h"
 #include "scene_setup.h"
 #include "server_config.pb.h"
 
@@ -231,55 +230,6 @@ TEST_F(RecordingTest, AFlippedByteIsReportedAsCorruptWithTheRecordsBeforeKept) {
   EXPECT_FALSE(result.divergence) << result.summary();
   EXPECT_EQ(result.records, k);
   EXPECT_EQ(result.exit_code(), cli::kExitDamaged);
-}
-
-// One row per contact of every grasp event, numbers read back exactly.
-TEST_F(RecordingTest, ContactsCsvHoldsEveryGraspContact) {
-  const std::string csv = (scratch() / "contacts.csv").string();
-  const ContactExport e = export_contacts_csv(session().path, csv);
-  std::uint64_t grasps = 0, contacts = 0;
-  for (const auto& ev : session().events) {
-    if (ev.kind() != msg::GRASP_EVENT_GRASP) continue;
-    ++grasps;
-    contacts += ev.contacts().size();
-  }
-  EXPECT_EQ(e.events, grasps);
-  EXPECT_EQ(e.rows, contacts);
-  EXPECT_FALSE(e.damage);
-
-  std::ifstream in(csv);
-  std::vector<std::string> lines;
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  ASSERT_EQ(lines.size(), contacts + 1);
-  EXPECT_EQ(lines[0], kContactCsvHeader);
-
-  // The last contact of the first grasp.
-  const msg::GraspEvent& ev = session().events[0];
-  const std::size_t c_index = ev.contacts().size() - 1;
-  const msg::ContactPoint& c = ev.contacts()[c_index];
-  std::vector<std::string> f;
-  std::stringstream row(lines[1 + c_index]);
-  for (std::string cell; std::getline(row, cell, ',');) f.push_back(cell);
-  ASSERT_EQ(f.size(), 23u) << lines[1 + c_index];
-  auto num = [](const std::string& s) { return std::strtod(s.c_str(), nullptr); };
-  EXPECT_EQ(f[0], std::to_string(ev.event_id()));
-  EXPECT_EQ(f[1], "alice");
-  EXPECT_EQ(f[2], "right");
-  EXPECT_EQ(f[3], std::to_string(ev.object_id()));
-  EXPECT_EQ(f[4], "005_tomato_soup_can");
-  EXPECT_EQ(f[5], std::to_string(ev.tick()));
-  EXPECT_EQ(num(f[6]), ev.time());
-  EXPECT_EQ(f[7], std::to_string(c.phalanx()));
-  const sim::HandRig rig = sim::HandRig::load(sim::HandRig::builtin_path("human_right"));
-  EXPECT_EQ(f[8], c.phalanx() < 0 ? std::string("palm") : rig.phalanges()[c.phalanx()].name);
-  const msg::Vec3* vecs[] = {&c.p_world(), &c.n_world(), &c.p_object(), &c.n_object()};
-  for (int v = 0; v < 4; ++v) {
-    EXPECT_EQ(num(f[9 + 3 * v]), vecs[v]->x()) << v;  // exact: shortest round-trip text
-    EXPECT_EQ(num(f[10 + 3 * v]), vecs[v]->y()) << v;
-    EXPECT_EQ(num(f[11 + 3 * v]), vecs[v]->z()) << v;
-  }
-  EXPECT_EQ(num(f[21]), c.nd());
-  EXPECT_EQ(f[22], c.nd_hit() ? "1" : "0");
 }
 
 // Every setting goes into the header and comes back, lockstep and fill_standins included.

@@ -1,7 +1,7 @@
 // The bot's object choice, trials and records (bot.h).
 #include "bot.h"
 
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 #include "grasp_event_record.h"
 #include "telegrasp/sim/mesh_loading.h"
 #include "telegrasp/sim/standin_objects.h"

@@ -2,7 +2,7 @@
 // over DDS. It grasps every object of the server's scene --trials times, records each grasp
 // from the server's GraspEvent, and prints the same table and JSON records as telegrasp-eval.
 #include "bot.h"
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 #include "telegrasp/idl/network_flags.h"
 #include "telegrasp/sim/standin_objects.h"
 

@@ -5,7 +5,7 @@
 // one, to print "topic" first).
 #pragma once
 
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 #include "telegrasp/client/types.h"
 
 #include <Eigen/Geometry>

@@ -8,7 +8,7 @@
 #include "telegrasp/client/client.h"
 #include "telegrasp/idl/network_flags.h"
 
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 
 #include <nlohmann/json.hpp>
 

@@ -1,7 +1,7 @@
-// telegrasp-eval <subcommand>: grasp evaluation. In-process runs, the oracle ND bound and the
-// questionnaire's scoring (sim/tools/eval), the paper's protocol over DDS and its participant
-// processes (here); see commands.h.
-#include "cli.h"
+// telegrasp-eval <subcommand>: grasp evaluation. In-process runs, the oracle ND bound, the
+// questionnaire's scoring, the paper's protocol over DDS and its participant processes; see
+// commands.h.
+#include "telegrasp/idl/cli.h"
 #include "commands.h"
 
 #include <cstring>

@@ -6,7 +6,7 @@
 // Progress: one line per grasp on stdout ("grasp I/N OBJECT held|not-held"), read by the runner.
 // Each record also keeps the hand at the grasp tick (the server's HandSkeleton of that tick, in the
 // object's frame), so the report can draw the grasp.
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 #include "commands.h"
 #include "grasp_event_record.h"
 #include "grasp_report.h"

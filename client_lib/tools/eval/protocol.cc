@@ -3,7 +3,7 @@
 // participant process (participant.cc) driving it. Jobs run in parallel, as many as --jobs.
 // Records come from the GraspEvent topic, via the participants.
 #include "child_process.h"
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 #include "commands.h"
 #include "experiment_report.h"
 #include "progress_line.h"

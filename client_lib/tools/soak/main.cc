@@ -3,7 +3,7 @@
 // already running), runs telegrasp-bot processes (two hands each) and restarts each bot when it
 // ends, samples every --sample-s seconds and prints the samples and a verdict as JSON.
 #include "child_process.h"
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 #include "telegrasp/client/client.h"
 #include "telegrasp/idl/network_flags.h"
 

@@ -4,7 +4,7 @@
 // (http://host:8765/) speaking the same protocol. See client_lib/tools/view/README.md.
 #include "channels.h"
 #include "drive.h"
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 #include "mcap_recorder.h"
 #include "step_messages.h"
 #include "telegrasp/client/client.h"

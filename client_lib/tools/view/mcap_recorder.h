@@ -1,4 +1,4 @@
-// McapRecorder: telegrasp-view's channels written into an MCAP file (sim/tools/mcap), the same
+// McapRecorder: telegrasp-view's channels written into an MCAP file (client_lib/tools/mcap), the same
 // topics, schema names, JSON schemas and JSON messages the viewers get, so the file opens in
 // Foxglove or Lichtblick with a time line. telegrasp-view --record writes one live;
 // telegrasp-replay --export-mcap writes one from a server recording.

@@ -1,6 +1,6 @@
 #include "bench_common.h"
 
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 #include "telegrasp/idl/profiles.h"
 #include "telegrasp/idl/telegraspPubSubTypes.h"
 #include "telegrasp/idl/topics.h"

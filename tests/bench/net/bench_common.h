@@ -4,7 +4,7 @@
 #pragma once
 
 #include "child_process.h"
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 #include "test_domain.h"
 
 #include "telegrasp/idl/dds_participant.h"
@@ -131,7 +131,7 @@ class Watchdog {
 std::string self_exe();
 std::string default_server_path();
 
-/// Child processes: the shared ChildProcess (sim/tools/common); the watchdog stops every live one.
+/// Child processes: the shared ChildProcess (client_lib/tools/common); the watchdog stops every live one.
 using tools::ChildProcess;
 
 // ---------------------------------------------------------------------------------------------

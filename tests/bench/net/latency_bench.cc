@@ -2,7 +2,7 @@
 // published -> first HandSkeleton reflecting it), and, in the same run, the raw Fast DDS round
 // trip of an echo process with the same transport and QoS.
 #include "bench_common.h"
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 #include "test_domain.h"
 
 #include "telegrasp/idl/telegraspPubSubTypes.h"

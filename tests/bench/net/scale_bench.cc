@@ -2,7 +2,7 @@
 // missing a tick, and what each costs in server CPU.
 #include "active_hands.h"
 #include "bench_common.h"
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 #include "test_domain.h"
 
 #include "telegrasp/idl/telegraspPubSubTypes.h"

@@ -2,7 +2,7 @@
 // message is written at the step's time, the whole scene is written again every 2 s of log time
 // (so a player that seeks finds it), and a chunk goes to disk once the flush interval has passed.
 // The files themselves are read by the reference reader in client_lib.view.record_killed and
-// server.replay_mcap.reference_reader.
+// tools.replay_mcap.reference_reader.
 #include "channels.h"
 #include "mcap_recorder.h"
 #include "step_messages.h"

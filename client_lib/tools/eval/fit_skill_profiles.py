@@ -162,7 +162,7 @@ def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--eval", default="build/bin/telegrasp-eval")
     p.add_argument("--objects", default="../shared/data/ycb")
-    p.add_argument("--paper", default="sim/tools/report/paper_results_per_object.csv")
+    p.add_argument("--paper", default="client_lib/tools/report/paper_results_per_object.csv")
     p.add_argument("--fit-seeds", default="1,2")
     p.add_argument("--confirm-seeds", default="3,4")
     p.add_argument("--sizes", default="0.8", help="size_standoff grid")

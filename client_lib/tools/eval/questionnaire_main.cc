@@ -1,8 +1,8 @@
 // telegrasp-eval questionnaire FILE.csv: scores the paper's questionnaire
 // (sim/README.md, section 10 The evaluation protocol) per participant and per group, beside the paper's Table 2.
-#include "offline_commands.h"
+#include "commands.h"
 
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 #include "experiment_report.h"
 #include "questionnaire.h"
 

@@ -5,7 +5,7 @@
 #include "replay_export.h"
 #include "replay_export_mcap.h"
 
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 #include "progress_line.h"
 
 #include <nlohmann/json.hpp>

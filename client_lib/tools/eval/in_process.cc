@@ -1,8 +1,8 @@
 // telegrasp-eval's in-process run: scripted grasps on objects with no network; reports success,
 // time and ND.
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 #include "progress_line.h"
-#include "offline_commands.h"
+#include "commands.h"
 #include "eval_inputs.h"
 #include "grasp_report.h"
 #include "grasp_svg.h"

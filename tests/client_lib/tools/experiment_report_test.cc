@@ -6,7 +6,7 @@
 #include "experiment_aggregate.h"
 #include "experiment_report.h"
 
-#include "../test_meshes.h"
+#include "test_meshes.h"
 
 #include <gtest/gtest.h>
 

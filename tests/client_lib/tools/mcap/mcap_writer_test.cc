@@ -1,4 +1,4 @@
-// Tests telegrasp::mcap::Writer (sim/tools/mcap/mcap_writer.h) at the byte level: every expectation
+// Tests telegrasp::mcap::Writer (client_lib/tools/mcap/mcap_writer.h) at the byte level: every expectation
 // comes from the MCAP specification, read back with this file's own little-endian parser and a
 // bitwise CRC-32, independent of the writer's serialization and table-driven CRC.
 #include "mcap_writer.h"

@@ -4,7 +4,7 @@
 // shape's bounds.
 #include "grasp_svg.h"
 
-#include "../test_meshes.h"
+#include "test_meshes.h"
 
 #include <gtest/gtest.h>
 

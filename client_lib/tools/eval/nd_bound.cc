@@ -1,9 +1,9 @@
 // telegrasp-eval nd-bound: how low can ND go for this rig on these objects, whoever operates it?
 // An oracle searches palm poses around each object (random, then refined locally), closes the
 // hand at each with precise closing, and keeps the clean grasp with the lowest mean |ND|.
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 #include "progress_line.h"
-#include "offline_commands.h"
+#include "commands.h"
 #include "eval_inputs.h"
 #include "grasp_report.h"
 #include "grasp_svg.h"

@@ -1,7 +1,7 @@
 // Tests cli.h: numbers are read whole and in range or refused with a message naming the flag,
 // the range and the text given; numbers are written as people write them; the option loop hands
 // every argument over in order, with its value, and refuses what the tool does not take.
-#include "cli.h"
+#include "telegrasp/idl/cli.h"
 
 #include <gtest/gtest.h>
 

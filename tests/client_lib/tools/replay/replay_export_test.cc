@@ -1,27 +1,33 @@
-// Tests server/src/replay_export_mcap (telegrasp-replay --export-mcap) on a recorded session:
-// what it reads and writes is counted against the recording, a damaged recording is exported up
-// to the damage, the step rate sets the number of view updates, and missing schemas or an
-// unwritable file fail naming the file. The MCAP file itself is read by the reference reader in
-// server.replay_mcap.reference_reader (tests/js/mcap_export_check.mjs).
+// Tests telegrasp-replay's exports (client_lib/tools/replay) on a recorded session: the contacts
+// CSV holds every grasp contact, numbers read back exactly; --export-mcap reads and writes what
+// the recording holds, exports a damaged recording up to the damage, sets the number of view
+// updates by the step rate, and fails naming the file when the schemas are missing or the file
+// cannot be written. The MCAP file itself is read by the reference reader in
+// tools.replay_mcap.reference_reader (tests/js/mcap_export_check.mjs).
 #include "recorded_session.h"
 #include "scratch_dir.h"
 #include "recording.h"
+#include "replay_export.h"
 #include "replay_export_mcap.h"
+
+#include "telegrasp/sim/hand_rig.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <sstream>
 
 namespace telegrasp::server {
 namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path& scratch() { return scratch_dir("telegrasp-replay-mcap-test"); }
+const fs::path& scratch() { return scratch_dir("telegrasp-replay-export-test"); }
 
 // The recording's outputs and the server time of the first and last, counted here.
 struct Outputs {
@@ -46,7 +52,7 @@ Outputs count_outputs(const Recording& rec) {
   return o;
 }
 
-class ReplayExportMcapTest : public ::testing::Test {
+class ReplayExportTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     session_ = new RecordedSession(record_session((scratch() / "session.tgrec").string()));
@@ -60,9 +66,58 @@ class ReplayExportMcapTest : public ::testing::Test {
  private:
   static RecordedSession* session_;
 };
-RecordedSession* ReplayExportMcapTest::session_ = nullptr;
+RecordedSession* ReplayExportTest::session_ = nullptr;
 
-TEST_F(ReplayExportMcapTest, ReadsEveryOutputAndSpansTheRecordingsTime) {
+// One row per contact of every grasp event, numbers read back exactly.
+TEST_F(ReplayExportTest, ContactsCsvHoldsEveryGraspContact) {
+  const std::string csv = (scratch() / "contacts.csv").string();
+  const ContactExport e = export_contacts_csv(session().path, csv);
+  std::uint64_t grasps = 0, contacts = 0;
+  for (const auto& ev : session().events) {
+    if (ev.kind() != msg::GRASP_EVENT_GRASP) continue;
+    ++grasps;
+    contacts += ev.contacts().size();
+  }
+  EXPECT_EQ(e.events, grasps);
+  EXPECT_EQ(e.rows, contacts);
+  EXPECT_FALSE(e.damage);
+
+  std::ifstream in(csv);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  ASSERT_EQ(lines.size(), contacts + 1);
+  EXPECT_EQ(lines[0], kContactCsvHeader);
+
+  // The last contact of the first grasp.
+  const msg::GraspEvent& ev = session().events[0];
+  const std::size_t c_index = ev.contacts().size() - 1;
+  const msg::ContactPoint& c = ev.contacts()[c_index];
+  std::vector<std::string> f;
+  std::stringstream row(lines[1 + c_index]);
+  for (std::string cell; std::getline(row, cell, ',');) f.push_back(cell);
+  ASSERT_EQ(f.size(), 23u) << lines[1 + c_index];
+  auto num = [](const std::string& s) { return std::strtod(s.c_str(), nullptr); };
+  EXPECT_EQ(f[0], std::to_string(ev.event_id()));
+  EXPECT_EQ(f[1], "alice");
+  EXPECT_EQ(f[2], "right");
+  EXPECT_EQ(f[3], std::to_string(ev.object_id()));
+  EXPECT_EQ(f[4], "005_tomato_soup_can");
+  EXPECT_EQ(f[5], std::to_string(ev.tick()));
+  EXPECT_EQ(num(f[6]), ev.time());
+  EXPECT_EQ(f[7], std::to_string(c.phalanx()));
+  const sim::HandRig rig = sim::HandRig::load(sim::HandRig::builtin_path("human_right"));
+  EXPECT_EQ(f[8], c.phalanx() < 0 ? std::string("palm") : rig.phalanges()[c.phalanx()].name);
+  const msg::Vec3* vecs[] = {&c.p_world(), &c.n_world(), &c.p_object(), &c.n_object()};
+  for (int v = 0; v < 4; ++v) {
+    EXPECT_EQ(num(f[9 + 3 * v]), vecs[v]->x()) << v;  // exact: shortest round-trip text
+    EXPECT_EQ(num(f[10 + 3 * v]), vecs[v]->y()) << v;
+    EXPECT_EQ(num(f[11 + 3 * v]), vecs[v]->z()) << v;
+  }
+  EXPECT_EQ(num(f[21]), c.nd());
+  EXPECT_EQ(f[22], c.nd_hit() ? "1" : "0");
+}
+
+TEST_F(ReplayExportTest, ReadsEveryOutputAndSpansTheRecordingsTime) {
   const Recording rec = read_recording(session().path);
   const Outputs expected = count_outputs(rec);
   const std::string path = (scratch() / "all.mcap").string();
@@ -81,7 +136,7 @@ TEST_F(ReplayExportMcapTest, ReadsEveryOutputAndSpansTheRecordingsTime) {
   EXPECT_LE(e.messages, 5 * e.steps + session().events.size() + 2);
 }
 
-TEST_F(ReplayExportMcapTest, TheRateSetsTheViewUpdatesPerSecondOfServerTime) {
+TEST_F(ReplayExportTest, TheRateSetsTheViewUpdatesPerSecondOfServerTime) {
   const Recording rec = read_recording(session().path);
   const Outputs o = count_outputs(rec);
   const double seconds = o.last_s - o.first_s;
@@ -96,7 +151,7 @@ TEST_F(ReplayExportMcapTest, TheRateSetsTheViewUpdatesPerSecondOfServerTime) {
   }
 }
 
-TEST_F(ReplayExportMcapTest, ADamagedRecordingIsExportedUpToTheDamage) {
+TEST_F(ReplayExportTest, ADamagedRecordingIsExportedUpToTheDamage) {
   std::ifstream in(session().path, std::ios::binary);
   const std::string bytes(std::istreambuf_iterator<char>(in), {});
   const std::string cut = (scratch() / "cut.tgrec").string();
@@ -111,7 +166,7 @@ TEST_F(ReplayExportMcapTest, ADamagedRecordingIsExportedUpToTheDamage) {
   EXPECT_GT(e.messages, 0u);
 }
 
-TEST_F(ReplayExportMcapTest, MissingSchemasFailNamingTheFile) {
+TEST_F(ReplayExportTest, MissingSchemasFailNamingTheFile) {
   const std::string missing = (scratch() / "no-schemas").string();
   try {
     export_mcap(session().path, (scratch() / "x.mcap").string(), {.schema_dir = missing});
@@ -122,7 +177,7 @@ TEST_F(ReplayExportMcapTest, MissingSchemasFailNamingTheFile) {
   }
 }
 
-TEST_F(ReplayExportMcapTest, AnUnwritableFileFailsNamingIt) {
+TEST_F(ReplayExportTest, AnUnwritableFileFailsNamingIt) {
   const std::string path = (scratch() / "no-such-dir" / "x.mcap").string();
   try {
     export_mcap(session().path, path);
