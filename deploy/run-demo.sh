@@ -90,7 +90,7 @@ else
 fi
 
 start=$SECONDS
-"$build/bin/telegrasp-bot" --domain "$domain" --profile loopback --hands both --timeout 60 \
+"$build/bin/telegrasp-bot" --domain "$domain" --profile loopback --hands both --timeout-s 60 \
   "${bot_args[@]}" "${objects[@]}" &
 bot_pid=$!
 set +e

@@ -4,8 +4,8 @@
 # the repository's own files (rigs, the example configuration and questionnaire) and the seeds
 # telegrasp-fuzz-seeds generates (CDR samples and commands, a recording, small meshes).
 #
-# usage: deploy/run-fuzz.sh [--seconds S] [--runs N] [--seed N] [--only NAME] [--jobs J] [--corpus DIR]
-#   --seconds S   time per harness (default 60)
+# usage: deploy/run-fuzz.sh [--duration-s S] [--runs N] [--seed N] [--only NAME] [--jobs J] [--corpus DIR]
+#   --duration-s S  seconds per harness (default 60; --seconds: the old spelling)
 #   --seed N      libFuzzer's random seed (default: a new one each run); the test command uses 1,
 #                 so CI mutates the same inputs as a run checked here (only how far it gets varies)
 #   --runs N      stop a harness after N executions instead (whichever comes first)
@@ -23,7 +23,10 @@ seconds=60 runs=-1 seed=0 only="" jobs=1 corpus=""
 usage() { sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'; }
 while [ $# -gt 0 ]; do
   case "$1" in
-    --seconds) seconds="${2:?--seconds needs a value}"; shift 2 ;;
+    --duration-s) seconds="${2:?--duration-s needs a value}"; shift 2 ;;
+    --seconds)  # the old spelling, for one release
+      echo "run-fuzz: deprecated: --seconds is now --duration-s (--seconds goes in the next release)" >&2
+      seconds="${2:?--seconds needs a value}"; shift 2 ;;
     --runs) runs="${2:?--runs needs a value}"; shift 2 ;;
     --seed) seed="${2:?--seed needs a value}"; shift 2 ;;
     --only) only="${2:?--only needs a harness name}"; shift 2 ;;
@@ -33,9 +36,8 @@ while [ $# -gt 0 ]; do
     *) echo "run-fuzz: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
-for v in seconds jobs; do
-  [[ "${!v}" =~ ^[1-9][0-9]*$ ]] || { echo "run-fuzz: --$v '${!v}' is not a positive integer" >&2; exit 2; }
-done
+[[ "$seconds" =~ ^[1-9][0-9]*$ ]] || { echo "run-fuzz: --duration-s '$seconds' is not a positive integer" >&2; exit 2; }
+[[ "$jobs" =~ ^[1-9][0-9]*$ ]] || { echo "run-fuzz: --jobs '$jobs' is not a positive integer" >&2; exit 2; }
 [[ "$runs" =~ ^(-1|[1-9][0-9]*)$ ]] || { echo "run-fuzz: --runs '$runs' is not a positive integer" >&2; exit 2; }
 [[ "$seed" =~ ^[0-9]{1,9}$ ]] || { echo "run-fuzz: --seed '$seed' is not a whole number below 10^9" >&2; exit 2; }
 harnesses=(controller-state scene-command server-config rig-text mesh recording questionnaire)

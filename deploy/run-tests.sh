@@ -13,4 +13,4 @@ cmake --build build -j"$(nproc)"
 ctest --test-dir build --output-on-failure -j"$(nproc)"
 [ "${TELEGRASP_TESTS_QUICK:-0}" = 1 ] && { echo "run-tests: TELEGRASP_TESTS_QUICK=1: sanitizers and fuzzing not run" >&2; exit 0; }
 deploy/run-sanitizers.sh
-deploy/run-fuzz.sh --seconds 60 --seed 1 --jobs "$(nproc)"
+deploy/run-fuzz.sh --duration-s 60 --seed 1 --jobs "$(nproc)"

@@ -372,9 +372,9 @@ start_bot() {  # start_bot SCENE_INDEX HOST ID TRIALS [env]: "env": scene and di
   s="$(scene_name "$1")"
   if [ "${5:-}" = env ]; then
     run_on "$2" "$work/bot-$3.log" env TELEGRASP_SCENE="$s" TELEGRASP_DISCOVERY_SERVERS="$dds_env" \
-      "$bin/telegrasp-bot" --client-id "$3" --trials "$4" --timeout 60 --json "$work/bot-$3.json" --profile wan
+      "$bin/telegrasp-bot" --client-id "$3" --trials "$4" --timeout-s 60 --json "$work/bot-$3.json" --profile wan
   else
-    run_on "$2" "$work/bot-$3.log" "$bin/telegrasp-bot" --client-id "$3" --trials "$4" --timeout 60 \
+    run_on "$2" "$work/bot-$3.log" "$bin/telegrasp-bot" --client-id "$3" --trials "$4" --timeout-s 60 \
       --json "$work/bot-$3.json" --scene "$s" "${dds_args[@]}"
   fi
   pid_of[$3]=$started

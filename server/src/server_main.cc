@@ -46,9 +46,9 @@ Options (override the --config file):
                       telegrasp/scene/NAME, so clients of other scenes never see them; 1-64
                       letters, digits, '-', '_', '.' (default $TELEGRASP_SCENE, else default).
                       The server announces itself on the scene directory (telegrasp-echo
-                      --scenes) and, before serving, waits --claim-wait seconds for an older run
+                      --scenes) and, before serving, waits --claim-wait-s seconds for an older run
                       of the same scene: if one is live, it refuses to start (exit 1)
-  --claim-wait S      seconds to wait for an older claim on the scene name (default 1.5; 0:
+  --claim-wait-s S    seconds to wait for an older claim on the scene name (default 1.5; 0:
                       do not wait, e.g. in tests that start many servers)
   --discovery-server HOST[:PORT]
                       a Fast DDS discovery server (port 11811 when left out); repeat for more, in
@@ -150,7 +150,7 @@ void apply_flags(int argc, char** argv, Flags& f, std::vector<std::string>& conf
       configs.push_back(value());
     else if (idl::parse_network_flag(a, value, network, usage_error))
       ;
-    else if (a == "--claim-wait")
+    else if (telegrasp::cli::is_flag("telegrasp-server", a, "--claim-wait-s", "--claim-wait"))
       s.claim_wait_s = cli::parse_number(a, value(), 0, 60, usage_error);
     else if (a == "--security")
       f.security_dir = value();

@@ -44,7 +44,7 @@ TEST(EchoToolTest, PrintsOneJsonObjectPerSampleAndStopsAtTheCount) {
   ASSERT_TRUE(status_writer->write(&status));
 
   const std::string command = std::string(TELEGRASP_ECHO) + " --domain " + std::to_string(domain) +
-                              " --topics ServerStatus,GraspEvent --count 2 --seconds 60";
+                              " --topics ServerStatus,GraspEvent --count 2 --duration-s 60";
   FILE* pipe = popen(command.c_str(), "r");
   ASSERT_NE(pipe, nullptr);
 

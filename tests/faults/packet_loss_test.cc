@@ -99,7 +99,7 @@ TEST_P(PacketLossTest, GraspsCompleteAndEveryGraspEventArrivesOnce) {
   const auto start = Clock::now();
   ChildProcess bot(
       {bin("telegrasp-bot"), "--client-id", "lossy", "--hands", "both", "--trials", std::to_string(kTrials), "--seed",
-       "1", "--domain", domain, "--profile", "udp", "--json", json, "--timeout", "60"},
+       "1", "--domain", domain, "--profile", "udp", "--json", json, "--timeout-s", "60"},
       work_path(tag + "_bot.log"));
   const int status = bot.wait(kGuard);
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();

@@ -76,7 +76,7 @@ TEST(ClientKilledTest, HeldObjectIsReleasedAndTheReleasePublishedWithinOneSecond
   ASSERT_TRUE(observer->wait_for_server(std::chrono::duration_cast<std::chrono::milliseconds>(kGuard)))
       << server.log_tail();
   ChildProcess bot({bin("telegrasp-bot"), "--client-id", victim, "--hands", "right", "--trials", "3", "--domain",
-                    domain, "--profile", "udp", "--timeout", "60"},
+                    domain, "--profile", "udp", "--timeout-s", "60"},
                    work_path("killed_client_bot.log"));
 
   // 1. Wait for the bot's first grasp, and see the object held in a scene state after it.
@@ -162,7 +162,7 @@ TEST(ServerKilledTest, RecordingKeepsEveryRecordWrittenBeforeTheKill) {
   ASSERT_TRUE(observer->wait_for_server(std::chrono::duration_cast<std::chrono::milliseconds>(kGuard)))
       << server.log_tail();
   ChildProcess bot({bin("telegrasp-bot"), "--client-id", "recorded", "--hands", "both", "--trials", "3", "--domain",
-                    domain, "--profile", "udp", "--timeout", "60"},
+                    domain, "--profile", "udp", "--timeout-s", "60"},
                    work_path("killed_server_bot.log"));
 
   // 1. Kill the server as soon as its third grasp event arrives.

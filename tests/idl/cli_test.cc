@@ -94,5 +94,21 @@ TEST(CliTest, OptionLoopRefusesUnknownOptionsStrayArgumentsAndMissingValues) {
   EXPECT_EQ(parse({"--name", "x"}), "");
 }
 
+// A renamed flag: the new name is taken silently, the old one is taken with a warning naming
+// both, anything else is not this flag.
+TEST(CliTest, ARenamedFlagTakesBothSpellingsAndWarnsOnTheOldOne) {
+  ::testing::internal::CaptureStderr();
+  EXPECT_TRUE(is_flag("tool", "--timeout-s", "--timeout-s", "--timeout"));
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
+  ::testing::internal::CaptureStderr();
+  EXPECT_TRUE(is_flag("tool", "--timeout", "--timeout-s", "--timeout"));
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(),
+            "tool: deprecated: --timeout is now --timeout-s (--timeout goes in the next release)\n");
+  ::testing::internal::CaptureStderr();
+  EXPECT_FALSE(is_flag("tool", "--timeouts", "--timeout-s", "--timeout"));
+  EXPECT_FALSE(is_flag("tool", "--trials", "--timeout-s", "--timeout"));
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
+}
+
 }  // namespace
 }  // namespace telegrasp::cli

@@ -50,7 +50,7 @@ P=$prefix
 server=\$!
 trap 'kill \$server 2>/dev/null || true' EXIT
 # Exit status 5: every trial done, some not held (the records are checked below).
-\$P/bin/telegrasp-bot --domain $domain --trials 1 --timeout 30 --json $work/bot.json >$work/bot.out 2>$work/bot.err ||
+\$P/bin/telegrasp-bot --domain $domain --trials 1 --timeout-s 30 --json $work/bot.json >$work/bot.out 2>$work/bot.err ||
   [ \$? -eq 5 ]
 kill -INT \$server
 wait \$server

@@ -40,7 +40,7 @@ run_one() {
   local server=$!
   local status=0
   "$bin/telegrasp-bot" --domain "$domain" --profile loopback --skill experienced --trials "$trials" \
-    --seed "$seed" --json "$out/bot_seed$seed.json" --timeout 30 >"$out/bot_seed$seed.out" 2>"$out/bot_seed$seed.log" ||
+    --seed "$seed" --json "$out/bot_seed$seed.json" --timeout-s 30 >"$out/bot_seed$seed.out" 2>"$out/bot_seed$seed.log" ||
     status=$?
   kill -TERM "$server" 2>/dev/null || true
   wait "$server" 2>/dev/null || true

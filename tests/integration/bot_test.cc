@@ -82,7 +82,7 @@ TEST(BotTest, NoMeshFilesHoldsTheHardestObjectsOnAFreeRunningServer) {
   const auto start = std::chrono::steady_clock::now();
   ChildProcess bot(
       {bin("telegrasp-bot"), "--client-id", "no-meshes", "--hands", "both", "--trials", std::to_string(kTrials),
-       "--seed", "2", "--domain", domain, "--profile", "loopback", "--json", json, "--timeout", "30"},
+       "--seed", "2", "--domain", domain, "--profile", "loopback", "--json", json, "--timeout-s", "30"},
       work_path("hard_bot.log"));
   const int status = bot.wait(kGuard);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

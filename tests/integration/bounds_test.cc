@@ -219,7 +219,7 @@ TEST(BoundsTest, ABotWhoseClientIdIsTakenIsToldAndExitsFour) {
     }
   });
   ChildProcess bot(
-      {bin("telegrasp-bot"), "--domain", std::to_string(server.domain), "--client-id", "taken", "--timeout", "20"},
+      {bin("telegrasp-bot"), "--domain", std::to_string(server.domain), "--client-id", "taken", "--timeout-s", "20"},
       work_path("bounds_taken_bot.log"));
   const int status = bot.wait(60s);
   stop = true;

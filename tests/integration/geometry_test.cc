@@ -180,7 +180,7 @@ TEST(ObjectGeometryTest, ABotWithoutMeshFilesPlansOnReceivedGeometry) {
   const int trials = 2;
   const std::string json = work_path("geometry_bot.json"), log = work_path("geometry_bot.log");
   ChildProcess bot({bin("telegrasp-bot"), "--client-id", "wire-bot", "--trials", std::to_string(trials), "--seed", "3",
-                    "--domain", std::to_string(domain), "--profile", "loopback", "--json", json, "--timeout", "30"},
+                    "--domain", std::to_string(domain), "--profile", "loopback", "--json", json, "--timeout-s", "30"},
                    log);
   const int status = bot.wait(300s);  // 0 every trial held, 3 some not (asserted below)
   ASSERT_TRUE(status == 0 || status == 3) << bot.exit_description() << "\n" << bot.log_tail();

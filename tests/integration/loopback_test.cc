@@ -117,7 +117,7 @@ std::unique_ptr<ChildProcess> start_bot(int domain, const std::string& id, const
   return std::make_unique<ChildProcess>(
       std::vector<std::string>{bin("telegrasp-bot"), "--client-id", id, "--hands", hands, "--trials",
                                std::to_string(trials), "--seed", "3", "--domain", std::to_string(domain), "--profile",
-                               profile, "--json", json, "--timeout", "30"},
+                               profile, "--json", json, "--timeout-s", "30"},
       work_path(id + ".log"));
 }
 

@@ -145,7 +145,7 @@ TEST(ServerRestartTest, BotGoesOnTrialRecordedInterruptedObjectsBackFromTheSnaps
   // 2. The bot, one trial per object.
   const std::string json_path = work_path("restart_bot.json");
   ChildProcess bot({bin("telegrasp-bot"), "--client-id", kBotId, "--trials", "1", "--seed", "5", "--domain",
-                    std::to_string(domain), "--profile", "loopback", "--json", json_path, "--timeout", "30"},
+                    std::to_string(domain), "--profile", "loopback", "--json", json_path, "--timeout-s", "30"},
                    work_path("restart_bot.log"));
 
   // 3. Once the bot holds an object and a snapshot with the spawned object is on disk: SIGKILL.

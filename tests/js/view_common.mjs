@@ -154,7 +154,7 @@ export function startBot(bin, out, domain, clientId) {
   return start(path.join(bin, "telegrasp-bot"), ["--domain", String(domain), "--profile", "loopback",
     // Five rounds: a loaded machine's screenshots can outlast several one-second holds; the checks
     // stop the bot when they are done.
-    "--client-id", clientId, "--hands", "both", "--skill", "perfect", "--trials", "5", "--timeout", "60"], {
+    "--client-id", clientId, "--hands", "both", "--skill", "perfect", "--trials", "5", "--timeout-s", "60"], {
     log: path.join(out, "bot.log"),
   });
 }

@@ -3,7 +3,7 @@
 // (messages and payload bytes per channel). --slow K makes the first K clients stop reading their
 // socket for 2 s of every 3 (a viewer on a bad link), to show the bridge drops their frames
 // (newest wins) instead of slowing down.
-// Usage: node view_viewers.mjs --url ws://127.0.0.1:8765 [--clients 4] [--seconds 20] [--slow 0]
+// Usage: node view_viewers.mjs --url ws://127.0.0.1:8765 [--clients 4] [--duration-s 20] [--slow 0]
 import { need } from "./view_common.mjs";
 
 const ws = await need("ws");
@@ -15,7 +15,7 @@ const args = process.argv.slice(2);
 const get = (flag, fallback) => (args.includes(flag) ? args[args.indexOf(flag) + 1] : fallback);
 const url = get("--url", "ws://127.0.0.1:8765");
 const clients = Number(get("--clients", 4));
-const seconds = Number(get("--seconds", 20));
+const seconds = Number(get("--duration-s", 20));
 const slow = Number(get("--slow", 0));
 
 const results = [];

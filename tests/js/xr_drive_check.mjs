@@ -62,7 +62,7 @@ async function startView(extra) {
   const name = `view${extra.length ? `-${extra.length}` : ""}`;
   const log = fs.createWriteStream(path.join(out, `${name}.log`));
   const view = start(path.join(bin, "telegrasp-view"), ["--domain", String(domain), "--profile", "loopback", "--port", "0",
-    "--address", "127.0.0.1", "--drive", "--tracking-grace", "1", ...extra], {
+    "--address", "127.0.0.1", "--drive", "--tracking-grace-s", "1", ...extra], {
     log: path.join(out, `${name}.stderr.log`),
     onLine: (line) => {
       log.write(line + "\n");

@@ -5,7 +5,7 @@
 // (p50, p99; page -> bridge -> server -> bridge -> page, no browser), the share of samples the
 // bridge forwarded, and the bridge's CPU per driven hand (its --stats).
 // Usage: BUILD/bin/telegrasp-test-domains node xr_drive_load.mjs --bin BUILD/bin --out DIR
-//          [--connections 1,8,32,64] [--seconds 10]
+//          [--connections 1,8,32,64] [--duration-s 10]
 // Prints one JSON line per N, and a table.
 import fs from "node:fs";
 import path from "node:path";
@@ -16,8 +16,8 @@ const { bin, out } = options();
 const args = process.argv.slice(2);
 const arg = (flag, fallback) => (args.includes(flag) ? args[args.indexOf(flag) + 1] : fallback);
 const counts = arg("--connections", "1,8,32,64").split(",").map(Number);
-const seconds = Number(arg("--seconds", "10"));
-if (counts.some((n) => !(n >= 1 && n <= 256)) || !(seconds > 0)) fatal("--connections N,N.. in 1..256, --seconds > 0");
+const seconds = Number(arg("--duration-s", "10"));
+if (counts.some((n) => !(n >= 1 && n <= 256)) || !(seconds > 0)) fatal("--connections N,N.. in 1..256, --duration-s > 0");
 const domain = testDomain();
 
 const server = start(path.join(bin, "telegrasp-server"), ["--domain", String(domain), "--profile", "loopback",

@@ -84,7 +84,7 @@ Options:
   --scene NAME        the scene (room) to join (default $TELEGRASP_SCENE, else default)
   --discovery-server HOST[:PORT]
                       a Fast DDS discovery server; repeat in id order (telegrasp-server --help)
-  --timeout S         give up when no server is found (or it goes silent) for S seconds
+  --timeout-s S       give up when no server is found (or it goes silent) for S seconds
                       (default 20)
   -h, --help          this text
 
@@ -139,7 +139,7 @@ Options parse(int argc, char** argv) {
       o.json_path = value();
     else if (telegrasp::idl::parse_network_flag(a, value, o, usage_error))
       ;
-    else if (a == "--timeout")
+    else if (telegrasp::cli::is_flag("telegrasp-bot", a, "--timeout-s", "--timeout"))
       o.timeout_s = telegrasp::cli::parse_number(a, value(), 0.1, 86400, usage_error);
     else {
       return false;
@@ -210,7 +210,7 @@ int main(int argc, char** argv) {
   if (g_stop) return kExitInterrupted;
   if (!found) {
     std::cerr << "telegrasp-bot: no telegrasp server found on domain " << opt.domain << " with profile " << opt.profile
-              << " within " << opt.timeout_s << " s (--timeout)\n";
+              << " within " << opt.timeout_s << " s (--timeout-s)\n";
     return 1;
   }
 
@@ -274,7 +274,7 @@ int main(int argc, char** argv) {
     const auto silent = Clock::now() - last_scene_change;
     if (silent > std::chrono::duration<double>(opt.timeout_s)) {
       std::cerr << "telegrasp-bot: the server sent no scene state for " << opt.timeout_s
-                << " s (--timeout); stopping\n";
+                << " s (--timeout-s); stopping\n";
       status = 1;
       break;
     }

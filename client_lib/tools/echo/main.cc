@@ -62,9 +62,9 @@ Options:
   --discovery-server HOST[:PORT]
                    a Fast DDS discovery server; repeat in id order (telegrasp-server --help)
   --count N        exit after N lines
-  --seconds S      exit after S seconds
+  --duration-s S   exit after S seconds
   --scenes         instead of samples: list the live servers of every scene from the scene
-                   directory after --seconds (default 3) of listening, one line each (scene,
+                   directory after --duration-s (default 3) of listening, one line each (scene,
                    host, serving, clients, hands, objects, tick p99, missed ticks, CPU, host
                    load); exit 1 when there is none
   --format F       with --scenes: text (default, a line per server) or json: one JSON array
@@ -198,7 +198,7 @@ Args parse_args(int argc, char** argv) {
       ;
     else if (a == "--count")
       args.count = static_cast<std::uint64_t>(cli::parse_whole(a, value(), 1, 1'000'000'000'000, usage_error));
-    else if (a == "--seconds")
+    else if (telegrasp::cli::is_flag("telegrasp-echo", a, "--duration-s", "--seconds"))
       args.seconds = cli::parse_number(a, value(), 0.001, 1e9, usage_error);
     else if (a == "--scenes")
       args.scenes = true;

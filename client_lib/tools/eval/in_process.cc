@@ -108,10 +108,8 @@ Options parse(int argc, char** argv) {
         usage_error("--selection expects surface or origin, got '" + m + "'");
     } else if (a == "--trials")
       o.trials = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 100000, usage_error));
-    else if (a == "--jobs" || a == "--threads") {  // --threads: the old name
-      if (a == "--threads") telegrasp::cli::warn_renamed(kTool, a, "--jobs");
+    else if (telegrasp::cli::is_flag(kTool, a, "--jobs", "--threads"))
       o.threads = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 64, usage_error));
-    }
     else if (a == "--seed")
       o.seed = static_cast<std::uint64_t>(telegrasp::cli::parse_whole(a, value(), 0, 1L << 62, usage_error));
     else if (a == "--mode") {

@@ -94,10 +94,8 @@ Options parse(int argc, char** argv) {
       o.refine = static_cast<int>(parse_whole(a, value(), 0, 1000000, usage_error));
     else if (a == "--min-hits")
       o.min_hits = static_cast<int>(parse_whole(a, value(), 1, 1000, usage_error));
-    else if (a == "--jobs" || a == "--threads") {  // --threads: the old name
-      if (a == "--threads") telegrasp::cli::warn_renamed(kTool, a, "--jobs");
+    else if (telegrasp::cli::is_flag(kTool, a, "--jobs", "--threads"))
       o.threads = static_cast<int>(parse_whole(a, value(), 1, 64, usage_error));
-    }
     else if (a == "--seed")
       o.seed = static_cast<std::uint64_t>(parse_whole(a, value(), 0, 1L << 62, usage_error));
     else

@@ -60,7 +60,7 @@ Options:
   --objects DIR     the server's mesh folder (missing protocol objects: built-in stand-ins)
   --count N         grasp only the first N protocol objects (default 30)
   --json FILE       write the grasp records (JSON array) here (default: stdout at the end)
-  --timeout S       give up when the server sends nothing for S seconds (default 20)
+  --timeout-s S     give up when the server sends nothing for S seconds (default 20)
   -h, --help        this text
 
 Exit status: 0 every object done, 1 a runtime failure (the --objects folder or a mesh missing or
@@ -113,7 +113,7 @@ Options parse(int argc, char** argv) {
       o.count = static_cast<int>(cli::parse_whole(a, value(), 1, 30, usage_error));
     else if (a == "--json")
       o.json_path = value();
-    else if (a == "--timeout")
+    else if (cli::is_flag(kTool, a, "--timeout-s", "--timeout"))
       o.timeout_s = cli::parse_number(a, value(), 0.1, 86400, usage_error);
     else if (a == "--skills")
       o.skills_path = value();
@@ -357,7 +357,7 @@ int run_participant(int argc, char** argv) {
     client::Client c(copt);
     if (!c.wait_for_server(std::chrono::milliseconds(static_cast<long>(1000 * opt.timeout_s)))) {
       std::cerr << kTool << ": no telegrasp server found on domain " << opt.domain << " with profile " << opt.profile
-                << " within " << opt.timeout_s << " s (--timeout)\n";
+                << " within " << opt.timeout_s << " s (--timeout-s)\n";
       return cli::kExitFailure;
     }
     // SceneStates arrive on a DDS thread; this thread answers each tick in order.
@@ -388,7 +388,7 @@ int run_participant(int argc, char** argv) {
       while (!cv.wait_for(lock, std::chrono::milliseconds(100), [&] { return newest && newest->tick > answered; })) {
         if (Clock::now() > give_up) {
           std::cerr << kTool << " " << copt.client_id << ": no scene state after tick " << answered << " for "
-                    << opt.timeout_s << " s (--timeout)\n";
+                    << opt.timeout_s << " s (--timeout-s)\n";
           return cli::kExitFailure;
         }
         lock.unlock();

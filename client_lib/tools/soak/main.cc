@@ -40,9 +40,9 @@ using telegrasp::cli::kExitInterrupted;
 using telegrasp::cli::kExitMemoryGrew;
 using telegrasp::cli::kExitTooFewGrasps;
 
-constexpr const char* kUsage = R"(Usage: telegrasp-soak --hands N --minutes M [options]
+constexpr const char* kUsage = R"(Usage: telegrasp-soak --hands N --duration-s S [options]
 
-Soak test: N hands grasp continuously for M minutes against one telegrasp server while the
+Soak test: N hands grasp continuously for S seconds against one telegrasp server while the
 server's resident memory (VmRSS from /proc/PID/status), heap in use, tick time and missed ticks
 (from its ServerStatus) are sampled every --sample-s seconds. The hands are telegrasp-bot
 processes with two hands each (one right hand for an odd N), each grasping every object of the
@@ -66,7 +66,7 @@ as freed memory waits in quarantine) is judged on its RSS with --max-growth-pct.
 
 Options:
   --hands N           hands grasping at once, 1..1024 (required)
-  --minutes M         how long to run, > 0 (required; fractions allowed, e.g. 0.5)
+  --duration-s S      how long to run, in seconds, > 0 (required; e.g. 1800 for 30 minutes)
   --sample-s S        seconds between samples (default 10)
   --warmup-s S        samples before this are not judged (default: 60, at most a third of the run)
   --max-growth-pct P  the verdict's limit on the growth of the server's heap in use after
@@ -108,7 +108,7 @@ far are printed).
 
 struct Options {
   int hands = 0;
-  double minutes = 0, sample_s = 10, warmup_s = -1, max_growth_pct = 1, max_rss_growth_pct = 5;
+  double duration_s = 0, sample_s = 10, warmup_s = -1, max_growth_pct = 1, max_rss_growth_pct = 5;
   int domain = 0;
   std::string scene;  // "": $TELEGRASP_SCENE, else default
   std::vector<std::string> discovery_servers;
@@ -123,8 +123,12 @@ Options parse(int argc, char** argv) {
   telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
     if (a == "--hands")
       o.hands = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 1024, usage_error));
-    else if (a == "--minutes")
-      o.minutes = telegrasp::cli::parse_number(a, value(), 1e-3, 7 * 24 * 60, usage_error);
+    else if (a == "--duration-s")
+      o.duration_s = telegrasp::cli::parse_number(a, value(), 0.06, 7 * 24 * 3600, usage_error);
+    else if (a == "--minutes") {  // the old spelling, in minutes
+      telegrasp::cli::warn_renamed("telegrasp-soak", a, "--duration-s (in seconds)");
+      o.duration_s = 60 * telegrasp::cli::parse_number(a, value(), 1e-3, 7 * 24 * 60, usage_error);
+    }
     else if (a == "--sample-s")
       o.sample_s = telegrasp::cli::parse_number(a, value(), 1, 3600, usage_error);
     else if (a == "--warmup-s")
@@ -156,11 +160,11 @@ Options parse(int argc, char** argv) {
     return true;
   });
   if (o.hands == 0) usage_error("--hands N is required");
-  if (o.minutes == 0) usage_error("--minutes M is required");
-  const double run_s = 60 * o.minutes;
+  if (o.duration_s == 0) usage_error("--duration-s S is required");
+  const double run_s = o.duration_s;
   if (o.warmup_s < 0) o.warmup_s = std::min(60.0, run_s / 3);
-  if (o.warmup_s >= run_s) usage_error("--warmup-s must be shorter than the run (--minutes)");
-  if (o.sample_s > run_s) usage_error("--sample-s must not be longer than the run (--minutes)");
+  if (o.warmup_s >= run_s) usage_error("--warmup-s must be shorter than the run (--duration-s)");
+  if (o.sample_s > run_s) usage_error("--sample-s must not be longer than the run (--duration-s)");
   if (!o.server_config.empty() && o.server_pid)
     usage_error("--server-config is for a started server; --server-pid watches a running one");
   if (!o.server_config.empty() && !fs::is_regular_file(o.server_config))
@@ -345,7 +349,7 @@ int main(int argc, char** argv) {
                                      opt.skill,
                                      "--seed",
                                      std::to_string(1000 * s.starts + k + 1),
-                                     "--timeout",
+                                     "--timeout-s",
                                      "60"};
     argv.insert(argv.end(), dds.begin(), dds.end());
     s.bot.start(argv, log_dir + "/bot" + std::to_string(k) + ".log");
@@ -361,13 +365,13 @@ int main(int argc, char** argv) {
     return telegrasp::cli::kExitFailure;
   }
   std::cerr << "telegrasp-soak: " << opt.hands << " hands in " << slots.size() << " bots against server pid "
-            << server_pid << ", " << opt.minutes << " min, a sample every " << opt.sample_s << " s\n";
+            << server_pid << ", " << opt.duration_s << " s, a sample every " << opt.sample_s << " s\n";
 
   json samples = json::array();
   std::vector<double> t_judged, rss_judged;
   std::vector<double> t_heap, heap_judged;  // the samples whose period had a status with the heap
   const auto t0 = Clock::now();
-  const auto end = t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(60 * opt.minutes));
+  const auto end = t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(opt.duration_s));
   auto next_sample = t0;
   int restarts = 0, total_restarts = 0;
   std::string failure;
@@ -457,7 +461,7 @@ int main(int argc, char** argv) {
     verdict["flat_memory"] = flat;
   } else {
     verdict = {{"flat_memory", nullptr},
-               {"why", "fewer than 2 samples after the warm-up: lengthen --minutes or shorten --warmup-s"}};
+               {"why", "fewer than 2 samples after the warm-up: lengthen --duration-s or shorten --warmup-s"}};
   }
   int grasps = 0;
   std::uint64_t missed = 0;
@@ -467,7 +471,8 @@ int main(int argc, char** argv) {
   verdict["bot_restarts"] = total_restarts;
   json result = {{"hands", opt.hands},
                  {"bots", slots.size()},
-                 {"minutes", opt.minutes},
+                 {"duration_s", opt.duration_s},
+                 {"minutes", opt.duration_s / 60},  // the old name of the setting, for one release
                  {"sample_s", opt.sample_s},
                  {"warmup_s", opt.warmup_s},
                  {"profile", opt.profile},

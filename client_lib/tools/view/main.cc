@@ -81,9 +81,11 @@ in the view's README, "Driving hands"):
   --drive-origin O   without a token, pages from Origin O (e.g. https://example.org:8443) may
                      drive too (repeat for more); the bridge's own pages always may
   --drive-prefix P   client ids P<tag>-<n> (default xr-)
-  --tracking-grace S a hand whose tracking is lost (or whose page stops sending) keeps its grasp
+  --tracking-grace-s S
+                     a hand whose tracking is lost (or whose page stops sending) keeps its grasp
                      S seconds, then opens (default 2)
-  --resume-window S  a connection whose link fails (not one the page closed) keeps its hands S
+  --resume-window-s S
+                     a connection whose link fails (not one the page closed) keeps its hands S
                      seconds for the page to reconnect with its resume token (default 5); a page
                      whose link died without a word gets them back within the tracking grace
   --tls-cert FILE    with --tls-key: the port also serves HTTPS and WSS with this certificate
@@ -149,9 +151,9 @@ Args parse(int argc, char** argv) {
       a.drive_options.prefix = value();
       if (a.drive_options.prefix.empty() || a.drive_options.prefix.size() > 32)
         usage_error("--drive-prefix expects 1..32 characters");
-    } else if (flag == "--tracking-grace")
+    } else if (telegrasp::cli::is_flag("telegrasp-view", flag, "--tracking-grace-s", "--tracking-grace"))
       a.drive_options.tracking_grace_s = cli::parse_number(flag, value(), 0, 60, usage_error);
-    else if (flag == "--resume-window")
+    else if (telegrasp::cli::is_flag("telegrasp-view", flag, "--resume-window-s", "--resume-window"))
       a.drive_options.resume_window_s = cli::parse_number(flag, value(), 0, 600, usage_error);
     else if (flag == "--tls-cert")
       a.tls_cert = value();

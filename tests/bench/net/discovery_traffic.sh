@@ -86,7 +86,7 @@ for profile in $profiles; do
     read -r b0 p0 < <(lo_counters); t0=$(now); c0=$(cpu_ticks "$ds")
     for i in $(seq 1 "$n"); do
       if [[ "$topics" == all ]]; then topic_args=(); else topic_args=(--topics "$topics"); fi
-      "$echo_bin" --domain 0 --profile "$profile" --seconds 120 "${topic_args[@]}" > "$tmp/echo$i.out" 2> "$tmp/echo$i.err" &
+      "$echo_bin" --domain 0 --profile "$profile" --duration-s 120 "${topic_args[@]}" > "$tmp/echo$i.out" 2> "$tmp/echo$i.err" &
       pids+=($!)
     done
     deadline=$(( $(date +%s) + 60 ))

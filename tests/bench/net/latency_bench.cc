@@ -54,15 +54,15 @@ pings on telegrasp/ControllerState as identity "bench", echoed on telegrasp/Hand
 ControllerState samples: access control checks topic names, not types) as identity "server";
 DIR is made by `deploy/security/make-certs.sh DIR bench`. The table then adds its row and the
 difference: the cost of security against --profile (loopback by default).
-The first --warmup seconds of each phase are excluded. A table goes to stdout, progress to stderr.
+The first --warmup-s seconds of each phase are excluded. A table goes to stdout, progress to stderr.
 
 Options:
   --clients N         client participants, 2 hands each (default 16)
   --sample-hz HZ      controller sample rate per hand (default 90; --hz, its old name, still works
                       for one release)
   --tick-hz HZ        the server's tick rate (default: the server's, 90)
-  --seconds S         measured seconds per phase, after the warm-up (default 10)
-  --warmup S          warm-up seconds per phase, not measured (default 1)
+  --duration-s S      measured seconds per phase, after the warm-up (default 10)
+  --warmup-s S        warm-up seconds per phase, not measured (default 1)
   --json FILE         also write the results as JSON
   --profile NAME      Fast DDS participant profile for everyone (default loopback)
   --profiles FILE     Fast DDS XML profiles file (default: the telegrasp one)
@@ -100,9 +100,9 @@ Options parse(int argc, char** argv) {
     if (parse_common_option(kTool, f, value, o, usage_error)) return true;
     if (f == "--clients")
       o.clients = static_cast<int>(cli::parse_whole(f, value(), 1, 1024, usage_error));
-    else if (f == "--seconds")
+    else if (cli::is_flag(kTool, f, "--duration-s", "--seconds"))
       o.seconds = cli::parse_number(f, value(), 0.1, 86400, usage_error);
-    else if (f == "--warmup")
+    else if (cli::is_flag(kTool, f, "--warmup-s", "--warmup"))
       o.warmup = cli::parse_number(f, value(), 0, 3600, usage_error);
     else if (f == "--secure") {
       o.secure_dir = value();
@@ -445,7 +445,7 @@ struct Bench {
         secure_pong_listener(secure_raw, opt.clients),
         skeleton_listener(e2e_any, e2e_tick, opt.clients) {}
 
-  // The measured window of a phase that starts publishing at t0: after the warm-up, for --seconds.
+  // The measured window of a phase that starts publishing at t0: after the warm-up, for --duration-s.
   std::pair<std::int64_t, std::int64_t> window(Clock::time_point t0) const {
     const std::int64_t t0_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(t0.time_since_epoch()).count();
     return {t0_ns + static_cast<std::int64_t>(o.warmup * 1e9),

@@ -37,7 +37,7 @@ Starts telegrasp-server (--empty-scene, private domain, max_hands raised to --ma
 temporary --config file) as a child process, then publishes ControllerState for a growing number
 of hands from publisher threads of this process (one DomainParticipant each; client ids
 "scale-<i>", 2 hands each, smooth motion in the air, oscillating trigger), adding --step hands per
-level. Each level is measured over --seconds-per-step between two ServerStatus samples: missed
+level. Each level is measured over --level-s seconds between two ServerStatus samples: missed
 ticks, tick work p50/max, hands, accepted inputs, and the CPU time (utime+stime, /proc) of the
 server, of its simulation thread and of this publisher process. A level is sustained when no tick
 was missed, the server reports every hand, the publishers kept --sample-hz and the server accepted at
@@ -88,7 +88,7 @@ Options:
   --tick-hz HZ           the server's tick rate (default: the server's, 90)
   --step N               hands added per level, even (default 8)
   --max N                last level (default 512; with --active 128, at most 128)
-  --seconds-per-step S   measured seconds per level (default 3; with --active 6, at least one
+  --level-s S            measured seconds per level (default 3; with --active 6, at least one
                          grasp trial of every hand)
   --active               also sweep hands that grasp objects (above)
   --active-model NAME    the scene's objects with --active (default 005_tomato_soup_can)
@@ -135,7 +135,7 @@ Options parse(int argc, char** argv) {
       o.step = static_cast<int>(cli::parse_whole(f, value(), 2, 4096, usage_error));
     else if (f == "--max")
       o.max = static_cast<int>(cli::parse_whole(f, value(), 2, 4096, usage_error));
-    else if (f == "--seconds-per-step")
+    else if (cli::is_flag(kTool, f, "--level-s", "--seconds-per-step"))
       o.seconds_per_step = cli::parse_number(f, value(), 1, 600, usage_error);
     else if (f == "--publishers")
       o.publishers = static_cast<int>(cli::parse_whole(f, value(), 1, 64, usage_error));

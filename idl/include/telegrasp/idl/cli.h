@@ -94,6 +94,16 @@ inline void warn_renamed(const std::string& tool, const std::string& old_name, c
             << " goes in the next release)\n";
 }
 
+/// Whether `arg` is option `name`, or its old spelling `old_name`, which still works for one
+/// release and warns (warn_renamed).
+[[nodiscard]] inline bool is_flag(const std::string& tool, const std::string& arg, const std::string& name,
+                                  const std::string& old_name) {
+  if (arg == name) return true;
+  if (arg != old_name) return false;
+  warn_renamed(tool, old_name, name);
+  return true;
+}
+
 /// Whether `arg` is an option ("-x", "--name") rather than a positional argument ("FILE", "-").
 [[nodiscard]] inline bool is_option(const std::string& arg) { return arg.size() > 1 && arg[0] == '-'; }
 
