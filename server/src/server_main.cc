@@ -300,6 +300,27 @@ bool claim_scene(DdsNode& node, const ServerSettings& settings) {
   return true;
 }
 
+// --snapshot: the objects' poses of the run before, if its file exists (and it can be written
+// from now on). False, after saying why, when the file cannot be read or written.
+bool restore_snapshot(ServerSettings& settings, const SceneAssets& assets) {
+  if (settings.snapshot_path.empty()) return true;
+  try {
+    check_snapshot_writable(settings.snapshot_path);
+    if (const auto snapshot = read_snapshot(settings.snapshot_path)) {
+      settings.restored_objects = placed_objects(*snapshot, assets.models, "snapshot " + settings.snapshot_path);
+      std::cerr << "telegrasp-server: " << settings.restored_objects->size() << " objects back from snapshot "
+                << settings.snapshot_path << " (tick " << snapshot->tick() << " of the run before)\n";
+    } else {
+      std::cerr << "telegrasp-server: no snapshot " << settings.snapshot_path
+                << " yet: the configured scene; writing it from now on\n";
+    }
+    return true;
+  } catch (const SnapshotError& e) {
+    std::cerr << "telegrasp-server: " << e.what() << "\n";
+    return false;
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -325,22 +346,7 @@ int main(int argc, char** argv) {
   }
 
   settings.incarnation = new_incarnation();
-  if (!settings.snapshot_path.empty()) {
-    try {
-      check_snapshot_writable(settings.snapshot_path);
-      if (const auto snapshot = read_snapshot(settings.snapshot_path)) {
-        settings.restored_objects = placed_objects(*snapshot, assets.models, "snapshot " + settings.snapshot_path);
-        std::cerr << "telegrasp-server: " << settings.restored_objects->size() << " objects back from snapshot "
-                  << settings.snapshot_path << " (tick " << snapshot->tick() << " of the run before)\n";
-      } else {
-        std::cerr << "telegrasp-server: no snapshot " << settings.snapshot_path
-                  << " yet: the configured scene; writing it from now on\n";
-      }
-    } catch (const SnapshotError& e) {
-      std::cerr << "telegrasp-server: " << e.what() << "\n";
-      return cli::kExitFailure;
-    }
-  }
+  if (!restore_snapshot(settings, assets)) return cli::kExitFailure;
 
   InputMailbox mailbox({assets.left_rig->fingers().size(), assets.right_rig->fingers().size()}, input_limits(settings));
   const sigset_t stop_signals = block_stop_signals();  // before the DDS threads start

@@ -1,10 +1,12 @@
 // telegrasp-bot: the scripted operator of sim/ driving one or two hands of a telegrasp server
 // over DDS. It grasps every object of the server's scene --trials times, records each grasp
 // from the server's GraspEvent, and prints the same table and JSON records as telegrasp-eval.
+#include "client_options.h"
 #include "bot.h"
 #include "telegrasp/idl/cli.h"
 #include "telegrasp/idl/network_flags.h"
 #include "telegrasp/sim/standin_objects.h"
+#include "skill_flag.h"
 
 #include <algorithm>
 #include <atomic>
@@ -122,14 +124,9 @@ Options parse(int argc, char** argv) {
         o.hands = {client::HandSide::kRight, client::HandSide::kLeft};
       else
         usage_error("--hands expects right, left or both, got '" + h + "'");
-    } else if (a == "--skill") {
-      o.skill = value();
-      try {
-        sim::skill_profile(o.skill);
-      } catch (const std::exception&) {
-        usage_error("--skill expects perfect, experienced or inexperienced, got '" + o.skill + "'");
-      }
-    } else if (a == "--trials")
+    } else if (a == "--skill")
+      o.skill = telegrasp::tools::parse_skill(a, value(), usage_error);
+    else if (a == "--trials")
       o.trials = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 10000, usage_error));
     else if (a == "--seed")
       o.seed = static_cast<std::uint64_t>(telegrasp::cli::parse_whole(a, value(), 0, 1L << 62, usage_error));
@@ -164,43 +161,125 @@ bool wait_until(F ready, double timeout_s) {
   return false;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  const Options opt = parse(argc, argv);
+// The meshes of --objects by name; without it, none (every model comes from the server's
+// published geometry, resolve_models). Exits 1 naming the folder or file that does not load.
+std::map<std::string, sim::ObjectModelPtr> load_models(const Options& opt) {
   std::map<std::string, sim::ObjectModelPtr> models;
   try {
-    // Without --objects every model comes from the server's published geometry (resolve_models).
     if (!opt.objects_dir.empty())
       for (auto& m : sim::load_protocol_object_dir(opt.objects_dir)) models.emplace(m->name, std::move(m));
   } catch (const std::exception& e) {  // MeshLoadError, naming the folder or the file in it
     std::cerr << "telegrasp-bot: --objects " << e.what() << "\n";
-    return telegrasp::cli::kExitFailure;
+    std::exit(telegrasp::cli::kExitFailure);
   }
+  return models;
+}
+
+// The bot's DDS client, or null after saying why it could not start.
+std::unique_ptr<client::Client> connect(const Options& opt) {
+  try {
+    return std::make_unique<client::Client>(telegrasp::tools::client_options(
+        opt, opt.client_id,
+        client::kNotices | client::kHandSkeletons | client::kGraspStates | client::kGraspEvents | client::kSceneStates |
+            client::kServerStatuses | client::kObjectGeometries));
+  } catch (const std::exception& e) {
+    std::cerr << "telegrasp-bot: " << e.what() << "\n";
+    return nullptr;
+  }
+}
+
+// Why the server refuses us (ClientNotice): reported as it comes, kept for the exit status.
+// Made before the client it listens to, so that it outlives the client's threads.
+class Refusals {
+ public:
+  void listen(const Options& opt, client::Client& c) {
+    c.on_notice([this, id = opt.client_id](const client::Notice& n) {
+      std::cerr << "telegrasp-bot " << id << ": the server refused our "
+                << (n.kind == client::Notice::Kind::kInputRejected ? "controller states" : "scene command") << ": "
+                << n.reason << (n.detail.empty() ? "" : " (" + n.detail + ")") << "\n";
+      // A dropped input now and then (rate_limited after a stall, a stale sample) costs nothing:
+      // only refusals that keep the hands out or refuse a command decide the exit status.
+      if (n.kind == client::Notice::Kind::kInputRejected && !fatal_refusal(n)) return;
+      std::lock_guard lock(mutex_);
+      if (!refusal_ || fatal_refusal(n)) refusal_ = n;
+    });
+  }
+  bool any() const {
+    std::lock_guard lock(mutex_);
+    return refusal_.has_value();
+  }
+  bool fatal() const {
+    std::lock_guard lock(mutex_);
+    return refusal_ && fatal_refusal(*refusal_);
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::optional<client::Notice> refusal_;
+};
+
+// One loop at 90 Hz steps every hand and publishes its controller, until every trial is done, a
+// signal, a fatal refusal or a server silent for --timeout-s; returns the exit status so far. The
+// operators' clock (`tick`) runs only while the server's scene state is fresh, so a stalled server
+// does not fail trials.
+int run_trials(const Options& opt, client::Client& c, Bot& bot, client::SceneState scene, const Refusals& refusals) {
+  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / kRate));
+  const auto stale_after = std::chrono::duration<double>(kStaleScene);
+  auto next = Clock::now();
+  std::uint64_t last_scene_tick = scene.tick;
+  auto last_scene_change = Clock::now();
+  bool paused = false;
+  for (std::int64_t tick = 0; !bot.all_done();) {
+    if (g_stop) return kExitInterrupted;
+    if (refusals.fatal()) {
+      std::cerr << "telegrasp-bot: the server will not take this bot's hands; stopping\n";
+      return kExitRefused;
+    }
+    if (auto s = c.latest_scene_state(); s && (s->tick != last_scene_tick || s->incarnation != bot.incarnation())) {
+      scene = std::move(*s);
+      last_scene_tick = scene.tick;
+      last_scene_change = Clock::now();
+      // A restarted server (the client library noticed its new incarnation): the trials in progress
+      // are interrupted, the bot goes on with the new run's scene.
+      if (scene.incarnation != bot.incarnation()) bot.server_restarted(scene);
+    }
+    const auto silent = Clock::now() - last_scene_change;
+    if (silent > std::chrono::duration<double>(opt.timeout_s)) {
+      std::cerr << "telegrasp-bot: the server sent no scene state for " << opt.timeout_s
+                << " s (--timeout-s); stopping\n";
+      return telegrasp::cli::kExitFailure;
+    }
+    if (silent > stale_after) {
+      if (!paused) std::cerr << "telegrasp-bot: no scene state from the server for " << kStaleScene << " s; waiting\n";
+      paused = true;
+      bot.hold();
+    } else {
+      if (paused) std::cerr << "telegrasp-bot: the server is back\n";
+      paused = false;
+      bot.tick(tick++, scene);
+    }
+    next += period;
+    const auto now = Clock::now();
+    if (now > next + 5 * period) next = now;  // fell behind (a stall): do not burst to catch up
+    std::this_thread::sleep_until(next);
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options opt = parse(argc, argv);
+  std::map<std::string, sim::ObjectModelPtr> models = load_models(opt);
   if (!opt.json_path.empty() && !std::ofstream(opt.json_path, std::ios::app)) {
     std::cerr << "telegrasp-bot: --json " << opt.json_path << ": cannot write\n";
     return telegrasp::cli::kExitFailure;
   }
-
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
-
-  client::ClientOptions copt;
-  copt.client_id = opt.client_id;
-  copt.domain = opt.domain;
-  copt.profile = opt.profile;
-  copt.profiles_file = opt.profiles_file;
-  copt.scene = opt.scene;
-  copt.discovery_servers = opt.discovery_servers;
-  copt.topics = client::kNotices | client::kHandSkeletons | client::kGraspStates | client::kGraspEvents |
-                client::kSceneStates | client::kServerStatuses | client::kObjectGeometries;
-  std::unique_ptr<client::Client> c;
-  try {
-    c = std::make_unique<client::Client>(copt);
-  } catch (const std::exception& e) {
-    std::cerr << "telegrasp-bot: " << e.what() << "\n";
-    return telegrasp::cli::kExitFailure;
-  }
+  Refusals refusals;
+  const std::unique_ptr<client::Client> c = connect(opt);
+  if (!c) return telegrasp::cli::kExitFailure;
 
   std::cerr << "telegrasp-bot " << opt.client_id << ": waiting for a server on domain " << opt.domain << " (profile "
             << opt.profile << ") ...\n";
@@ -211,30 +290,14 @@ int main(int argc, char** argv) {
   if (!found) {
     std::cerr << "telegrasp-bot: no telegrasp server found on domain " << opt.domain << " with profile " << opt.profile
               << " within " << opt.timeout_s << " s (--timeout-s)\n";
-    return 1;
+    return telegrasp::cli::kExitFailure;
   }
-
   // Objects with no local mesh are planned on the geometry the server publishes: wait for it (a
   // server that publishes none leaves the built-in stand-ins).
   wait_until([&] { return telegrasp::bot::geometry_complete(*c, *scene, models); }, std::min(opt.timeout_s, 10.0));
   if (g_stop) return kExitInterrupted;
-  // The server says why it refuses us (ClientNotice): reported, and the exit status says so.
-  std::mutex refusal_mutex;
-  std::optional<client::Notice> refusal;
-  c->on_notice([&](const client::Notice& n) {
-    std::cerr << "telegrasp-bot " << opt.client_id << ": the server refused our "
-              << (n.kind == client::Notice::Kind::kInputRejected ? "controller states" : "scene command") << ": "
-              << n.reason << (n.detail.empty() ? "" : " (" + n.detail + ")") << "\n";
-    // A dropped input now and then (rate_limited after a stall, a stale sample) costs nothing: only
-    // refusals that keep the hands out or refuse a command decide the exit status.
-    if (n.kind == client::Notice::Kind::kInputRejected && !fatal_refusal(n)) return;
-    std::lock_guard lock(refusal_mutex);
-    if (!refusal || fatal_refusal(n)) refusal = n;
-  });
-  auto refused_fatally = [&] {
-    std::lock_guard lock(refusal_mutex);
-    return refusal && fatal_refusal(*refusal);
-  };
+
+  refusals.listen(opt, *c);
   Bot bot(opt, *c, telegrasp::bot::resolve_models(*c, *scene, std::move(models)));
   if (!bot.set_scene(*scene)) {
     std::cerr << "telegrasp-bot: the server's scene has no objects\n";
@@ -244,61 +307,11 @@ int main(int argc, char** argv) {
   std::cerr << "telegrasp-bot " << opt.client_id << ": " << scene->objects.size() << " objects x " << opt.trials
             << " trial(s), " << opt.hands.size() << " hand(s), skill " << opt.skill << "\n";
 
-  // One loop at 90 Hz steps every hand and publishes its controller. The operators' clock (`tick`)
-  // runs only while the server's scene state is fresh, so a stalled server does not fail trials.
-  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / kRate));
-  const auto stale_after = std::chrono::duration<double>(kStaleScene);
-  auto next = Clock::now();
-  std::uint64_t last_scene_tick = scene->tick;
-  auto last_scene_change = Clock::now();
-  bool paused = false;
-  int status = 0;
-  for (std::int64_t tick = 0; !bot.all_done();) {
-    if (g_stop) {
-      status = kExitInterrupted;
-      break;
-    }
-    if (refused_fatally()) {
-      std::cerr << "telegrasp-bot: the server will not take this bot's hands; stopping\n";
-      status = kExitRefused;
-      break;
-    }
-    if (auto s = c->latest_scene_state(); s && (s->tick != last_scene_tick || s->incarnation != bot.incarnation())) {
-      scene = std::move(s);
-      last_scene_tick = scene->tick;
-      last_scene_change = Clock::now();
-      // A restarted server (the client library noticed its new incarnation): the trials in progress
-      // are interrupted, the bot goes on with the new run's scene.
-      if (scene->incarnation != bot.incarnation()) bot.server_restarted(*scene);
-    }
-    const auto silent = Clock::now() - last_scene_change;
-    if (silent > std::chrono::duration<double>(opt.timeout_s)) {
-      std::cerr << "telegrasp-bot: the server sent no scene state for " << opt.timeout_s
-                << " s (--timeout-s); stopping\n";
-      status = 1;
-      break;
-    }
-    if (silent > stale_after) {
-      if (!paused) std::cerr << "telegrasp-bot: no scene state from the server for " << kStaleScene << " s; waiting\n";
-      paused = true;
-      bot.hold();
-    } else {
-      if (paused) std::cerr << "telegrasp-bot: the server is back\n";
-      paused = false;
-      bot.tick(tick++, *scene);
-    }
-    next += period;
-    const auto now = Clock::now();
-    if (now > next + 5 * period) next = now;  // fell behind (a stall): do not burst to catch up
-    std::this_thread::sleep_until(next);
-  }
+  int status = run_trials(opt, *c, bot, std::move(*scene), refusals);
   if (status != 0 && bot.in_progress() > 0)
     std::cerr << "telegrasp-bot: " << bot.in_progress() << " trial(s) in progress not counted\n";
-  if (!bot.report_results() && status == 0) status = 1;
+  if (!bot.report_results() && status == 0) status = telegrasp::cli::kExitFailure;
   if (status == 0 && !bot.all_held()) status = kExitNotHeld;
-  if (status == 0 || status == kExitNotHeld) {
-    std::lock_guard lock(refusal_mutex);
-    if (refusal) status = kExitRefused;
-  }
+  if ((status == 0 || status == kExitNotHeld) && refusals.any()) status = kExitRefused;
   return status;
 }

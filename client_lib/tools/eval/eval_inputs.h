@@ -1,9 +1,11 @@
 // What the in-process commands (telegrasp-eval, telegrasp-eval nd-bound) load and write.
 #pragma once
 
+#include "telegrasp/idl/cli.h"
 #include "telegrasp/sim/hand_rig.h"
 #include "telegrasp/sim/object_model.h"
 
+#include <cstdint>
 #include <fstream>
 #include <memory>
 #include <string>
@@ -24,5 +26,28 @@ EvalInputs load_eval_inputs(const std::string& rig_path, const std::string& obje
 /// Opens `json_path` (if given) into `json_out` and creates `svg_dir` (if given), so a long run
 /// fails before it starts, not after. Returns "" or what went wrong, naming the option and path.
 std::string prepare_outputs(const std::string& json_path, std::ofstream& json_out, const std::string& svg_dir);
+
+/// Applies `flag` onto `o` if it is one of the flags both in-process commands take: --objects,
+/// --rig, --json, --svg, --jobs (--threads, its old name, warns) and --seed. `o` is any options
+/// type with the members objects_dir, rig_path, json_path, svg_dir, threads and seed; `fail` is
+/// the command's usage error.
+template <class Options, class Value>
+bool parse_offline_flag(const char* tool, const std::string& flag, const Value& value, Options& o, cli::Fail fail) {
+  if (flag == "--objects")
+    o.objects_dir = value();
+  else if (flag == "--rig")
+    o.rig_path = value();
+  else if (flag == "--json")
+    o.json_path = value();
+  else if (flag == "--svg")
+    o.svg_dir = value();
+  else if (cli::is_flag(tool, flag, "--jobs", "--threads"))
+    o.threads = static_cast<int>(cli::parse_whole(flag, value(), 1, 64, fail));
+  else if (flag == "--seed")
+    o.seed = static_cast<std::uint64_t>(cli::parse_whole(flag, value(), 0, 1L << 62, fail));
+  else
+    return false;
+  return true;
+}
 
 }  // namespace telegrasp::eval

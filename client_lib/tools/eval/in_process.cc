@@ -10,6 +10,7 @@
 #include "telegrasp/sim/object_model.h"
 #include "telegrasp/sim/scripted_operator.h"
 #include "telegrasp/sim/world.h"
+#include "skill_flag.h"
 
 #include <nlohmann/json.hpp>
 
@@ -33,6 +34,7 @@ namespace {
 using namespace telegrasp::sim;
 using nlohmann::json;
 using telegrasp::eval::EvalInputs;
+using telegrasp::eval::parse_offline_flag;
 using telegrasp::report::capsule_records;
 using telegrasp::report::fmt;
 using telegrasp::report::grasp_figures;
@@ -83,22 +85,11 @@ constexpr const char* kTool = "telegrasp-eval run";
 Options parse(int argc, char** argv) {
   Options o;
   telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
-    if (a == "--objects")
-      o.objects_dir = value();
-    else if (a == "--rig")
-      o.rig_path = value();
-    else if (a == "--json")
-      o.json_path = value();
-    else if (a == "--svg")
-      o.svg_dir = value();
-    else if (a == "--skill") {
-      o.skill = value();
-      try {
-        skill_profile(o.skill);
-      } catch (const std::invalid_argument&) {
-        usage_error("--skill expects perfect, experienced or inexperienced, got '" + o.skill + "'");
-      }
-    } else if (a == "--selection") {
+    if (parse_offline_flag(kTool, a, value, o, usage_error))
+      ;
+    else if (a == "--skill")
+      o.skill = telegrasp::tools::parse_skill(a, value(), usage_error);
+    else if (a == "--selection") {
       const std::string m = value();
       if (m == "surface")
         o.selection = SelectionMetric::kSurface;
@@ -108,10 +99,6 @@ Options parse(int argc, char** argv) {
         usage_error("--selection expects surface or origin, got '" + m + "'");
     } else if (a == "--trials")
       o.trials = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 100000, usage_error));
-    else if (telegrasp::cli::is_flag(kTool, a, "--jobs", "--threads"))
-      o.threads = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 64, usage_error));
-    else if (a == "--seed")
-      o.seed = static_cast<std::uint64_t>(telegrasp::cli::parse_whole(a, value(), 0, 1L << 62, usage_error));
     else if (a == "--mode") {
       const std::string m = value();
       if (m == "both")

@@ -31,6 +31,7 @@ namespace {
 
 using namespace telegrasp::sim;
 using nlohmann::json;
+using telegrasp::eval::parse_offline_flag;
 using telegrasp::report::capsule_json;
 using telegrasp::report::capsule_records;
 using telegrasp::report::fmt;
@@ -80,24 +81,14 @@ Options parse(int argc, char** argv) {
   using telegrasp::cli::parse_whole;
   Options o;
   telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
-    if (a == "--objects")
-      o.objects_dir = value();
-    else if (a == "--rig")
-      o.rig_path = value();
-    else if (a == "--json")
-      o.json_path = value();
-    else if (a == "--svg")
-      o.svg_dir = value();
+    if (parse_offline_flag(kTool, a, value, o, usage_error))
+      ;
     else if (a == "--poses")
       o.poses = static_cast<int>(parse_whole(a, value(), 1, 1000000, usage_error));
     else if (a == "--refine")
       o.refine = static_cast<int>(parse_whole(a, value(), 0, 1000000, usage_error));
     else if (a == "--min-hits")
       o.min_hits = static_cast<int>(parse_whole(a, value(), 1, 1000, usage_error));
-    else if (telegrasp::cli::is_flag(kTool, a, "--jobs", "--threads"))
-      o.threads = static_cast<int>(parse_whole(a, value(), 1, 64, usage_error));
-    else if (a == "--seed")
-      o.seed = static_cast<std::uint64_t>(parse_whole(a, value(), 0, 1L << 62, usage_error));
     else
       return false;
     return true;

@@ -6,6 +6,7 @@
 // Progress: one line per grasp on stdout ("grasp I/N OBJECT held|not-held"), read by the runner.
 // Each record also keeps the hand at the grasp tick (the server's HandSkeleton of that tick, in the
 // object's frame), so the report can draw the grasp.
+#include "client_options.h"
 #include "telegrasp/idl/cli.h"
 #include "commands.h"
 #include "grasp_event_record.h"
@@ -15,6 +16,7 @@
 #include "telegrasp/idl/network_flags.h"
 #include "telegrasp/sim/hand_controller.h"
 #include "telegrasp/sim/hand_rig.h"
+#include "skill_flag.h"
 
 #include <nlohmann/json.hpp>
 
@@ -93,14 +95,9 @@ Options parse(int argc, char** argv) {
   cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
     if (telegrasp::idl::parse_network_flag(a, value, o, usage_error))
       ;
-    else if (a == "--group") {
-      o.group = value();
-      try {
-        sim::skill_profile(o.group);
-      } catch (const std::invalid_argument&) {
-        usage_error("--group expects a skill profile: perfect, experienced or inexperienced, got '" + o.group + "'");
-      }
-    } else if (a == "--participant")
+    else if (a == "--group")
+      o.group = tools::parse_skill(a, value(), usage_error);
+    else if (a == "--participant")
       o.participant = static_cast<int>(cli::parse_whole(a, value(), 1, 100'000, usage_error));
     else if (a == "--seed")
       o.seed = static_cast<std::uint64_t>(cli::parse_whole(a, value(), 0, 1L << 50, usage_error));
@@ -332,6 +329,34 @@ class Participant {
   std::vector<report::Record> records_;
 };
 
+// Every protocol object must be a model of the server, else the run would wait for nothing.
+bool server_has_the_objects(const client::Client& c, int count) {
+  if (const auto status = c.latest_server_status())
+    for (std::size_t i = 0; i < paper_object_order().size() && static_cast<int>(i) < count; ++i)
+      if (std::find(status->models.begin(), status->models.end(), paper_object_order()[i]) == status->models.end()) {
+        std::cerr << kTool << ": the server has no model named " << paper_object_order()[i]
+                  << " (start it with --objects DIR --fill-standins, or without --objects)\n";
+        return false;
+      }
+  return true;
+}
+
+// The records as a JSON array: on stdout, or in --json FILE. False, after saying so, if the
+// file cannot be written.
+bool write_records(const std::vector<report::Record>& records, const std::string& json_path) {
+  json array = json::array();
+  for (const report::Record& r : records) array.push_back(report::record_json(r));
+  if (json_path.empty()) {
+    std::cout << array.dump() << "\n";
+    return true;
+  }
+  std::ofstream out(json_path);
+  out << array.dump(1) << "\n";
+  if (out.flush()) return true;
+  std::cerr << kTool << ": --json " << json_path << ": cannot write\n";
+  return false;
+}
+
 }  // namespace
 
 int run_participant(int argc, char** argv) {
@@ -344,15 +369,10 @@ int run_participant(int argc, char** argv) {
     std::cerr << kTool << ": --objects " << e.what() << "\n";
     return cli::kExitFailure;
   }
-  client::ClientOptions copt;
-  copt.client_id = opt.group + "-" + std::to_string(opt.participant);
-  copt.domain = opt.domain;
-  copt.profile = opt.profile;
-  copt.profiles_file = opt.profiles_file;
-  copt.scene = opt.scene;
-  copt.discovery_servers = opt.discovery_servers;
-  copt.topics =
-      client::kNotices | client::kGraspEvents | client::kSceneStates | client::kServerStatuses | client::kHandSkeletons;
+  const client::ClientOptions copt =
+      tools::client_options(opt, opt.group + "-" + std::to_string(opt.participant),
+                            client::kNotices | client::kGraspEvents | client::kSceneStates | client::kServerStatuses |
+                                client::kHandSkeletons);
   try {
     client::Client c(copt);
     if (!c.wait_for_server(std::chrono::milliseconds(static_cast<long>(1000 * opt.timeout_s)))) {
@@ -369,14 +389,7 @@ int run_participant(int argc, char** argv) {
       if (!newest || s.tick > newest->tick) newest = s;
       cv.notify_one();
     });
-    // Every protocol object must be a model of the server, else the run would wait for nothing.
-    if (const auto status = c.latest_server_status())
-      for (std::size_t i = 0; i < paper_object_order().size() && static_cast<int>(i) < opt.count; ++i)
-        if (std::find(status->models.begin(), status->models.end(), paper_object_order()[i]) == status->models.end()) {
-          std::cerr << kTool << ": the server has no model named " << paper_object_order()[i]
-                    << " (start it with --objects DIR --fill-standins, or without --objects)\n";
-          return cli::kExitFailure;
-        }
+    if (!server_has_the_objects(c, opt.count)) return cli::kExitFailure;
     Participant p(opt, c, std::move(models));
     p.start();
     std::uint64_t answered = 0;
@@ -404,18 +417,7 @@ int run_participant(int argc, char** argv) {
       p.answer(scene);
     }
     c.on_scene_state({});
-    json records = json::array();
-    for (const report::Record& r : p.records()) records.push_back(report::record_json(r));
-    if (opt.json_path.empty()) {
-      std::cout << records.dump() << "\n";
-    } else {
-      std::ofstream out(opt.json_path);
-      out << records.dump(1) << "\n";
-      if (!out.flush()) {
-        std::cerr << kTool << ": --json " << opt.json_path << ": cannot write\n";
-        return cli::kExitFailure;
-      }
-    }
+    if (!write_records(p.records(), opt.json_path)) return cli::kExitFailure;
   } catch (const std::exception& e) {
     std::cerr << kTool << ": " << e.what() << "\n";
     return cli::kExitFailure;

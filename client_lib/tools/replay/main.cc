@@ -95,83 +95,90 @@ void write_json(const std::string& path, const nlohmann::json& j) {
   }
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+struct Args {
   std::string recording, objects_dir, csv_path, mcap_path, json_path;
   McapExportOptions mcap_options;
+};
+
+Args parse(int argc, char** argv) {
+  Args o;
   bool mcap_rate_given = false;
   telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
     if (a == "--objects")
-      objects_dir = value();
+      o.objects_dir = value();
     else if (a == "--export-contacts")
-      csv_path = value();
+      o.csv_path = value();
     else if (a == "--export-mcap")
-      mcap_path = value();
+      o.mcap_path = value();
     else if (a == "--mcap-rate") {
-      mcap_options.rate_hz = telegrasp::cli::parse_number(a, value(), 1, 240, usage_error);
+      o.mcap_options.rate_hz = telegrasp::cli::parse_number(a, value(), 1, 240, usage_error);
       mcap_rate_given = true;
     } else if (a == "--json")
-      json_path = value();
+      o.json_path = value();
     else if (telegrasp::cli::is_option(a))
       return false;
-    else if (recording.empty())
-      recording = a;
+    else if (o.recording.empty())
+      o.recording = a;
     else
-      usage_error("one recording at a time (got '" + recording + "' and '" + a + "')");
+      usage_error("one recording at a time (got '" + o.recording + "' and '" + a + "')");
     return true;
   });
-  if (recording.empty()) usage_error("no recording given");
-  if (!csv_path.empty() && !mcap_path.empty()) usage_error("--export-contacts and --export-mcap: one export at a time");
-  if (mcap_rate_given && mcap_path.empty()) usage_error("--mcap-rate goes with --export-mcap");
+  if (o.recording.empty()) usage_error("no recording given");
+  if (!o.csv_path.empty() && !o.mcap_path.empty())
+    usage_error("--export-contacts and --export-mcap: one export at a time");
+  if (mcap_rate_given && o.mcap_path.empty()) usage_error("--mcap-rate goes with --export-mcap");
+  return o;
+}
 
+int export_contacts(const Args& o) {
+  const ContactExport e = export_contacts_csv(o.recording, o.csv_path);
+  std::cout << "exported " << e.rows << " contacts of " << e.events << " grasps to " << o.csv_path << "\n";
+  if (e.damage) std::cout << e.damage->message << "\n";
+  if (!o.json_path.empty())
+    write_json(o.json_path, {{"recording", o.recording},
+                             {"csv", o.csv_path},
+                             {"grasps", e.events},
+                             {"contacts", e.rows},
+                             {"damage", damage_json(e.damage)},
+                             {"exit_code", exported_status(e.damage)}});
+  return exported_status(e.damage);
+}
+
+int export_mcap_file(const Args& o) {
+  const McapExport e = export_mcap(o.recording, o.mcap_path, o.mcap_options);
+  const double seconds = static_cast<double>(e.end_time_ns - e.start_time_ns) * 1e-9;
+  std::cout << "exported " << e.outputs << " outputs as " << e.messages << " messages (" << e.steps << " view updates, "
+            << telegrasp::cli::format_number(std::round(seconds * 10) / 10) << " s, "
+            << telegrasp::cli::format_number(std::round(static_cast<double>(e.bytes) / 1024.0)) << " KiB) to "
+            << o.mcap_path << "\n";
+  if (e.damage) std::cout << e.damage->message << "\n";
+  if (!o.json_path.empty())
+    write_json(o.json_path, {{"recording", o.recording},
+                             {"mcap", o.mcap_path},
+                             {"outputs", e.outputs},
+                             {"view_updates", e.steps},
+                             {"messages", e.messages},
+                             {"bytes", e.bytes},
+                             {"start_time_ns", e.start_time_ns},
+                             {"end_time_ns", e.end_time_ns},
+                             {"damage", damage_json(e.damage)},
+                             {"exit_code", exported_status(e.damage)}});
+  return exported_status(e.damage);
+}
+
+int replay(const Args& o) {
   Progress progress;
-  try {
-    if (!csv_path.empty()) {
-      const ContactExport e = export_contacts_csv(recording, csv_path);
-      std::cout << "exported " << e.rows << " contacts of " << e.events << " grasps to " << csv_path << "\n";
-      if (e.damage) std::cout << e.damage->message << "\n";
-      if (!json_path.empty())
-        write_json(json_path, {{"recording", recording},
-                               {"csv", csv_path},
-                               {"grasps", e.events},
-                               {"contacts", e.rows},
-                               {"damage", damage_json(e.damage)},
-                               {"exit_code", exported_status(e.damage)}});
-      return exported_status(e.damage);
-    }
-    if (!mcap_path.empty()) {
-      const McapExport e = export_mcap(recording, mcap_path, mcap_options);
-      const double seconds = static_cast<double>(e.end_time_ns - e.start_time_ns) * 1e-9;
-      std::cout << "exported " << e.outputs << " outputs as " << e.messages << " messages (" << e.steps
-                << " view updates, " << telegrasp::cli::format_number(std::round(seconds * 10) / 10) << " s, "
-                << telegrasp::cli::format_number(std::round(static_cast<double>(e.bytes) / 1024.0)) << " KiB) to "
-                << mcap_path << "\n";
-      if (e.damage) std::cout << e.damage->message << "\n";
-      if (!json_path.empty())
-        write_json(json_path, {{"recording", recording},
-                               {"mcap", mcap_path},
-                               {"outputs", e.outputs},
-                               {"view_updates", e.steps},
-                               {"messages", e.messages},
-                               {"bytes", e.bytes},
-                               {"start_time_ns", e.start_time_ns},
-                               {"end_time_ns", e.end_time_ns},
-                               {"damage", damage_json(e.damage)},
-                               {"exit_code", exported_status(e.damage)}});
-      return exported_status(e.damage);
-    }
-    ReplayOptions options;
-    options.objects_dir = objects_dir;
-    options.progress = [&](const RecordingReader& r) { progress(r); };
-    const ReplayResult r = replay_recording(recording, options);
-    std::cout << r.summary();
-    if (!json_path.empty()) {
-      nlohmann::json d = nullptr;
-      if (r.divergence)
-        d = {{"record", r.divergence->record}, {"tick", r.divergence->tick},   {"type", r.divergence->type},
-             {"key", r.divergence->key},       {"field", r.divergence->field}, {"message", r.divergence->message}};
-      write_json(json_path, {{"recording", recording},
+  ReplayOptions options;
+  options.objects_dir = o.objects_dir;
+  options.progress = [&](const RecordingReader& r) { progress(r); };
+  const ReplayResult r = replay_recording(o.recording, options);
+  std::cout << r.summary();
+  if (!o.json_path.empty()) {
+    nlohmann::json d = nullptr;
+    if (r.divergence)
+      d = {{"record", r.divergence->record}, {"tick", r.divergence->tick},   {"type", r.divergence->type},
+           {"key", r.divergence->key},       {"field", r.divergence->field}, {"message", r.divergence->message}};
+    write_json(o.json_path, {{"recording", o.recording},
                              {"identical", !r.divergence},
                              {"records", r.records},
                              {"ticks", r.ticks},
@@ -181,8 +188,18 @@ int main(int argc, char** argv) {
                              {"damage", damage_json(r.damage)},
                              {"warnings", r.warnings},
                              {"exit_code", r.exit_code()}});
-    }
-    return r.exit_code();
+  }
+  return r.exit_code();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Args args = parse(argc, argv);
+  try {
+    if (!args.csv_path.empty()) return export_contacts(args);
+    if (!args.mcap_path.empty()) return export_mcap_file(args);
+    return replay(args);
   } catch (const std::exception& e) {  // RecordingError: the header, the assets, the CSV or MCAP file
     std::cerr << "telegrasp-replay: " << e.what() << "\n";
     return telegrasp::cli::kExitFailure;

@@ -2,6 +2,7 @@
 // server's memory (VmRSS and heap in use), tick time and missed ticks for growth. Starts the server (or watches one
 // already running), runs telegrasp-bot processes (two hands each) and restarts each bot when it
 // ends, samples every --sample-s seconds and prints the samples and a verdict as JSON.
+#include "client_options.h"
 #include "child_process.h"
 #include "telegrasp/idl/cli.h"
 #include "telegrasp/client/client.h"
@@ -22,6 +23,7 @@
 #include <mutex>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -128,8 +130,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--minutes") {  // the old spelling, in minutes
       telegrasp::cli::warn_renamed("telegrasp-soak", a, "--duration-s (in seconds)");
       o.duration_s = 60 * telegrasp::cli::parse_number(a, value(), 1e-3, 7 * 24 * 60, usage_error);
-    }
-    else if (a == "--sample-s")
+    } else if (a == "--sample-s")
       o.sample_s = telegrasp::cli::parse_number(a, value(), 1, 3600, usage_error);
     else if (a == "--warmup-s")
       o.warmup_s = telegrasp::cli::parse_number(a, value(), 0, 7 * 24 * 3600, usage_error);
@@ -238,107 +239,138 @@ json growth(const std::vector<double>& t, const std::vector<double>& kib, double
           {"flat", last < limit_pct && fit < limit_pct}};
 }
 
-}  // namespace
+// A failure before the run: its message, then exit 1.
+struct Failure : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
 
-int main(int argc, char** argv) {
-  const Options opt = parse(argc, argv);
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
-
-  const std::string bin = self_dir();
+// The programs this soak starts, beside its own executable.
+void check_programs(const std::string& bin, const Options& opt) {
   for (const char* tool : {"telegrasp-server", "telegrasp-bot"})
-    if ((tool != std::string("telegrasp-server") || !opt.server_pid) && access((bin + "/" + tool).c_str(), X_OK) != 0) {
-      std::cerr << "telegrasp-soak: " << bin << "/" << tool << ": not found or not executable\n";
-      return telegrasp::cli::kExitFailure;
-    }
+    if ((tool != std::string("telegrasp-server") || !opt.server_pid) && access((bin + "/" + tool).c_str(), X_OK) != 0)
+      throw Failure(bin + "/" + tool + ": not found or not executable");
+}
+
+// Where the server's and bots' logs go: --log-dir, or a new folder in $TMPDIR.
+std::string make_log_dir(const Options& opt) {
   std::string log_dir = opt.log_dir;
   std::error_code ec;
   if (log_dir.empty()) {
     std::string pattern = (fs::temp_directory_path(ec) / "telegrasp_soak.XXXXXX").string();
-    if (!mkdtemp(pattern.data())) {
-      std::cerr << "telegrasp-soak: cannot make a log folder " << pattern << "\n";
-      return telegrasp::cli::kExitFailure;
-    }
+    if (!mkdtemp(pattern.data())) throw Failure("cannot make a log folder " + pattern);
     log_dir = pattern;
   } else if (fs::create_directories(log_dir, ec); ec) {
-    std::cerr << "telegrasp-soak: --log-dir " << log_dir << ": " << ec.message() << "\n";
-    return telegrasp::cli::kExitFailure;
+    throw Failure("--log-dir " + log_dir + ": " + ec.message());
   }
   std::cerr << "telegrasp-soak: logs in " << log_dir << "\n";
+  return log_dir;
+}
 
-  const std::vector<std::string> dds = telegrasp::idl::network_args(opt);
-
-  // The server: started here (and stopped at the end), or one already running.
+// What the run is made of: the programs' folder, the network flags every process gets, the logs,
+// the server (started here and stopped at the end, or one already running) and its pid.
+struct Setup {
+  std::string bin, log_dir;
+  std::vector<std::string> dds;
   ChildProcess server;
-  int server_pid = opt.server_pid;
-  if (!server_pid) {
-    std::vector<std::string> argv = {bin + "/telegrasp-server"};
-    argv.insert(argv.end(), dds.begin(), dds.end());
+  int server_pid = 0;
+  bool server_ended(const Options& opt) { return !opt.server_pid && !server.running(); }
+};
+
+void start_server(const Options& opt, Setup& setup) {
+  setup.server_pid = opt.server_pid;
+  if (!setup.server_pid) {
+    std::vector<std::string> argv = {setup.bin + "/telegrasp-server"};
+    argv.insert(argv.end(), setup.dds.begin(), setup.dds.end());
     if (!opt.server_config.empty()) argv.insert(argv.end(), {"--config", opt.server_config});
     try {
-      server.start(argv, log_dir + "/server.log");
+      setup.server.start(argv, setup.log_dir + "/server.log");
     } catch (const std::exception& e) {
-      std::cerr << "telegrasp-soak: cannot start the server: " << e.what() << "\n";
-      return telegrasp::cli::kExitFailure;
+      throw Failure(std::string("cannot start the server: ") + e.what());
     }
-    server_pid = server.pid();
+    setup.server_pid = setup.server.pid();
   }
-  if (!rss_kib(server_pid)) {
-    std::cerr << "telegrasp-soak: cannot read /proc/" << server_pid << "/status (no such server process)\n";
-    return telegrasp::cli::kExitFailure;
-  }
+  if (!rss_kib(setup.server_pid))
+    throw Failure("cannot read /proc/" + std::to_string(setup.server_pid) + "/status (no such server process)");
+}
 
-  // The soak's own subscriber: server status and grasp events only.
-  Window window;
+// The soak's own subscriber (server status and grasp events only, gathered into `window`),
+// returned once the server's first status has arrived.
+std::unique_ptr<client::Client> subscribe(const Options& opt, Setup& setup, Window& window) {
   std::unique_ptr<client::Client> c;
   try {
-    client::ClientOptions copt;
-    copt.client_id = "soak-" + std::to_string(getpid());
-    copt.domain = opt.domain;
-    copt.profile = opt.profile;
-    copt.profiles_file = opt.profiles_file;
-    copt.scene = opt.scene;
-    copt.discovery_servers = opt.discovery_servers;
-    copt.topics = client::kServerStatuses | client::kGraspEvents;
-    c = std::make_unique<client::Client>(copt);
+    c = std::make_unique<client::Client>(telegrasp::tools::client_options(
+        opt, "soak-" + std::to_string(getpid()), client::kServerStatuses | client::kGraspEvents));
   } catch (const std::exception& e) {
-    std::cerr << "telegrasp-soak: " << e.what() << "\n";
-    return telegrasp::cli::kExitFailure;
+    throw Failure(e.what());
   }
-  c->on_server_status([&](const client::ServerStatus& s) {
+  c->on_server_status([&window](const client::ServerStatus& s) {
     std::lock_guard lock(window.mu);
     window.latest = s;
     window.tick_us_max = std::max(window.tick_us_max, s.tick_us_max);
     window.tick_us_p50.push_back(s.tick_us_p50);
     if (s.heap_kib > 0) window.heap_kib_min = std::min(window.heap_kib_min.value_or(s.heap_kib), s.heap_kib);
   });
-  c->on_grasp_event([&](const client::GraspEvent& e) {
+  c->on_grasp_event([&window](const client::GraspEvent& e) {
     std::lock_guard lock(window.mu);
     (e.kind == client::GraspEvent::Kind::kGrasp ? window.grasps : window.releases)++;
   });
   const auto found_deadline = Clock::now() + std::chrono::seconds(60);
   while (!g_stop && !c->latest_server_status()) {
-    if (Clock::now() > found_deadline || (!opt.server_pid && !server.running())) {
-      std::cerr << "telegrasp-soak: no ServerStatus from the server (pid " << server_pid << ") on domain " << opt.domain
-                << " with profile " << opt.profile << " within 60 s; see " << log_dir << "/server.log\n";
-      return telegrasp::cli::kExitFailure;
-    }
+    if (Clock::now() > found_deadline || setup.server_ended(opt))
+      throw Failure("no ServerStatus from the server (pid " + std::to_string(setup.server_pid) + ") on domain " +
+                    std::to_string(opt.domain) + " with profile " + opt.profile + " within 60 s; see " + setup.log_dir +
+                    "/server.log");
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
+  return c;
+}
 
-  // Missed ticks are counted from here on (a starting server may miss some while it loads).
-  std::uint64_t missed_before = c->latest_server_status()->missed_ticks;
+// The bots: two hands each (one right hand in the last slot for an odd count); slot k's n-th
+// start is client soak<pid>-k-n with seed 1000 n + k.
+class Bots {
+ public:
+  Bots(const Options& opt, const Setup& setup) : opt_(opt), setup_(setup), slots_((opt.hands + 1) / 2) {
+    if (opt.hands % 2) slots_.back().both = false;
+  }
+  std::size_t size() const { return slots_.size(); }
+  void start_all() {
+    try {
+      for (std::size_t k = 0; k < slots_.size() && !g_stop; ++k) {
+        start(k);
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));  // spread the discovery bursts
+      }
+    } catch (const std::exception& e) {
+      throw Failure(std::string("cannot start a bot: ") + e.what());
+    }
+  }
+  // Restarts every bot that ended (a bot that cannot run at all would spin: counted, and the
+  // run goes on); returns how many, and sets `failure` if one could not be started.
+  int restart_ended(std::string& failure) {
+    int restarts = 0;
+    for (std::size_t k = 0; k < slots_.size(); ++k)
+      if (!slots_[k].bot.running()) {
+        try {
+          start(k);
+        } catch (const std::exception& e) {
+          failure = std::string("cannot restart a bot: ") + e.what();
+        }
+        ++restarts;
+      }
+    return restarts;
+  }
+  void stop() {
+    for (Slot& s : slots_) s.bot.signal(SIGTERM);
+    for (Slot& s : slots_) s.bot.stop(std::chrono::seconds(10));
+  }
 
-  // The bots: two hands each; slot k's n-th start is client soak<pid>-k-n with seed 1000 n + k.
-  std::vector<Slot> slots((opt.hands + 1) / 2);
-  if (opt.hands % 2) slots.back().both = false;
-  auto start_bot = [&](std::size_t k) {
-    Slot& s = slots[k];
+ private:
+  void start(std::size_t k) {
+    Slot& s = slots_[k];
     const std::string id = "soak" + std::to_string(getpid()) + "-" + std::to_string(k) + "-" + std::to_string(s.starts);
     std::vector<std::string> argv = {"/usr/bin/nice",
                                      "-n",
-                                     std::to_string(opt.bot_nice),
-                                     bin + "/telegrasp-bot",
+                                     std::to_string(opt_.bot_nice),
+                                     setup_.bin + "/telegrasp-bot",
                                      "--client-id",
                                      id,
                                      "--hands",
@@ -346,58 +378,53 @@ int main(int argc, char** argv) {
                                      "--trials",
                                      "10000",
                                      "--skill",
-                                     opt.skill,
+                                     opt_.skill,
                                      "--seed",
                                      std::to_string(1000 * s.starts + k + 1),
                                      "--timeout-s",
                                      "60"};
-    argv.insert(argv.end(), dds.begin(), dds.end());
-    s.bot.start(argv, log_dir + "/bot" + std::to_string(k) + ".log");
+    argv.insert(argv.end(), setup_.dds.begin(), setup_.dds.end());
+    s.bot.start(argv, setup_.log_dir + "/bot" + std::to_string(k) + ".log");
     ++s.starts;
-  };
-  try {
-    for (std::size_t k = 0; k < slots.size() && !g_stop; ++k) {
-      start_bot(k);
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));  // spread the discovery bursts
-    }
-  } catch (const std::exception& e) {
-    std::cerr << "telegrasp-soak: cannot start a bot: " << e.what() << "\n";
-    return telegrasp::cli::kExitFailure;
   }
-  std::cerr << "telegrasp-soak: " << opt.hands << " hands in " << slots.size() << " bots against server pid "
-            << server_pid << ", " << opt.duration_s << " s, a sample every " << opt.sample_s << " s\n";
+  const Options& opt_;
+  const Setup& setup_;
+  std::vector<Slot> slots_;
+};
 
+// The samples of a run, those judged (after the warm-up), and how it ended.
+struct Run {
   json samples = json::array();
   std::vector<double> t_judged, rss_judged;
   std::vector<double> t_heap, heap_judged;  // the samples whose period had a status with the heap
+  int total_restarts = 0;
+  std::string failure;  // "" when the run lasted until its end or a signal
+};
+
+// Samples every --sample-s seconds until the end of the run, a signal or a failure, restarting
+// the bots that end. Missed ticks are counted from the first status on (a starting server may
+// miss some while it loads).
+Run sample_until_end(const Options& opt, Setup& setup, Bots& bots, Window& window, std::uint64_t missed_before) {
+  Run run;
   const auto t0 = Clock::now();
   const auto end = t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(opt.duration_s));
   auto next_sample = t0;
-  int restarts = 0, total_restarts = 0;
-  std::string failure;
+  int restarts = 0;
   while (!g_stop) {
-    // Restart every bot that ended (a bot that cannot run at all would spin: count and go on).
-    for (std::size_t k = 0; k < slots.size(); ++k)
-      if (!slots[k].bot.running()) {
-        try {
-          start_bot(k);
-        } catch (const std::exception& e) {
-          failure = std::string("cannot restart a bot: ") + e.what();
-        }
-        ++restarts, ++total_restarts;
-      }
-    if (!failure.empty()) break;
-    if (!opt.server_pid && !server.running()) {
-      failure = "the server ended (" + server.exit_description() + "); see " + log_dir + "/server.log";
+    const int restarted = bots.restart_ended(run.failure);
+    restarts += restarted, run.total_restarts += restarted;
+    if (!run.failure.empty()) break;
+    if (setup.server_ended(opt)) {
+      run.failure = "the server ended (" + setup.server.exit_description() + "); see " + setup.log_dir + "/server.log";
       break;
     }
     const auto now = Clock::now();
     if (now >= next_sample + std::chrono::duration<double>(opt.sample_s) || now >= end) {
       next_sample = now;
       const double t = std::chrono::duration<double>(now - t0).count();
-      const std::optional<long> rss = rss_kib(server_pid);
+      const std::optional<long> rss = rss_kib(setup.server_pid);
       if (!rss) {
-        failure = "cannot read /proc/" + std::to_string(server_pid) + "/status: the server is gone";
+        run.failure = "cannot read /proc/" + std::to_string(setup.server_pid) + "/status: the server is gone";
         break;
       }
       json s;
@@ -425,65 +452,48 @@ int main(int argc, char** argv) {
       restarts = 0;
       std::cerr << "telegrasp-soak: " << s.dump() << "\n";
       if (t >= opt.warmup_s) {
-        if (s["heap_kib"].is_number()) t_heap.push_back(t), heap_judged.push_back(s["heap_kib"].get<double>());
-        t_judged.push_back(t), rss_judged.push_back(static_cast<double>(*rss));
+        if (s["heap_kib"].is_number()) run.t_heap.push_back(t), run.heap_judged.push_back(s["heap_kib"].get<double>());
+        run.t_judged.push_back(t), run.rss_judged.push_back(static_cast<double>(*rss));
       }
-      samples.push_back(std::move(s));
+      run.samples.push_back(std::move(s));
       if (now >= end) break;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
-  const bool interrupted = g_stop;
+  return run;
+}
 
-  // Stop the bots first (their hands leave), then the server we started.
-  for (Slot& s : slots) s.bot.signal(SIGTERM);
-  for (Slot& s : slots) s.bot.stop(std::chrono::seconds(10));
-  c.reset();
-  int server_status = 0;
-  if (!opt.server_pid) server_status = server.stop(std::chrono::seconds(10));
-
-  // The verdict over the samples after warm-up.
+// The verdict over the samples after warm-up. A leak shows in the heap in use. The resident set
+// also keeps the heap's high-water mark (pages the allocator cannot give back), so it is held to
+// the looser --max-rss-growth-pct; it has the tighter limit only when the server does not report
+// its heap. A sample whose period brought no status (a stalled server, lost samples) has no heap
+// figure: skipped.
+json judge(const Options& opt, const Run& run) {
   json verdict;
-  bool flat = false;
-  if (rss_judged.size() >= 2) {
-    // A leak shows in the heap in use. The resident set also keeps the heap's high-water mark
-    // (pages the allocator cannot give back), so it is held to the looser --max-rss-growth-pct;
-    // it has the tighter limit only when the server does not report its heap. A sample whose
-    // period brought no status (a stalled server, lost samples) has no heap figure: skipped.
-    const bool heap = heap_judged.size() >= 2;
-    verdict = {{"judged_samples", rss_judged.size()},
-               {"judged_from_s", t_judged.front()},
+  if (run.rss_judged.size() >= 2) {
+    const bool heap = run.heap_judged.size() >= 2;
+    verdict = {{"judged_samples", run.rss_judged.size()},
+               {"judged_from_s", run.t_judged.front()},
                {"judged_on", heap ? "heap and rss" : "rss (the server reported no heap)"},
-               {"heap_samples_missing", t_judged.size() - heap_judged.size()},
-               {"heap", heap ? growth(t_heap, heap_judged, opt.max_growth_pct) : json(nullptr)},
-               {"rss", growth(t_judged, rss_judged, heap ? opt.max_rss_growth_pct : opt.max_growth_pct)}};
-    flat = verdict["rss"]["flat"].get<bool>() && (!heap || verdict["heap"]["flat"].get<bool>());
-    verdict["flat_memory"] = flat;
+               {"heap_samples_missing", run.t_judged.size() - run.heap_judged.size()},
+               {"heap", heap ? growth(run.t_heap, run.heap_judged, opt.max_growth_pct) : json(nullptr)},
+               {"rss", growth(run.t_judged, run.rss_judged, heap ? opt.max_rss_growth_pct : opt.max_growth_pct)}};
+    verdict["flat_memory"] = verdict["rss"]["flat"].get<bool>() && (!heap || verdict["heap"]["flat"].get<bool>());
   } else {
     verdict = {{"flat_memory", nullptr},
                {"why", "fewer than 2 samples after the warm-up: lengthen --duration-s or shorten --warmup-s"}};
   }
   int grasps = 0;
   std::uint64_t missed = 0;
-  for (const json& s : samples) grasps += s["grasps"].get<int>(), missed += s["missed_ticks"].get<std::uint64_t>();
+  for (const json& s : run.samples) grasps += s["grasps"].get<int>(), missed += s["missed_ticks"].get<std::uint64_t>();
   verdict["grasps"] = grasps;
   verdict["missed_ticks"] = missed;
-  verdict["bot_restarts"] = total_restarts;
-  json result = {{"hands", opt.hands},
-                 {"bots", slots.size()},
-                 {"duration_s", opt.duration_s},
-                 {"minutes", opt.duration_s / 60},  // the old name of the setting, for one release
-                 {"sample_s", opt.sample_s},
-                 {"warmup_s", opt.warmup_s},
-                 {"profile", opt.profile},
-                 {"bot_nice", opt.bot_nice},
-                 {"server_pid", server_pid},
-                 {"server_exit", opt.server_pid ? json(nullptr) : json(server_status)},
-                 {"log_dir", log_dir},
-                 {"samples", samples},
-                 {"verdict", verdict},
-                 {"completed", failure.empty() && !interrupted},
-                 {"failure", failure.empty() ? json(nullptr) : json(failure)}};
+  verdict["bot_restarts"] = run.total_restarts;
+  return verdict;
+}
+
+// The result on stdout (and in --json), the verdict on stderr, and the exit status.
+int report(const Options& opt, const json& result, bool interrupted) {
   std::cout << result.dump(1) << "\n" << std::flush;
   if (!opt.json_path.empty()) {
     std::ofstream out(opt.json_path);
@@ -493,15 +503,17 @@ int main(int argc, char** argv) {
       return telegrasp::cli::kExitFailure;
     }
   }
-  if (!failure.empty()) {
-    std::cerr << "telegrasp-soak: " << failure << "\n";
+  if (!result["failure"].is_null()) {
+    std::cerr << "telegrasp-soak: " << result["failure"].get<std::string>() << "\n";
     return telegrasp::cli::kExitFailure;
   }
   if (interrupted) return kExitInterrupted;
+  const json& verdict = result["verdict"];
   if (verdict["flat_memory"].is_null()) {
     std::cerr << "telegrasp-soak: no verdict: " << verdict["why"].get<std::string>() << "\n";
     return telegrasp::cli::kExitFailure;
   }
+  const bool flat = verdict["flat_memory"].get<bool>();
   std::cerr << "telegrasp-soak: " << (flat ? "flat memory" : "memory grew") << ":";
   for (const char* series : {"heap", "rss"}) {
     const json& g = verdict[series];
@@ -511,11 +523,66 @@ int main(int argc, char** argv) {
               << g["growth_fit_pct"].get<double>() << " % (fitted line), limit " << g["limit_pct"].get<double>() << " %"
               << (g["flat"].get<bool>() ? ";" : " EXCEEDED;");
   }
-  std::cerr << " " << grasps << " grasps, " << missed << " missed ticks\n";
+  const int grasps = verdict["grasps"].get<int>();
+  std::cerr << " " << grasps << " grasps, " << verdict["missed_ticks"].get<std::uint64_t>() << " missed ticks\n";
   if (!flat) return kExitMemoryGrew;
   if (grasps < opt.min_grasps) {
     std::cerr << "telegrasp-soak: only " << grasps << " grasps, --min-grasps " << opt.min_grasps << "\n";
     return kExitTooFewGrasps;
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options opt = parse(argc, argv);
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+
+  Setup setup;
+  Window window;
+  std::unique_ptr<client::Client> c;
+  std::optional<Bots> bots;
+  try {
+    setup.bin = self_dir();
+    check_programs(setup.bin, opt);
+    setup.log_dir = make_log_dir(opt);
+    setup.dds = telegrasp::idl::network_args(opt);
+    start_server(opt, setup);
+    c = subscribe(opt, setup, window);
+    bots.emplace(opt, setup);
+    bots->start_all();
+  } catch (const Failure& e) {
+    std::cerr << "telegrasp-soak: " << e.what() << "\n";
+    return telegrasp::cli::kExitFailure;
+  }
+  std::cerr << "telegrasp-soak: " << opt.hands << " hands in " << bots->size() << " bots against server pid "
+            << setup.server_pid << ", " << opt.duration_s << " s, a sample every " << opt.sample_s << " s\n";
+
+  const auto first_status = c->latest_server_status();  // none only when a signal came first
+  const Run run = sample_until_end(opt, setup, *bots, window, first_status ? first_status->missed_ticks : 0);
+  const bool interrupted = g_stop;
+
+  // Stop the bots first (their hands leave), then the server we started.
+  bots->stop();
+  c.reset();
+  const int server_status = opt.server_pid ? 0 : setup.server.stop(std::chrono::seconds(10));
+
+  const json result = {{"hands", opt.hands},
+                       {"bots", bots->size()},
+                       {"duration_s", opt.duration_s},
+                       {"minutes", opt.duration_s / 60},  // the old name of the setting, for one release
+                       {"sample_s", opt.sample_s},
+                       {"warmup_s", opt.warmup_s},
+                       {"profile", opt.profile},
+                       {"bot_nice", opt.bot_nice},
+                       {"server_pid", setup.server_pid},
+                       {"server_exit", opt.server_pid ? json(nullptr) : json(server_status)},
+                       {"log_dir", setup.log_dir},
+                       {"samples", run.samples},
+                       {"verdict", judge(opt, run)},
+                       {"completed", run.failure.empty() && !interrupted},
+                       {"failure", run.failure.empty() ? json(nullptr) : json(run.failure)}};
+  return report(opt, result, interrupted);
 }

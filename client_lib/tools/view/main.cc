@@ -30,6 +30,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 
 namespace {
@@ -228,244 +229,275 @@ struct Meter {
   std::uint64_t record_ns = 0;  ///< Steady-clock time spent in the recorder.
 };
 
-}  // namespace
+// A failure before serving: its message, then exit 1.
+struct Failure : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
 
-int main(int argc, char** argv) {
-  const Args args = parse(argc, argv);
+// The running bridge. Everything but the client library's DDS threads runs on one thread
+// (io_.run()), so the model needs no lock.
+class Bridge {
+ public:
+  explicit Bridge(const Args& args) : args_(args) {}
 
-  const std::filesystem::path web_root =
-      args.web_dir.empty() ? sim::data_dir() / "view" : std::filesystem::path(args.web_dir);
-  for (const char* needed : {"index.html", "vendor/three/build/three.module.js"}) {
-    if (!std::filesystem::is_regular_file(web_root / needed)) {
-      std::cerr
-          << "telegrasp-view: " << (web_root / needed).string() << " not found (the build stages the page and "
-          << "three.js from client_lib/tools/view/web/node_modules: run deploy/install-deps.sh, then build again)\n";
-      return telegrasp::cli::kExitFailure;
-    }
-  }
-  std::vector<view::Channel> channels;
-  try {
-    channels = view::view_channels(web_root / "schemas");
-  } catch (const std::exception& e) {
-    std::cerr << "telegrasp-view: " << e.what() << "\n";
-    return telegrasp::cli::kExitFailure;
-  }
-
-  std::optional<view::McapRecorder> recorder;
-  if (!args.record_path.empty()) {
+  // The page, the channels, the recording, the DDS client and the web server; throws Failure.
+  void open() {
+    const std::filesystem::path web_root =
+        args_.web_dir.empty() ? sim::data_dir() / "view" : std::filesystem::path(args_.web_dir);
+    for (const char* needed : {"index.html", "vendor/three/build/three.module.js"})
+      if (!std::filesystem::is_regular_file(web_root / needed))
+        throw Failure((web_root / needed).string() + " not found (the build stages the page and " +
+                      "three.js from client_lib/tools/view/web/node_modules: run deploy/install-deps.sh, then build again)");
+    std::vector<view::Channel> channels;
     try {
-      recorder.emplace(args.record_path, channels, view::McapRecorder::Options{.flush_interval_ns = kRecordFlushNs});
+      channels = view::view_channels(web_root / "schemas");
     } catch (const std::exception& e) {
-      std::cerr << "telegrasp-view: --record: " << e.what() << "\n";
-      return 1;
+      throw Failure(e.what());
     }
-  }
-
-  std::optional<tc::Client> client;
-  try {
-    client.emplace(args.client);
-  } catch (const std::exception& e) {
-    std::cerr << "telegrasp-view: " << e.what() << "\n";
-    return telegrasp::cli::kExitFailure;
-  }
-
-  RigCache rigs;
-  view::ViewModel model([&](const std::string& name) { return rigs.get(name); });
-  asio::io_context io;
-  std::optional<view::WebServer> server;
-  std::string drive_token = args.drive_token;
-  if (args.drive && drive_token.empty() && !is_loopback(args.address))
-    drive_token = view::random_hex(16);  // off this machine, driving always needs a token
-  if (args.drive) channels.push_back(view::driven_hands_channel());
-  try {
-    view::WebServer::Options options;
-    options.address = args.address;
-    options.port = args.port;
-    options.web_root = web_root;
-    options.drive = args.drive;
-    options.drive_token = drive_token;
-    options.drive_origins = args.drive_origins;
-    options.tls_cert = args.tls_cert;
-    options.tls_key = args.tls_key;
-    // Everything below runs on this thread (io.run()): the model needs no lock.
-    server.emplace(io, options, std::move(channels), [&](std::uint32_t channel) {
-      std::vector<std::shared_ptr<const std::string>> out;
-      const std::uint64_t now = wall_ns();
-      switch (channel) {
-        case view::kSceneChannel:
-          out.push_back(payload(model.scene_full(now)));
-          break;
-        case view::kTransformsChannel:
-          if (auto tf = model.transforms_full(now)) out.push_back(payload(*tf));
-          break;
-        case view::kGraspStateChannel:
-          for (const view::Json& s : model.grasp_states_full()) out.push_back(payload(s));
-          break;
-        case view::kGraspEventsChannel:
-          for (const view::Json& e : model.event_history()) out.push_back(payload(e));
-          break;
-        case view::kServerStatusChannel:
-          if (model.server_status()) out.push_back(payload(*model.server_status()));
-          break;
-        default:
-          break;
+    if (!args_.record_path.empty()) {
+      try {
+        recorder_.emplace(args_.record_path, channels, view::McapRecorder::Options{.flush_interval_ns = kRecordFlushNs});
+      } catch (const std::exception& e) {
+        throw Failure(std::string("--record: ") + e.what());
       }
-      return out;
-    });
-  } catch (const std::exception& e) {
-    std::cerr << "telegrasp-view: " << e.what() << "\n";
-    return telegrasp::cli::kExitFailure;
+    }
+    try {
+      client_.emplace(args_.client);
+    } catch (const std::exception& e) {
+      throw Failure(e.what());
+    }
+    drive_token_ = args_.drive_token;
+    if (args_.drive && drive_token_.empty() && !is_loopback(args_.address))
+      drive_token_ = view::random_hex(16);  // off this machine, driving always needs a token
+    if (args_.drive) channels.push_back(view::driven_hands_channel());
+    try {
+      view::WebServer::Options options;
+      options.address = args_.address;
+      options.port = args_.port;
+      options.web_root = web_root;
+      options.drive = args_.drive;
+      options.drive_token = drive_token_;
+      options.drive_origins = args_.drive_origins;
+      options.tls_cert = args_.tls_cert;
+      options.tls_key = args_.tls_key;
+      server_.emplace(io_, options, std::move(channels), [this](std::uint32_t channel) { return full(channel); });
+    } catch (const std::exception& e) {
+      throw Failure(e.what());
+    }
+    host_ = args_.address == "0.0.0.0" ? "localhost" : args_.address;
+    std::cout << "telegrasp-view: http://" << host_ << ":" << server_->port() << "/ (page), ws://" << host_ << ":"
+              << server_->port() << " (Foxglove WebSocket), DDS domain " << args_.client.domain
+              << (args_.tls_cert.empty() ? "" : "; https:// and wss:// on the same port") << std::endl;
   }
-  const std::string host = args.address == "0.0.0.0" ? "localhost" : args.address;
-  std::cout << "telegrasp-view: http://" << host << ":" << server->port() << "/ (page), ws://" << host << ":"
-            << server->port() << " (Foxglove WebSocket), DDS domain " << args.client.domain
-            << (args.tls_cert.empty() ? "" : "; https:// and wss:// on the same port") << std::endl;
 
   // --drive: connections publish controller input, forwarded as client ids under the prefix.
-  std::optional<view::Drive> drive;
-  asio::steady_timer drive_timer(io);
-  std::function<void()> drive_tick = [&] {
-    drive->tick();
-    drive_timer.expires_after(std::chrono::milliseconds(30));
-    drive_timer.async_wait([&](boost::system::error_code ec) {
-      if (!ec) drive_tick();
-    });
-  };
-  if (args.drive) {
-    drive.emplace(*client, *server, view::kDrivenHandsChannel, [&](const std::string& name) { return rigs.get(name); },
-                  args.drive_options);
-    server->set_drive_hooks(drive->hooks());
-    const std::string prefix = args.drive_options.prefix;
+  void start_drive() {
+    if (!args_.drive) return;
+    drive_.emplace(*client_, *server_, view::kDrivenHandsChannel, [this](const std::string& name) { return rigs_.get(name); },
+                   args_.drive_options);
+    server_->set_drive_hooks(drive_->hooks());
+    const std::string prefix = args_.drive_options.prefix;
     // DDS threads hand the driven hands' skeletons and refusals to the io thread as they arrive.
-    client->on_hand_skeleton([&io, &drive, prefix](const tc::HandSkeleton& s) {
-      if (s.hand.client_id.starts_with(prefix)) asio::post(io, [&drive, s] { drive->skeleton(s, wall_ns()); });
+    client_->on_hand_skeleton([this, prefix](const tc::HandSkeleton& s) {
+      if (s.hand.client_id.starts_with(prefix)) asio::post(io_, [this, s] { drive_->skeleton(s, wall_ns()); });
     });
-    client->on_notice([&io, &drive, prefix](const tc::Notice& n) {
-      if (n.client_id.starts_with(prefix)) asio::post(io, [&drive, n] { drive->notice(n); });
+    client_->on_notice([this, prefix](const tc::Notice& n) {
+      if (n.client_id.starts_with(prefix)) asio::post(io_, [this, n] { drive_->notice(n); });
     });
     drive_tick();
-    std::cout << "telegrasp-view: headsets drive hands at " << (args.tls_cert.empty() ? "http" : "https") << "://" << host << ":" << server->port() << "/xr"
-              << (drive_token.empty() ? "" : "?token=" + drive_token) << " (client ids " << prefix
-              << "*: start the server with --relay " << prefix << ")" << std::endl;
+    std::cout << "telegrasp-view: headsets drive hands at " << (args_.tls_cert.empty() ? "http" : "https") << "://"
+              << host_ << ":" << server_->port() << "/xr" << (drive_token_.empty() ? "" : "?token=" + drive_token_)
+              << " (client ids " << prefix << "*: start the server with --relay " << prefix << ")" << std::endl;
   }
 
-  // One step per 1/rate: poll the client (newest of everything), update the model, publish.
-  const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-      std::chrono::duration<double>(1.0 / args.rate_hz));
-  asio::steady_timer timer(io);
-  Meter meter;
-  std::optional<std::uint64_t> last_scene_tick;
-  auto next_stats = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                           std::chrono::duration<double>(args.stats_s));
-  std::function<void()> step = [&] {
-    view::ClientSnapshot snap;
-    snap.skeletons = client->latest_hand_skeletons();
-    for (const tc::HandSkeleton& s : snap.skeletons) {
-      if (auto g = client->latest_grasp_state(s.hand)) snap.grasp_states.emplace(s.hand, std::move(*g));
-      if (auto c = client->latest_contact_set(s.hand)) snap.contact_sets.emplace(s.hand, std::move(*c));
-    }
-    snap.scene = client->latest_scene_state();
-    snap.status = client->latest_server_status();
-    snap.events = client->take_grasp_events();
-    snap.geometries = client->object_geometries();
-    if (snap.scene) {
-      if (last_scene_tick && snap.scene->tick > *last_scene_tick)
-        meter.hand_ticks += (snap.scene->tick - *last_scene_tick) * snap.skeletons.size();
-      last_scene_tick = snap.scene->tick;
-    }
-
-    // One time for the step: the messages' stamps and, when recording, their log time.
-    const std::uint64_t now = wall_ns();
-    const view::ViewUpdate update = model.update(snap, now);
-    const std::vector<view::StepMessage> messages = view::step_messages(update);
-    for (const view::StepMessage& m : messages) {
-      if (m.channel == view::kTransformsChannel && !update.transforms_complete)
-        server->publish(m.channel, m.payload, now, [&] { return payload(*model.transforms_full(now)); });
-      else
-        server->publish(m.channel, m.payload, now);
-    }
-    ++meter.steps;
-    if (recorder) {
-      const std::uint64_t t0 = steady_ns();
-      try {
-        recorder->record(messages, model, now);
-        recorder->flush_if_due(t0);
-      } catch (const std::exception& e) {
-        std::cerr << "telegrasp-view: recording stopped: " << e.what() << "\n";
-        recorder.reset();
-      }
-      meter.record_ns += steady_ns() - t0;
-    }
-
-    if (args.stats_s > 0 && std::chrono::steady_clock::now() >= next_stats) {
-      const view::WebServerStats s = server->stats();
-      const double cpu = cpu_seconds(),
-                   wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - meter.wall).count();
-      const std::uint64_t ticks = meter.hand_ticks;
-      const std::uint64_t recorded = recorder ? recorder->writer().bytes_written() : meter.bytes_recorded;
-      view::Json line{{"viewers", s.viewers},
-                        {"hands", snap.skeletons.size()},
-                        {"objects", model.object_count()},
-                        {"seconds", wall},
-                        {"cpu_percent", 100 * (cpu - meter.cpu_s) / wall},
-                        {"hand_ticks", ticks},
-                        {"cpu_us_per_hand_tick", ticks ? 1e6 * (cpu - meter.cpu_s) / static_cast<double>(ticks) : 0.0},
-                        {"sent_kb_per_s", static_cast<double>(s.bytes_sent - meter.bytes_sent) / 1024.0 / wall},
-                        {"messages_sent", s.messages_sent},
-                        {"messages_replaced", s.messages_replaced},
-                        {"viewers_dropped", s.viewers_dropped},
-                        {"recording", recorder.has_value()},
-                        {"recorded_kb_per_s", static_cast<double>(recorded - meter.bytes_recorded) / 1024.0 / wall},
-                        {"record_us_per_step",
-                         meter.steps ? 1e-3 * static_cast<double>(meter.record_ns) / static_cast<double>(meter.steps)
-                                     : 0.0}};
-      if (drive) {
-        const view::DriveStats d = drive->stats();
-        line["drive"] = {{"connections", d.connections},         {"held", d.held},
-                         {"samples_forwarded", d.samples_forwarded}, {"keepalives", d.keepalives},
-                         {"resumed", d.resumed},                 {"notices", d.notices},
-                         {"skeletons_sent", d.skeletons_sent},   {"refused_connections", s.drive_refused},
-                         {"messages_rejected", s.client_messages_rejected},
-                         {"closed_for_errors", s.closed_for_errors}};
-      }
-      std::cerr << line.dump() << std::endl;
-
-      meter = Meter{};
-      meter.bytes_sent = s.bytes_sent;
-      meter.bytes_recorded = recorded;
-      next_stats +=
-          std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(args.stats_s));
-    }
-    timer.expires_at(std::max(timer.expiry() + period, std::chrono::steady_clock::now()));
-    timer.async_wait([&](boost::system::error_code ec) {
+  // Steps every 1/--rate until SIGINT or SIGTERM, then closes the server and the client.
+  void run() {
+    meter_ = Meter{};
+    next_stats_ = std::chrono::steady_clock::now() + seconds(args_.stats_s);
+    timer_.expires_after(period());
+    timer_.async_wait([this](boost::system::error_code ec) {
       if (!ec) step();
     });
-  };
-  timer.expires_after(period);
-  timer.async_wait([&](boost::system::error_code ec) {
-    if (!ec) step();
-  });
+    asio::signal_set signals(io_, SIGINT, SIGTERM);
+    signals.async_wait([this](boost::system::error_code, int) {
+      timer_.cancel();
+      drive_timer_.cancel();
+      server_->close();
+      io_.stop();
+    });
+    io_.run();
+    server_.reset();
+    client_.reset();
+  }
 
-  asio::signal_set signals(io, SIGINT, SIGTERM);
-  signals.async_wait([&](boost::system::error_code, int) {
-    timer.cancel();
-    drive_timer.cancel();
-    server->close();
-    io.stop();
-  });
-  io.run();
-  server.reset();
-  client.reset();
-  if (recorder) {
+  void close_recording() {
+    if (!recorder_) return;
     try {
-      recorder->close();
-      std::cerr << "telegrasp-view: recorded " << recorder->writer().message_count() << " messages ("
+      recorder_->close();
+      std::cerr << "telegrasp-view: recorded " << recorder_->writer().message_count() << " messages ("
                 << telegrasp::cli::format_number(
-                       std::round(static_cast<double>(recorder->writer().bytes_written()) / 1024.0))
-                << " KiB) to " << args.record_path << "\n";
+                       std::round(static_cast<double>(recorder_->writer().bytes_written()) / 1024.0))
+                << " KiB) to " << args_.record_path << "\n";
     } catch (const std::exception& e) {
       std::cerr << "telegrasp-view: closing the recording: " << e.what() << "\n";
     }
   }
+
+ private:
+  static std::chrono::steady_clock::duration seconds(double s) {
+    return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(s));
+  }
+  std::chrono::steady_clock::duration period() const { return seconds(1.0 / args_.rate_hz); }
+
+  // A channel's whole state, for a viewer that subscribes to it.
+  std::vector<std::shared_ptr<const std::string>> full(std::uint32_t channel) {
+    std::vector<std::shared_ptr<const std::string>> out;
+    const std::uint64_t now = wall_ns();
+    switch (channel) {
+      case view::kSceneChannel:
+        out.push_back(payload(model_.scene_full(now)));
+        break;
+      case view::kTransformsChannel:
+        if (auto tf = model_.transforms_full(now)) out.push_back(payload(*tf));
+        break;
+      case view::kGraspStateChannel:
+        for (const view::Json& s : model_.grasp_states_full()) out.push_back(payload(s));
+        break;
+      case view::kGraspEventsChannel:
+        for (const view::Json& e : model_.event_history()) out.push_back(payload(e));
+        break;
+      case view::kServerStatusChannel:
+        if (model_.server_status()) out.push_back(payload(*model_.server_status()));
+        break;
+      default:
+        break;
+    }
+    return out;
+  }
+
+  void drive_tick() {
+    drive_->tick();
+    drive_timer_.expires_after(std::chrono::milliseconds(30));
+    drive_timer_.async_wait([this](boost::system::error_code ec) {
+      if (!ec) drive_tick();
+    });
+  }
+
+  // One step: poll the client (newest of everything), update the model, publish, record.
+  void step() {
+    view::ClientSnapshot snap;
+    snap.skeletons = client_->latest_hand_skeletons();
+    for (const tc::HandSkeleton& s : snap.skeletons) {
+      if (auto g = client_->latest_grasp_state(s.hand)) snap.grasp_states.emplace(s.hand, std::move(*g));
+      if (auto c = client_->latest_contact_set(s.hand)) snap.contact_sets.emplace(s.hand, std::move(*c));
+    }
+    snap.scene = client_->latest_scene_state();
+    snap.status = client_->latest_server_status();
+    snap.events = client_->take_grasp_events();
+    snap.geometries = client_->object_geometries();
+    if (snap.scene) {
+      if (last_scene_tick_ && snap.scene->tick > *last_scene_tick_)
+        meter_.hand_ticks += (snap.scene->tick - *last_scene_tick_) * snap.skeletons.size();
+      last_scene_tick_ = snap.scene->tick;
+    }
+
+    // One time for the step: the messages' stamps and, when recording, their log time.
+    const std::uint64_t now = wall_ns();
+    const view::ViewUpdate update = model_.update(snap, now);
+    const std::vector<view::StepMessage> messages = view::step_messages(update);
+    for (const view::StepMessage& m : messages) {
+      if (m.channel == view::kTransformsChannel && !update.transforms_complete)
+        server_->publish(m.channel, m.payload, now, [&] { return payload(*model_.transforms_full(now)); });
+      else
+        server_->publish(m.channel, m.payload, now);
+    }
+    ++meter_.steps;
+    if (recorder_) {
+      const std::uint64_t t0 = steady_ns();
+      try {
+        recorder_->record(messages, model_, now);
+        recorder_->flush_if_due(t0);
+      } catch (const std::exception& e) {
+        std::cerr << "telegrasp-view: recording stopped: " << e.what() << "\n";
+        recorder_.reset();
+      }
+      meter_.record_ns += steady_ns() - t0;
+    }
+    if (args_.stats_s > 0 && std::chrono::steady_clock::now() >= next_stats_) print_stats(snap.skeletons.size());
+    timer_.expires_at(std::max(timer_.expiry() + period(), std::chrono::steady_clock::now()));
+    timer_.async_wait([this](boost::system::error_code ec) {
+      if (!ec) step();
+    });
+  }
+
+  // --stats: one JSON line on stderr over the period since the last.
+  void print_stats(std::size_t hands) {
+    const view::WebServerStats s = server_->stats();
+    const double cpu = cpu_seconds(),
+                 wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - meter_.wall).count();
+    const std::uint64_t ticks = meter_.hand_ticks;
+    const std::uint64_t recorded = recorder_ ? recorder_->writer().bytes_written() : meter_.bytes_recorded;
+    view::Json line{{"viewers", s.viewers},
+                    {"hands", hands},
+                    {"objects", model_.object_count()},
+                    {"seconds", wall},
+                    {"cpu_percent", 100 * (cpu - meter_.cpu_s) / wall},
+                    {"hand_ticks", ticks},
+                    {"cpu_us_per_hand_tick", ticks ? 1e6 * (cpu - meter_.cpu_s) / static_cast<double>(ticks) : 0.0},
+                    {"sent_kb_per_s", static_cast<double>(s.bytes_sent - meter_.bytes_sent) / 1024.0 / wall},
+                    {"messages_sent", s.messages_sent},
+                    {"messages_replaced", s.messages_replaced},
+                    {"viewers_dropped", s.viewers_dropped},
+                    {"recording", recorder_.has_value()},
+                    {"recorded_kb_per_s", static_cast<double>(recorded - meter_.bytes_recorded) / 1024.0 / wall},
+                    {"record_us_per_step",
+                     meter_.steps ? 1e-3 * static_cast<double>(meter_.record_ns) / static_cast<double>(meter_.steps)
+                                  : 0.0}};
+    if (drive_) {
+      const view::DriveStats d = drive_->stats();
+      line["drive"] = {{"connections", d.connections},         {"held", d.held},
+                       {"samples_forwarded", d.samples_forwarded}, {"keepalives", d.keepalives},
+                       {"resumed", d.resumed},                 {"notices", d.notices},
+                       {"skeletons_sent", d.skeletons_sent},   {"refused_connections", s.drive_refused},
+                       {"messages_rejected", s.client_messages_rejected},
+                       {"closed_for_errors", s.closed_for_errors}};
+    }
+    std::cerr << line.dump() << std::endl;
+    meter_ = Meter{};
+    meter_.bytes_sent = s.bytes_sent;
+    meter_.bytes_recorded = recorded;
+    next_stats_ += seconds(args_.stats_s);
+  }
+
+  const Args& args_;
+  RigCache rigs_;
+  view::ViewModel model_{[this](const std::string& name) { return rigs_.get(name); }};
+  asio::io_context io_;
+  std::optional<view::McapRecorder> recorder_;
+  std::optional<tc::Client> client_;
+  std::optional<view::WebServer> server_;
+  std::optional<view::Drive> drive_;
+  asio::steady_timer drive_timer_{io_};
+  asio::steady_timer timer_{io_};
+  std::string drive_token_, host_;
+  Meter meter_;
+  std::optional<std::uint64_t> last_scene_tick_;
+  std::chrono::steady_clock::time_point next_stats_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Args args = parse(argc, argv);
+  Bridge bridge(args);
+  try {
+    bridge.open();
+  } catch (const Failure& e) {
+    std::cerr << "telegrasp-view: " << e.what() << "\n";
+    return telegrasp::cli::kExitFailure;
+  }
+  bridge.start_drive();
+  bridge.run();
+  bridge.close_recording();
   return 0;
 }
