@@ -152,10 +152,10 @@ void apply_flags(int argc, char** argv, Flags& f, std::vector<std::string>& conf
       ;
     else if (telegrasp::cli::is_flag("telegrasp-server", a, "--claim-wait-s", "--claim-wait"))
       s.claim_wait_s = cli::parse_number(a, value(), 0, 60, usage_error);
-    else if (a == "--security")
-      f.security_dir = value();
-    else if (a == "--identity")
-      f.identity = value();
+    else if (cli::text_flag(a, value,
+                            {{"--security", &f.security_dir}, {"--identity", &f.identity}, {"--record", &s.record_path},
+                             {"--snapshot", &s.snapshot_path}}))
+      ;
     else if (a == "--objects")
       s.objects_dir = value(), f.objects_flag = true;
     else if (a == "--empty-scene")
@@ -174,10 +174,6 @@ void apply_flags(int argc, char** argv, Flags& f, std::vector<std::string>& conf
       f.list_models = true;
     else if (a == "--fill-standins")
       s.fill_standins = true;
-    else if (a == "--record")
-      s.record_path = value();
-    else if (a == "--snapshot")
-      s.snapshot_path = value();
     else if (a == "--mode") {
       const std::string m = value();
       const std::optional<sim::ClosingMode> mode = sim::parse_closing_mode(m);

@@ -110,5 +110,20 @@ TEST(CliTest, ARenamedFlagTakesBothSpellingsAndWarnsOnTheOldOne) {
   EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
 }
 
+
+// A table of text options: the matching one gets its value, in the order given; others are left.
+TEST(CliTest, TextFlagsStoreTheirValueWhereTheTableSays) {
+  std::string json, report;
+  const std::vector<std::string> values = {"out.json", "r.html"};
+  std::size_t taken = 0;
+  auto value = [&] { return values.at(taken++); };
+  EXPECT_TRUE(text_flag("--json", value, {{"--json", &json}, {"--report", &report}}));
+  EXPECT_TRUE(text_flag("--report", value, {{"--json", &json}, {"--report", &report}}));
+  EXPECT_FALSE(text_flag("--csv", value, {{"--json", &json}, {"--report", &report}}));
+  EXPECT_EQ(json, "out.json");
+  EXPECT_EQ(report, "r.html");
+  EXPECT_EQ(taken, 2u);  // --csv took no value
+}
+
 }  // namespace
 }  // namespace telegrasp::cli

@@ -130,10 +130,8 @@ Options parse(int argc, char** argv) {
       o.trials = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 10000, usage_error));
     else if (a == "--seed")
       o.seed = static_cast<std::uint64_t>(telegrasp::cli::parse_whole(a, value(), 0, 1L << 62, usage_error));
-    else if (a == "--objects")
-      o.objects_dir = value();
-    else if (a == "--json")
-      o.json_path = value();
+    else if (telegrasp::cli::text_flag(a, value, {{"--objects", &o.objects_dir}, {"--json", &o.json_path}}))
+      ;
     else if (telegrasp::idl::parse_network_flag(a, value, o, usage_error))
       ;
     else if (telegrasp::cli::is_flag("telegrasp-bot", a, "--timeout-s", "--timeout"))

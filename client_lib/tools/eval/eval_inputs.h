@@ -33,15 +33,11 @@ std::string prepare_outputs(const std::string& json_path, std::ofstream& json_ou
 /// the command's usage error.
 template <class Options, class Value>
 bool parse_offline_flag(const char* tool, const std::string& flag, const Value& value, Options& o, cli::Fail fail) {
-  if (flag == "--objects")
-    o.objects_dir = value();
-  else if (flag == "--rig")
-    o.rig_path = value();
-  else if (flag == "--json")
-    o.json_path = value();
-  else if (flag == "--svg")
-    o.svg_dir = value();
-  else if (cli::is_flag(tool, flag, "--jobs", "--threads"))
+  if (cli::text_flag(flag, value,
+                     {{"--objects", &o.objects_dir}, {"--rig", &o.rig_path}, {"--json", &o.json_path},
+                      {"--svg", &o.svg_dir}}))
+    return true;
+  if (cli::is_flag(tool, flag, "--jobs", "--threads"))
     o.threads = static_cast<int>(cli::parse_whole(flag, value(), 1, 64, fail));
   else if (flag == "--seed")
     o.seed = static_cast<std::uint64_t>(cli::parse_whole(flag, value(), 0, 1L << 62, fail));

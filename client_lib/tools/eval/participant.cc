@@ -104,18 +104,14 @@ Options parse(int argc, char** argv) {
     else if (a == "--mode") {
       o.mode = value();
       if (!sim::parse_closing_mode(o.mode)) usage_error("--mode expects precise or discrete, got '" + o.mode + "'");
-    } else if (a == "--objects")
-      o.objects_dir = value();
+    } else if (cli::text_flag(a, value,
+                              {{"--objects", &o.objects_dir}, {"--json", &o.json_path}, {"--skills", &o.skills_path},
+                               {"--rig", &o.rig_path}}))
+      ;
     else if (a == "--count")
       o.count = static_cast<int>(cli::parse_whole(a, value(), 1, 30, usage_error));
-    else if (a == "--json")
-      o.json_path = value();
     else if (cli::is_flag(kTool, a, "--timeout-s", "--timeout"))
       o.timeout_s = cli::parse_number(a, value(), 0.1, 86400, usage_error);
-    else if (a == "--skills")
-      o.skills_path = value();
-    else if (a == "--rig")
-      o.rig_path = value();
     else
       return false;
     return true;

@@ -161,32 +161,20 @@ Options parse(int argc, char** argv) {
         o.modes = {closing_mode_name(*mode)};
       else
         usage_error("--mode expects precise, discrete or both, got '" + m + "'");
-    } else if (a == "--objects")
-      o.objects_dir = value();
+    } else if (cli::text_flag(a, value,
+                              {{"--objects", &o.objects_dir}, {"--json", &o.json_path}, {"--csv", &o.csv_path},
+                               {"--report", &o.report_path}, {"--questionnaire", &o.questionnaire_path},
+                               {"--keep-logs", &o.logs_dir}, {"--record", &o.record_dir},
+                               {"--skills", &o.skills_path}, {"--rig", &o.rig_path}}))
+      ;
     else if (a == "--count")
       o.count = static_cast<int>(cli::parse_whole(a, value(), 1, 30, usage_error));
     else if (a == "--seed")
       o.seed = static_cast<std::uint64_t>(cli::parse_whole(a, value(), 0, 1L << 50, usage_error));
     else if (a == "--jobs")
       o.jobs = static_cast<int>(cli::parse_whole(a, value(), 1, 64, usage_error));
-    else if (a == "--json")
-      o.json_path = value();
-    else if (a == "--csv")
-      o.csv_path = value();
-    else if (a == "--report")
-      o.report_path = value();
-    else if (a == "--questionnaire")
-      o.questionnaire_path = value();
     else if (telegrasp::idl::parse_network_flag(a, value, o, usage_error))
       ;
-    else if (a == "--keep-logs")
-      o.logs_dir = value();
-    else if (a == "--record")
-      o.record_dir = value();
-    else if (a == "--skills")
-      o.skills_path = value();
-    else if (a == "--rig")
-      o.rig_path = value();
     else if (a == "--in-process")
       o.in_process = true;
     else

@@ -45,10 +45,8 @@ int telegrasp::eval::run_questionnaire(int argc, char** argv) {
   namespace cli = telegrasp::cli;
   std::string input, json_path, report_path;
   cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
-    if (a == "--json")
-      json_path = value();
-    else if (a == "--report")
-      report_path = value();
+    if (cli::text_flag(a, value, {{"--json", &json_path}, {"--report", &report_path}}))
+      ;
     else if (cli::is_option(a))
       return false;
     else if (input.empty())

@@ -104,18 +104,14 @@ Args parse(int argc, char** argv) {
   Args o;
   bool mcap_rate_given = false;
   telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
-    if (a == "--objects")
-      o.objects_dir = value();
-    else if (a == "--export-contacts")
-      o.csv_path = value();
-    else if (a == "--export-mcap")
-      o.mcap_path = value();
+    if (telegrasp::cli::text_flag(a, value,
+                                  {{"--objects", &o.objects_dir}, {"--export-contacts", &o.csv_path},
+                                   {"--export-mcap", &o.mcap_path}, {"--json", &o.json_path}}))
+      ;
     else if (a == "--mcap-rate") {
       o.mcap_options.rate_hz = telegrasp::cli::parse_number(a, value(), 1, 240, usage_error);
       mcap_rate_given = true;
-    } else if (a == "--json")
-      o.json_path = value();
-    else if (telegrasp::cli::is_option(a))
+    } else if (telegrasp::cli::is_option(a))
       return false;
     else if (o.recording.empty())
       o.recording = a;

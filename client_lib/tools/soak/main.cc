@@ -144,18 +144,15 @@ Options parse(int argc, char** argv) {
       o.server_pid = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 1, 1L << 30, usage_error));
     else if (a == "--bot-nice")
       o.bot_nice = static_cast<int>(telegrasp::cli::parse_whole(a, value(), 0, 19, usage_error));
-    else if (a == "--server-config")
-      o.server_config = value();
+    else if (telegrasp::cli::text_flag(
+                 a, value, {{"--server-config", &o.server_config}, {"--log-dir", &o.log_dir}, {"--json", &o.json_path}}))
+      ;
     else if (a == "--skill") {
       o.skill = value();
       if (o.skill != "perfect" && o.skill != "experienced" && o.skill != "inexperienced")
         usage_error("--skill expects perfect, experienced or inexperienced, got '" + o.skill + "'");
-    } else if (a == "--log-dir")
-      o.log_dir = value();
-    else if (a == "--min-grasps")
+    } else if (a == "--min-grasps")
       o.min_grasps = telegrasp::cli::parse_whole(a, value(), 0, 1L << 40, usage_error);
-    else if (a == "--json")
-      o.json_path = value();
     else
       return false;
     return true;

@@ -128,14 +128,14 @@ Args parse(int argc, char** argv) {
   cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& flag, const auto& value) {
     if (flag == "--port")
       a.port = static_cast<std::uint16_t>(cli::parse_whole(flag, value(), 0, 65535, usage_error));
-    else if (flag == "--address")
-      a.address = value();
+    else if (cli::text_flag(flag, value,
+                            {{"--address", &a.address}, {"--web", &a.web_dir}, {"--tls-cert", &a.tls_cert},
+                             {"--tls-key", &a.tls_key}}))
+      ;
     else if (flag == "--rate")
       a.rate_hz = cli::parse_number(flag, value(), 1, 240, usage_error);
     else if (telegrasp::idl::parse_network_flag(flag, value, a.client, usage_error))
       ;
-    else if (flag == "--web")
-      a.web_dir = value();
     else if (flag == "--stats")
       a.stats_s = cli::parse_number(flag, value(), 0.1, 86400, usage_error);
     else if (flag == "--drive")
@@ -156,10 +156,6 @@ Args parse(int argc, char** argv) {
       a.drive_options.tracking_grace_s = cli::parse_number(flag, value(), 0, 60, usage_error);
     else if (telegrasp::cli::is_flag("telegrasp-view", flag, "--resume-window-s", "--resume-window"))
       a.drive_options.resume_window_s = cli::parse_number(flag, value(), 0, 600, usage_error);
-    else if (flag == "--tls-cert")
-      a.tls_cert = value();
-    else if (flag == "--tls-key")
-      a.tls_key = value();
     else if (flag == "--record") {
       a.record_path = value();
       if (a.record_path.empty()) usage_error("--record expects a file name, got ''");

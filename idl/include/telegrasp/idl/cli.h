@@ -10,9 +10,11 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <initializer_list>
 #include <iostream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace telegrasp::cli {
 
@@ -102,6 +104,20 @@ inline void warn_renamed(const std::string& tool, const std::string& old_name, c
   if (arg != old_name) return false;
   warn_renamed(tool, old_name, name);
   return true;
+}
+
+/// If `flag` is one of `flags` (an option's name and the string its value goes into), stores the
+/// value (`value()`, as for_each_option hands it) there and returns true: the options that take
+/// a file, folder or name as it is written, in one table instead of an if-chain each.
+template <class Value>
+bool text_flag(const std::string& flag, const Value& value,
+               std::initializer_list<std::pair<const char*, std::string*>> flags) {
+  for (const auto& [name, target] : flags)
+    if (flag == name) {
+      *target = value();
+      return true;
+    }
+  return false;
 }
 
 /// Whether `arg` is an option ("-x", "--name") rather than a positional argument ("FILE", "-").
