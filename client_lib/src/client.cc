@@ -143,6 +143,15 @@ struct Client::Impl {
   void forget(PerHand<T>& store, const dds::InstanceHandle_t& instance);
   template <class T>
   void call(Channel<T>& channel, const T& value, const char* what);
+  // A per-hand sample (HandSkeleton, GraspState, ContactSet): remembered in `store`, then delivered.
+  template <class T, class Msg>
+  void received_per_hand(const Msg& m, const dds::SampleInfo& info, PerHand<T>& store, Channel<T>& channel,
+                         const char* what);
+  // A scene-wide sample (SceneState, ServerStatus) the client keeps only the newest of: if
+  // noticed(), kept in `newest`, then delivered.
+  template <class T, class Msg>
+  void received_newest(const Msg& m, const dds::SampleInfo& info, std::optional<T>& newest, Channel<T>& channel,
+                       const char* what);
   template <class T, class Snapshot>
   void set_callback(Channel<T>& channel, std::function<void(const T&)> callback, const Snapshot& snapshot,
                     const char* what);
@@ -366,25 +375,25 @@ void Client::Impl::set_callback(Channel<T>& channel, std::function<void(const T&
   for (const T& value : snapshot()) call(channel, value, what);
 }
 
+template <class T, class Msg>
+void Client::Impl::received_per_hand(const Msg& m, const dds::SampleInfo& info, PerHand<T>& store,
+                                     Channel<T>& channel, const char* what) {
+  const T s = from_msg(m);
+  std::lock_guard delivery(channel.mutex);
+  remember(store, s, info);
+  call(channel, s, what);
+}
+
 void Client::Impl::received(const msg::HandSkeleton& m, const dds::SampleInfo& info) {
-  const HandSkeleton s = from_msg(m);
-  std::lock_guard delivery(skeleton_channel.mutex);
-  remember(skeletons, s, info);
-  call(skeleton_channel, s, "HandSkeleton");
+  received_per_hand(m, info, skeletons, skeleton_channel, "HandSkeleton");
 }
 
 void Client::Impl::received(const msg::GraspState& m, const dds::SampleInfo& info) {
-  const GraspState s = from_msg(m);
-  std::lock_guard delivery(grasp_state_channel.mutex);
-  remember(grasp_states, s, info);
-  call(grasp_state_channel, s, "GraspState");
+  received_per_hand(m, info, grasp_states, grasp_state_channel, "GraspState");
 }
 
 void Client::Impl::received(const msg::ContactSet& m, const dds::SampleInfo& info) {
-  const ContactSet s = from_msg(m);
-  std::lock_guard delivery(contact_set_channel.mutex);
-  remember(contact_sets, s, info);
-  call(contact_set_channel, s, "ContactSet");
+  received_per_hand(m, info, contact_sets, contact_set_channel, "ContactSet");
 }
 
 void Client::Impl::received(const msg::GraspEvent& m, const dds::SampleInfo& info) {
@@ -405,26 +414,25 @@ void Client::Impl::received(const msg::GraspEvent& m, const dds::SampleInfo& inf
   }
 }
 
-void Client::Impl::received(const msg::SceneState& m, const dds::SampleInfo& info) {
+template <class T, class Msg>
+void Client::Impl::received_newest(const Msg& m, const dds::SampleInfo& info, std::optional<T>& newest,
+                                   Channel<T>& channel, const char* what) {
   if (!noticed(m.incarnation(), source_of(info))) return;
-  const SceneState s = from_msg(m);
-  std::lock_guard delivery(scene_state_channel.mutex);
+  const T s = from_msg(m);
+  std::lock_guard delivery(channel.mutex);
   {
     std::lock_guard lock(data_mutex);
-    scene = s;
+    newest = s;
   }
-  call(scene_state_channel, s, "SceneState");
+  call(channel, s, what);
+}
+
+void Client::Impl::received(const msg::SceneState& m, const dds::SampleInfo& info) {
+  received_newest(m, info, scene, scene_state_channel, "SceneState");
 }
 
 void Client::Impl::received(const msg::ServerStatus& m, const dds::SampleInfo& info) {
-  if (!noticed(m.incarnation(), source_of(info))) return;
-  const ServerStatus s = from_msg(m);
-  std::lock_guard delivery(server_status_channel.mutex);
-  {
-    std::lock_guard lock(data_mutex);
-    status = s;
-  }
-  call(server_status_channel, s, "ServerStatus");
+  received_newest(m, info, status, server_status_channel, "ServerStatus");
 }
 
 std::shared_ptr<const ObjectGeometry> Client::Impl::cached_geometry(const msg::ObjectGeometry& m) {
@@ -570,6 +578,29 @@ std::vector<T> values_of(const std::map<HandKey, T>& by_hand) {
   return out;
 }
 
+// A copy of `value`, read under `data_mutex`.
+template <class T>
+T locked_copy(std::mutex& data_mutex, const T& value) {
+  std::lock_guard lock(data_mutex);
+  return value;
+}
+
+// The newest value of every hand, read under `data_mutex`.
+template <class T>
+std::vector<T> latest_values(std::mutex& data_mutex, const PerHand<T>& per_hand) {
+  std::lock_guard lock(data_mutex);
+  return values_of(per_hand.latest);
+}
+
+// The newest value of `hand`, read under `data_mutex` (none before its first).
+template <class T>
+std::optional<T> latest_value(std::mutex& data_mutex, const PerHand<T>& per_hand, const HandKey& hand) {
+  std::lock_guard lock(data_mutex);
+  const auto it = per_hand.latest.find(hand);
+  if (it == per_hand.latest.end()) return std::nullopt;
+  return it->second;
+}
+
 }  // namespace
 
 void Client::on_hand_skeleton(std::function<void(const HandSkeleton&)> callback) {
@@ -580,21 +611,13 @@ void Client::on_hand_skeleton(std::function<void(const HandSkeleton&)> callback)
 void Client::on_grasp_state(std::function<void(const GraspState&)> callback) {
   impl_->set_callback(
       impl_->grasp_state_channel, std::move(callback),
-      [&] {
-        std::lock_guard lock(impl_->data_mutex);
-        return values_of(impl_->grasp_states.latest);
-      },
-      "GraspState");
+      [&] { return latest_values(impl_->data_mutex, impl_->grasp_states); }, "GraspState");
 }
 
 void Client::on_contact_set(std::function<void(const ContactSet&)> callback) {
   impl_->set_callback(
       impl_->contact_set_channel, std::move(callback),
-      [&] {
-        std::lock_guard lock(impl_->data_mutex);
-        return values_of(impl_->contact_sets.latest);
-      },
-      "ContactSet");
+      [&] { return latest_values(impl_->data_mutex, impl_->contact_sets); }, "ContactSet");
 }
 
 void Client::on_grasp_event(std::function<void(const GraspEvent&)> callback) {
@@ -637,15 +660,9 @@ void Client::on_server_restart(std::function<void(const ServerRestart&)> callbac
       impl_->restart_channel, std::move(callback), [] { return std::vector<ServerRestart>{}; }, "server restart");
 }
 
-std::uint64_t Client::server_incarnation() const {
-  std::lock_guard lock(impl_->data_mutex);
-  return impl_->incarnation;
-}
+std::uint64_t Client::server_incarnation() const { return locked_copy(impl_->data_mutex, impl_->incarnation); }
 
-std::uint64_t Client::server_restarts() const {
-  std::lock_guard lock(impl_->data_mutex);
-  return impl_->restarts;
-}
+std::uint64_t Client::server_restarts() const { return locked_copy(impl_->data_mutex, impl_->restarts); }
 
 std::shared_ptr<const ObjectGeometry> Client::object_geometry(const std::string& model) const {
   std::lock_guard lock(impl_->data_mutex);
@@ -654,42 +671,27 @@ std::shared_ptr<const ObjectGeometry> Client::object_geometry(const std::string&
 }
 
 std::map<std::string, std::shared_ptr<const ObjectGeometry>> Client::object_geometries() const {
-  std::lock_guard lock(impl_->data_mutex);
-  return impl_->geometries;
+  return locked_copy(impl_->data_mutex, impl_->geometries);
 }
 
-std::optional<SceneState> Client::latest_scene_state() const {
-  std::lock_guard lock(impl_->data_mutex);
-  return impl_->scene;
-}
+std::optional<SceneState> Client::latest_scene_state() const { return locked_copy(impl_->data_mutex, impl_->scene); }
 
-std::optional<Notice> Client::last_notice() const {
-  std::lock_guard lock(impl_->data_mutex);
-  return impl_->notice;
-}
+std::optional<Notice> Client::last_notice() const { return locked_copy(impl_->data_mutex, impl_->notice); }
 
 std::optional<ServerStatus> Client::latest_server_status() const {
-  std::lock_guard lock(impl_->data_mutex);
-  return impl_->status;
+  return locked_copy(impl_->data_mutex, impl_->status);
 }
 
 std::vector<HandSkeleton> Client::latest_hand_skeletons() const {
-  std::lock_guard lock(impl_->data_mutex);
-  return values_of(impl_->skeletons.latest);
+  return latest_values(impl_->data_mutex, impl_->skeletons);
 }
 
 std::optional<GraspState> Client::latest_grasp_state(const HandKey& hand) const {
-  std::lock_guard lock(impl_->data_mutex);
-  const auto it = impl_->grasp_states.latest.find(hand);
-  if (it == impl_->grasp_states.latest.end()) return std::nullopt;
-  return it->second;
+  return latest_value(impl_->data_mutex, impl_->grasp_states, hand);
 }
 
 std::optional<ContactSet> Client::latest_contact_set(const HandKey& hand) const {
-  std::lock_guard lock(impl_->data_mutex);
-  const auto it = impl_->contact_sets.latest.find(hand);
-  if (it == impl_->contact_sets.latest.end()) return std::nullopt;
-  return it->second;
+  return latest_value(impl_->data_mutex, impl_->contact_sets, hand);
 }
 
 std::string scene_name_error(const std::string& name) { return idl::scene_name_error(name); }
