@@ -17,6 +17,8 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <tuple>
+#include <type_traits>
 #include <vector>
 
 namespace telegrasp::server {
@@ -60,6 +62,26 @@ bool from_cdr(const std::string& bytes, msg::ContactSet& m);
 bool from_cdr(const std::string& bytes, msg::GraspEvent& m);
 bool from_cdr(const std::string& bytes, msg::SceneState& m);
 bool from_cdr(const std::string& bytes, msg::ServerStatus& m);
+
+/// The output type of each wire message the server publishes (the argument only picks the type).
+constexpr proto::OutputType output_type_of(const msg::HandSkeleton*) { return proto::OUTPUT_HAND_SKELETON; }
+constexpr proto::OutputType output_type_of(const msg::GraspState*) { return proto::OUTPUT_GRASP_STATE; }
+constexpr proto::OutputType output_type_of(const msg::ContactSet*) { return proto::OUTPUT_CONTACT_SET; }
+constexpr proto::OutputType output_type_of(const msg::GraspEvent*) { return proto::OUTPUT_GRASP_EVENT; }
+constexpr proto::OutputType output_type_of(const msg::SceneState*) { return proto::OUTPUT_SCENE_STATE; }
+constexpr proto::OutputType output_type_of(const msg::ServerStatus*) { return proto::OUTPUT_SERVER_STATUS; }
+
+/// Calls `f(std::type_identity<M>{})` with the wire message type M an output of `type` carries
+/// (HandSkeleton, GraspState, ContactSet, GraspEvent, SceneState, ServerStatus) and returns true;
+/// false, without calling it, for a hand removal or a type this build does not know.
+template <class F>
+bool visit_output_type(proto::OutputType type, F&& f) {
+  const auto visit = [&]<class... M>(std::type_identity<std::tuple<M...>>) {
+    return ((type == output_type_of(static_cast<const M*>(nullptr)) && (f(std::type_identity<M>{}), true)) || ...);
+  };
+  return visit(std::type_identity<std::tuple<msg::HandSkeleton, msg::GraspState, msg::ContactSet, msg::GraspEvent,
+                                             msg::SceneState, msg::ServerStatus>>{});
+}
 
 /// The header a server with these settings and assets writes (created now).
 proto::RecordingHeader make_recording_header(const ServerSettings& settings, const SceneAssets& assets);

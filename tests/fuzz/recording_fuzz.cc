@@ -19,22 +19,8 @@ void decode(const std::string& cdr) {
 
 /// An output decoded as the type it names.
 void decode_output(const server::proto::Output& output) {
-  switch (output.type()) {
-    case server::proto::OUTPUT_HAND_SKELETON:
-      return decode<msg::HandSkeleton>(output.cdr());
-    case server::proto::OUTPUT_GRASP_STATE:
-      return decode<msg::GraspState>(output.cdr());
-    case server::proto::OUTPUT_CONTACT_SET:
-      return decode<msg::ContactSet>(output.cdr());
-    case server::proto::OUTPUT_GRASP_EVENT:
-      return decode<msg::GraspEvent>(output.cdr());
-    case server::proto::OUTPUT_SCENE_STATE:
-      return decode<msg::SceneState>(output.cdr());
-    case server::proto::OUTPUT_SERVER_STATUS:
-      return decode<msg::ServerStatus>(output.cdr());
-    default:
-      return;
-  }
+  server::visit_output_type(output.type(),
+                            [&]<class Message>(std::type_identity<Message>) { decode<Message>(output.cdr()); });
 }
 
 }  // namespace

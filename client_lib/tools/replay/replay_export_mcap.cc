@@ -120,28 +120,8 @@ McapExport export_mcap(const std::string& recording_path, const std::string& mca
         newest_s = std::max(newest_s, time_s);
         pending = true;
       };
-      switch (o.type()) {
-        case proto::OUTPUT_HAND_SKELETON:
-          take(decode<msg::HandSkeleton>(o, reader));
-          break;
-        case proto::OUTPUT_GRASP_STATE:
-          take(decode<msg::GraspState>(o, reader));
-          break;
-        case proto::OUTPUT_CONTACT_SET:
-          take(decode<msg::ContactSet>(o, reader));
-          break;
-        case proto::OUTPUT_GRASP_EVENT:
-          take(decode<msg::GraspEvent>(o, reader));
-          break;
-        case proto::OUTPUT_SCENE_STATE:
-          take(decode<msg::SceneState>(o, reader));
-          break;
-        case proto::OUTPUT_SERVER_STATUS:
-          take(decode<msg::ServerStatus>(o, reader));
-          break;
-        default:
-          break;  // a type this build does not know: nothing to draw
-      }
+      // Each message decoded as its type; a type this build does not know: nothing to draw.
+      visit_output_type(o.type(), [&]<class Msg>(std::type_identity<Msg>) { take(decode<Msg>(o, reader)); });
     }
     if (pending && std::isfinite(newest_s)) step();
     if (std::isfinite(newest_s)) recorder->record_keyframe(model, log_time(newest_s));
