@@ -66,18 +66,34 @@ class ParticipantListener : public dds::DomainParticipantListener {
   InputMailbox& mailbox_;
 };
 
-// Controller states go straight to the mailbox, with their sender (ParticipantListener::sender).
-class ControllerStateListener : public dds::DataReaderListener {
+// What the input listeners share: the mailbox they feed and who sent a sample.
+class InputListener : public dds::DataReaderListener {
  public:
-  ControllerStateListener(InputMailbox& mailbox, ParticipantListener& participants)
+  InputListener(InputMailbox& mailbox, ParticipantListener& participants)
       : mailbox_(mailbox), participants_(participants) {}
+
+ protected:
+  // The sender of a sample of `client_id` (ParticipantListener::sender).
+  std::optional<ParticipantKey> sender_of(const dds::SampleInfo& info, const std::string& client_id) {
+    return participants_.sender(key_of(info.sample_identity.writer_guid().guidPrefix), client_id);
+  }
+
+  InputMailbox& mailbox_;
+
+ private:
+  ParticipantListener& participants_;
+};
+
+// Controller states go straight to the mailbox, with their sender.
+class ControllerStateListener : public InputListener {
+ public:
+  using InputListener::InputListener;
   void on_data_available(dds::DataReader* reader) override {
     dds::SampleInfo info;
     while (reader->take_next_sample(&sample_, &info) == ReturnCode_t::RETCODE_OK) {
       if (!info.valid_data) continue;  // instance state changes, not samples
       const std::string client_id = sample_.client_id().to_string();
-      const std::optional<ParticipantKey> sender =
-          participants_.sender(key_of(info.sample_identity.writer_guid().guidPrefix), client_id);
+      const std::optional<ParticipantKey> sender = sender_of(info, client_id);
       if (!sender) {
         mailbox_.refuse(RejectReason::kClientIdOwnedByAnotherParticipant, client_id);
         continue;
@@ -87,24 +103,20 @@ class ControllerStateListener : public dds::DataReaderListener {
   }
 
  private:
-  InputMailbox& mailbox_;
-  ParticipantListener& participants_;
   msg::ControllerState sample_;  // reused: one listener thread per reader
 };
 
 // Commands are admitted (owner of the client id, rate) before they are queued for the scene.
-class SceneCommandListener : public dds::DataReaderListener {
+class SceneCommandListener : public InputListener {
  public:
-  SceneCommandListener(InputMailbox& mailbox, ParticipantListener& participants)
-      : mailbox_(mailbox), participants_(participants) {}
+  using InputListener::InputListener;
   void on_data_available(dds::DataReader* reader) override {
     msg::SceneCommand c;
     dds::SampleInfo info;
     bool any = false;
     while (reader->take_next_sample(&c, &info) == ReturnCode_t::RETCODE_OK) {
       if (!info.valid_data) continue;
-      const std::optional<ParticipantKey> sender =
-          participants_.sender(key_of(info.sample_identity.writer_guid().guidPrefix), c.client_id().to_string());
+      const std::optional<ParticipantKey> sender = sender_of(info, c.client_id().to_string());
       if (!mailbox_.admit_command(c, sender, steady_now_ns()).empty()) continue;
       std::lock_guard lock(mutex);
       queue.push_back(c);
@@ -114,10 +126,6 @@ class SceneCommandListener : public dds::DataReaderListener {
   }
   std::mutex mutex;
   std::vector<msg::SceneCommand> queue;
-
- private:
-  InputMailbox& mailbox_;
-  ParticipantListener& participants_;
 };
 
 }  // namespace
