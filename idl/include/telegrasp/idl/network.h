@@ -2,12 +2,10 @@
 // networks without multicast, the Fast DDS discovery servers it registers with.
 #pragma once
 
+#include "telegrasp/idl/fastdds_fwd.h"
+
 #include <string>
 #include <vector>
-
-namespace eprosima::fastdds::dds {
-class DomainParticipantQos;
-}  // namespace eprosima::fastdds::dds
 
 namespace telegrasp::idl {
 

@@ -2,11 +2,9 @@
 // that a `secure` participant profile cannot name itself, added to its QoS as properties.
 #pragma once
 
-#include <string>
+#include "telegrasp/idl/fastdds_fwd.h"
 
-namespace eprosima::fastdds::dds {
-class DomainParticipantQos;
-}  // namespace eprosima::fastdds::dds
+#include <string>
 
 namespace telegrasp::idl {
 
