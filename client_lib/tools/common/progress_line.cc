@@ -31,11 +31,7 @@ void ProgressLine::show(const std::string& text) {
     std::fprintf(out_, "\r%s%s", text.c_str(), padding(text).c_str());
   else
     std::fprintf(out_, "%s\n", text.c_str());
-  std::fflush(out_);
-  written_ = true;
-  open_line_ = terminal_;
-  last_ = now_();
-  last_text_ = text;
+  wrote(text, terminal_);
 }
 
 void ProgressLine::finish(const std::string& text) {
@@ -43,9 +39,13 @@ void ProgressLine::finish(const std::string& text) {
     std::fprintf(out_, "\r%s%s\n", text.c_str(), padding(text).c_str());
   else if (!written_ || text != last_text_)
     std::fprintf(out_, "%s\n", text.c_str());
+  wrote(text, false);
+}
+
+void ProgressLine::wrote(const std::string& text, bool open_line) {
   std::fflush(out_);
   written_ = true;
-  open_line_ = false;
+  open_line_ = open_line;
   last_ = now_();
   last_text_ = text;
 }

@@ -36,6 +36,8 @@ class ProgressLine {
 
  private:
   std::string padding(const std::string& text) const;
+  // After writing `text`: flushes and remembers it, the line left open or not.
+  void wrote(const std::string& text, bool open_line);
 
   std::FILE* out_;
   bool terminal_;
