@@ -9,20 +9,17 @@
 namespace {
 
 using namespace telegrasp;
-
-/// One server for the whole run: an empty table with two stand-ins, at most 4 hands (the state a
-/// long run builds up, hands joining, freezing and leaving, is part of what is fuzzed).
-fuzz::FuzzServer* the_server = nullptr;
+using fuzz::the_server;
 
 }  // namespace
 
-// The scene is built before the first input (30 stand-ins take seconds under ASan: not a hang).
+// One server for the whole run: an empty table with two stand-ins, at most 4 hands (the state a
+// long run builds up, hands joining, freezing and leaving, is part of what is fuzzed).
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  fuzz::silence_cerr();
   server::ServerSettings settings;
   settings.max_hands = 4;
   settings.objects = {{"056_tennis_ball", 0.3, 0.0, 0.0, {}}, {"013_apple", 0.5, 0.1, 1.0, {}}};
-  the_server = new fuzz::FuzzServer(settings);
+  fuzz::start_server(settings);
   return 0;
 }
 

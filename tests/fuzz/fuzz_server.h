@@ -3,6 +3,7 @@
 // network meet.
 #pragma once
 
+#include "fuzz_common.h"
 #include "input_mailbox.h"
 #include "recording.h"
 #include "scene_server.h"
@@ -47,6 +48,17 @@ struct FuzzServer {
   std::unique_ptr<server::SceneServer> scene;
   std::int64_t now_ns = 0;
 };
+
+/// The one server of a harness, kept for the whole run (the state a long run builds up is part of
+/// what is fuzzed); made by start_server.
+inline FuzzServer* the_server = nullptr;
+
+/// Silences std::cerr and makes the_server from `settings`. Called from LLVMFuzzerInitialize, so
+/// the scene is built before the first input (30 stand-ins take seconds under ASan: not a hang).
+inline void start_server(server::ServerSettings settings) {
+  silence_cerr();
+  the_server = new FuzzServer(std::move(settings));
+}
 
 /// Decodes `data` on both paths bytes of type PubSubType::type take into the server: the
 /// recording's from_cdr (replay; its result is not used further) and the DDS type's
