@@ -20,6 +20,7 @@
 #include <functional>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
@@ -83,14 +84,27 @@ ClientOptions options(const std::string& id, int domain, unsigned topics) {
   return o;
 }
 
+// Each test on a DDS domain of its own, where the server side is a raw participant.
+class ClientLoopbackTest : public ::testing::Test {
+ protected:
+  // The server's participant, made on first use (some tests start with nobody there).
+  idl::DdsParticipant& server() {
+    if (!server_) server_.emplace(domain, "loopback");
+    return *server_;
+  }
+
+  const DomainLease lease_;  // a domain no concurrent test uses
+  const int domain = lease_.domain();
+
+ private:
+  std::optional<idl::DdsParticipant> server_;
+};
+
 // ---------------------------------------------------------------------------------------------
 
-TEST(ClientLoopbackTest, PublishedControllerStatesArriveNumberedWithTheirFields) {
-  const DomainLease lease;  // a domain no concurrent test uses
-  const int domain = lease.domain();
-  idl::DdsParticipant server(domain, "loopback");
-  dds::DataReader* reader = server.reader<msg::ControllerStatePubSubType>(idl::kControllerStateTopic);
-  server.reader<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic);
+TEST_F(ClientLoopbackTest, PublishedControllerStatesArriveNumberedWithTheirFields) {
+  dds::DataReader* reader = server().reader<msg::ControllerStatePubSubType>(idl::kControllerStateTopic);
+  server().reader<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic);
   Client client(options("alice", domain, 0));
   // With no status topic subscribed, matched ControllerState and SceneCommand readers are a server.
   ASSERT_TRUE(client.wait_for_server(kTimeout));
@@ -192,12 +206,9 @@ TEST(ClientLoopbackTest, PublishedControllerStatesArriveNumberedWithTheirFields)
 
 // A relay publishes as ids under its prefix with its own sequence numbers, which go out as given
 // and do not touch the client's own numbering; ids outside the prefix and number 0 are refused.
-TEST(ClientLoopbackTest, ARelayPublishesAsIdsUnderItsPrefix) {
-  const DomainLease lease;
-  const int domain = lease.domain();
-  idl::DdsParticipant server(domain, "loopback");
-  dds::DataReader* reader = server.reader<msg::ControllerStatePubSubType>(idl::kControllerStateTopic);
-  server.reader<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic);
+TEST_F(ClientLoopbackTest, ARelayPublishesAsIdsUnderItsPrefix) {
+  dds::DataReader* reader = server().reader<msg::ControllerStatePubSubType>(idl::kControllerStateTopic);
+  server().reader<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic);
   ClientOptions o = options("bridge", domain, 0);
   o.relay_prefix = "xr-";
   Client client(o);
@@ -225,12 +236,9 @@ TEST(ClientLoopbackTest, ARelayPublishesAsIdsUnderItsPrefix) {
   EXPECT_THROW(not_a_relay.publish_as("xr-1", s), std::invalid_argument);
 }
 
-TEST(ClientLoopbackTest, SceneCommandsArriveNumbered) {
-  const DomainLease lease;
-  const int domain = lease.domain();
-  idl::DdsParticipant server(domain, "loopback");
-  dds::DataReader* reader = server.reader<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic);
-  server.reader<msg::ControllerStatePubSubType>(idl::kControllerStateTopic);
+TEST_F(ClientLoopbackTest, SceneCommandsArriveNumbered) {
+  dds::DataReader* reader = server().reader<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic);
+  server().reader<msg::ControllerStatePubSubType>(idl::kControllerStateTopic);
   Client client(options("operator", domain, 0));
   // Reliable, but only to readers matched when written: wait_for_server waits for that match.
   ASSERT_TRUE(client.wait_for_server(kTimeout));
@@ -287,13 +295,10 @@ msg::HandSkeleton make_skeleton(const std::string& id, std::uint8_t side, std::u
   return m;
 }
 
-TEST(ClientLoopbackTest, ServerOutputsReachCallbacksAndPolling) {
-  const DomainLease lease;
-  const int domain = lease.domain();
-  idl::DdsParticipant server(domain, "loopback");
-  dds::DataWriter* skeleton_writer = server.writer<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic);
-  dds::DataWriter* event_writer = server.writer<msg::GraspEventPubSubType>(idl::kGraspEventTopic);
-  dds::DataWriter* grasp_state_writer = server.writer<msg::GraspStatePubSubType>(idl::kGraspStateTopic);
+TEST_F(ClientLoopbackTest, ServerOutputsReachCallbacksAndPolling) {
+  dds::DataWriter* skeleton_writer = server().writer<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic);
+  dds::DataWriter* event_writer = server().writer<msg::GraspEventPubSubType>(idl::kGraspEventTopic);
+  dds::DataWriter* grasp_state_writer = server().writer<msg::GraspStatePubSubType>(idl::kGraspStateTopic);
 
   Client client(options("viewer", domain, kAllTopics));
   Received received;
@@ -400,14 +405,11 @@ TEST(ClientLoopbackTest, ServerOutputsReachCallbacksAndPolling) {
   EXPECT_EQ(received.grasp_states.size(), 1u);
 }
 
-TEST(ClientLoopbackTest, WaitForServerNeedsAMatchedReaderAndAStatus) {
-  const DomainLease lease;
-  const int domain = lease.domain();
+TEST_F(ClientLoopbackTest, WaitForServerNeedsAMatchedReaderAndAStatus) {
   Client client(options("waiter", domain, kAllTopics));
   EXPECT_FALSE(client.wait_for_server(100ms));  // nobody there
-  idl::DdsParticipant server(domain, "loopback");
-  dds::DataReader* reader = server.reader<msg::ControllerStatePubSubType>(idl::kControllerStateTopic);
-  server.reader<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic);
+  dds::DataReader* reader = server().reader<msg::ControllerStatePubSubType>(idl::kControllerStateTopic);
+  server().reader<msg::SceneCommandPubSubType>(idl::kSceneCommandTopic);
   // A client without the status topic calls the matched readers a server; ours needs a status too.
   Client no_status(options("no-status", domain, 0));
   ASSERT_TRUE(no_status.wait_for_server(kTimeout));
@@ -416,7 +418,7 @@ TEST(ClientLoopbackTest, WaitForServerNeedsAMatchedReaderAndAStatus) {
   EXPECT_FALSE(client.latest_server_status().has_value());
 
   // The status is transient local: written now, it reaches the client whenever it matches.
-  dds::DataWriter* status_writer = server.writer<msg::ServerStatusPubSubType>(idl::kServerStatusTopic);
+  dds::DataWriter* status_writer = server().writer<msg::ServerStatusPubSubType>(idl::kServerStatusTopic);
   msg::ServerStatus status;
   status.tick(900);
   status.clients(2);
@@ -436,12 +438,9 @@ TEST(ClientLoopbackTest, WaitForServerNeedsAMatchedReaderAndAStatus) {
 }
 
 // Samples that arrive before a callback is set are not lost to it: setting it catches it up.
-TEST(ClientLoopbackTest, ANewCallbackIsCaughtUpWithWhatArrivedBefore) {
-  const DomainLease lease;
-  const int domain = lease.domain();
-  idl::DdsParticipant server(domain, "loopback");
-  dds::DataWriter* status_writer = server.writer<msg::ServerStatusPubSubType>(idl::kServerStatusTopic);
-  dds::DataWriter* event_writer = server.writer<msg::GraspEventPubSubType>(idl::kGraspEventTopic);
+TEST_F(ClientLoopbackTest, ANewCallbackIsCaughtUpWithWhatArrivedBefore) {
+  dds::DataWriter* status_writer = server().writer<msg::ServerStatusPubSubType>(idl::kServerStatusTopic);
+  dds::DataWriter* event_writer = server().writer<msg::GraspEventPubSubType>(idl::kGraspEventTopic);
   Client client(options("late", domain, kServerStatuses | kGraspEvents));
 
   // A status and two events arrive while no callback is set (seen by polling). Written once the
@@ -482,11 +481,8 @@ TEST(ClientLoopbackTest, ANewCallbackIsCaughtUpWithWhatArrivedBefore) {
   client.on_server_status(nullptr);
 }
 
-TEST(ClientLoopbackTest, NoCallbackRunsAfterTheDestructorReturns) {
-  const DomainLease lease;
-  const int domain = lease.domain();
-  idl::DdsParticipant server(domain, "loopback");
-  dds::DataWriter* skeleton_writer = server.writer<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic);
+TEST_F(ClientLoopbackTest, NoCallbackRunsAfterTheDestructorReturns) {
+  dds::DataWriter* skeleton_writer = server().writer<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic);
   std::atomic<bool> destroyed{false}, called_after_destroy{false};
   std::atomic<int> calls{0};
   auto client = std::make_unique<Client>(options("short-lived", domain, kHandSkeletons));
@@ -519,11 +515,8 @@ TEST(ClientLoopbackTest, NoCallbackRunsAfterTheDestructorReturns) {
   EXPECT_EQ(calls, calls_at_destruction);
 }
 
-TEST(ClientLoopbackTest, AThrowingCallbackDoesNotStopDelivery) {
-  const DomainLease lease;
-  const int domain = lease.domain();
-  idl::DdsParticipant server(domain, "loopback");
-  dds::DataWriter* skeleton_writer = server.writer<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic);
+TEST_F(ClientLoopbackTest, AThrowingCallbackDoesNotStopDelivery) {
+  dds::DataWriter* skeleton_writer = server().writer<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic);
   Client client(options("thrower", domain, kHandSkeletons));
   std::atomic<int> calls{0};
   client.on_hand_skeleton([&](const HandSkeleton&) {
@@ -555,11 +548,8 @@ msg::ObjectGeometry tetrahedron_geometry(const std::string& model) {
 
 // Geometries arrive checked and cached by content hash: a damaged one is dropped, the same one
 // arriving again is the same object, and the same mesh under another name is taken from the cache.
-TEST(ClientLoopbackTest, ObjectGeometriesAreCheckedAndCachedByHash) {
-  const DomainLease lease;
-  const int domain = lease.domain();
-  idl::DdsParticipant server(domain, "loopback");
-  dds::DataWriter* writer = server.writer<msg::ObjectGeometryPubSubType>(idl::kObjectGeometryTopic);
+TEST_F(ClientLoopbackTest, ObjectGeometriesAreCheckedAndCachedByHash) {
+  dds::DataWriter* writer = server().writer<msg::ObjectGeometryPubSubType>(idl::kObjectGeometryTopic);
   Client client(options("viewer", domain, kObjectGeometries));
   std::atomic<int> calls{0};
   client.on_object_geometry([&](const std::shared_ptr<const ObjectGeometry>&) { ++calls; });
@@ -633,9 +623,7 @@ struct FakeServer {
 // first status arrived; a late sample of the old run is dropped; grasp events carry the
 // incarnation of the run that sent them. The old run stays on the wire here (a hung server, or
 // one whose last samples are late), so nothing of it is disposed by its writers going away.
-TEST(ClientLoopbackTest, ANewIncarnationIsNoticedOnceAndTheOldRunsStateDropped) {
-  const DomainLease lease;
-  const int domain = lease.domain();
+TEST_F(ClientLoopbackTest, ANewIncarnationIsNoticedOnceAndTheOldRunsStateDropped) {
   Client client(options("restarts", domain, kServerStatuses | kGraspStates | kGraspEvents));
   std::mutex mutex;
   std::vector<ServerRestart> restarts;

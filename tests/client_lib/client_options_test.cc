@@ -7,6 +7,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace telegrasp::client {
 namespace {
@@ -39,56 +40,44 @@ std::string construction_error(const ClientOptions& o) {
     EXPECT_NE(error.find(text), std::string::npos) << "'" << error << "' lacks " << (text); \
   } while (false)
 
-TEST(ClientOptionsTest, RejectsAnEmptyClientId) {
+// One bad field of otherwise good options, and what the error must mention.
+struct BadOption {
+  const char* name;
+  void (*spoil)(ClientOptions&);
+  std::vector<std::string> mentions;
+};
+
+// In test output, a row by its name.
+void PrintTo(const BadOption& bad, std::ostream* os) { *os << bad.name; }
+
+class ClientOptionsRejects : public ::testing::TestWithParam<BadOption> {};
+
+TEST_P(ClientOptionsRejects, NamingTheFieldAtFault) {
   ClientOptions o = good_options();
-  o.client_id = "";
-  EXPECT_ERROR_MENTIONS(o, "client_id");
+  GetParam().spoil(o);
+  for (const std::string& text : GetParam().mentions) EXPECT_ERROR_MENTIONS(o, text);
 }
 
-TEST(ClientOptionsTest, RejectsAClientIdLongerThan64Characters) {
-  ClientOptions o = good_options();
-  o.client_id = std::string(65, 'x');
-  EXPECT_ERROR_MENTIONS(o, "client_id");
-  EXPECT_ERROR_MENTIONS(o, "65");
-}
-
-TEST(ClientOptionsTest, RejectsAClientIdWithANulCharacter) {
-  ClientOptions o = good_options();
-  o.client_id = std::string("ab\0cd", 5);
-  EXPECT_ERROR_MENTIONS(o, "client_id");
-}
-
-TEST(ClientOptionsTest, RejectsDomainsOutside0To232) {
-  ClientOptions o = good_options();
-  o.domain = -1;
-  EXPECT_ERROR_MENTIONS(o, "domain");
-  o.domain = 233;
-  EXPECT_ERROR_MENTIONS(o, "domain");
-}
-
-TEST(ClientOptionsTest, RejectsAnEmptyProfile) {
-  ClientOptions o = good_options();
-  o.profile = "";
-  EXPECT_ERROR_MENTIONS(o, "profile");
-}
-
-TEST(ClientOptionsTest, RejectsAProfileNotInTheFile) {
-  ClientOptions o = good_options();
-  o.profile = "no_such_profile";
-  EXPECT_ERROR_MENTIONS(o, "no_such_profile");
-}
-
-TEST(ClientOptionsTest, RejectsAMissingProfilesFile) {
-  ClientOptions o = good_options();
-  o.profiles_file = "/nonexistent/telegrasp_profiles.xml";
-  EXPECT_ERROR_MENTIONS(o, "/nonexistent/telegrasp_profiles.xml");
-}
-
-TEST(ClientOptionsTest, RejectsUnknownTopicBits) {
-  ClientOptions o = good_options();
-  o.topics = (kAllTopics | kSceneDirectory) + 1;
-  EXPECT_ERROR_MENTIONS(o, "topics");
-}
+INSTANTIATE_TEST_SUITE_P(
+    ClientOptionsTest, ClientOptionsRejects,
+    ::testing::Values(
+        BadOption{"AnEmptyClientId", [](ClientOptions& o) { o.client_id = ""; }, {"client_id"}},
+        BadOption{"AClientIdWithANulCharacter",
+                  [](ClientOptions& o) { o.client_id = std::string("ab\0cd", 5); },
+                  {"client_id"}},
+        BadOption{"AClientIdLongerThan64Characters",
+                  [](ClientOptions& o) { o.client_id = std::string(65, 'x'); },
+                  {"client_id", "65"}},
+        BadOption{"ADomainBelow0", [](ClientOptions& o) { o.domain = -1; }, {"domain"}},
+        BadOption{"ADomainAbove232", [](ClientOptions& o) { o.domain = 233; }, {"domain"}},
+        BadOption{"AnEmptyProfile", [](ClientOptions& o) { o.profile = ""; }, {"profile"}},
+        BadOption{"AProfileNotInTheFile", [](ClientOptions& o) { o.profile = "no_such_profile"; }, {"no_such_profile"}},
+        BadOption{"AMissingProfilesFile",
+                  [](ClientOptions& o) { o.profiles_file = "/nonexistent/telegrasp_profiles.xml"; },
+                  {"/nonexistent/telegrasp_profiles.xml"}},
+        BadOption{
+            "UnknownTopicBits", [](ClientOptions& o) { o.topics = (kAllTopics | kSceneDirectory) + 1; }, {"topics"}}),
+    [](const ::testing::TestParamInfo<BadOption>& info) { return std::string(info.param.name); });
 
 TEST(ClientOptionsTest, AcceptsTheLimits) {
   ClientOptions o = good_options();
