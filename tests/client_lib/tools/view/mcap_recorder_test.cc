@@ -5,10 +5,8 @@
 // tools.replay_mcap.reference_reader.
 #include "channels.h"
 #include "mcap_recorder.h"
+#include "right_hand_model.h"
 #include "step_messages.h"
-#include "view_model.h"
-
-#include "telegrasp/sim/hand_rig.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -33,14 +31,9 @@ std::vector<Channel> test_channels() {
           {kServerStatusChannel, "/server_status", "telegrasp.ServerStatus", "{}", true}};
 }
 
-class McapRecorderTest : public ::testing::Test {
+class McapRecorderTest : public RightHandModelTest {
  protected:
-  McapRecorderTest()
-      : rig_(std::make_unique<sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")))),
-        model_([this](const std::string& name) { return name == "human_right" ? rig_.get() : nullptr; }) {
-    skeleton_.hand = {"c1", client::HandSide::kRight};
-    skeleton_.rig = "human_right";
-    skeleton_.X_WorldPalm.translation() = Eigen::Vector3d(0.4, 0, 0.2);
+  McapRecorderTest() {
     skeleton_.X_WorldPhalanx.assign(rig_->phalanges().size(), skeleton_.X_WorldPalm);
     path_ = fs::temp_directory_path() / ("mcap_recorder_test_" + std::to_string(::getpid()) + "_" +
                                          ::testing::UnitTest::GetInstance()->current_test_info()->name() + ".mcap");
@@ -55,9 +48,6 @@ class McapRecorderTest : public ::testing::Test {
     return step_messages(model_.update(s, time_ns));
   }
 
-  std::unique_ptr<sim::HandRig> rig_;
-  ViewModel model_;
-  client::HandSkeleton skeleton_;
   fs::path path_;
 };
 

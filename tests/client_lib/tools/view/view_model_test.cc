@@ -2,9 +2,7 @@
 // foxglove_json.h): capsule primitives against the segment they draw, /scene sent only when an
 // entity looks different, deletions when a hand goes, /tf carrying only what moved.
 #include "foxglove_json.h"
-#include "view_model.h"
-
-#include "telegrasp/sim/hand_rig.h"
+#include "right_hand_model.h"
 
 #include <gtest/gtest.h>
 
@@ -52,14 +50,9 @@ TEST(FoxgloveJsonTest, ArrowPointsAlongTheNormal) {
 }
 
 // A model of one right hand (the shipped rig) and, optionally, one object.
-class ViewModelTest : public ::testing::Test {
+class ViewModelTest : public RightHandModelTest {
  protected:
-  ViewModelTest()
-      : rig_(std::make_unique<sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")))),
-        model_([this](const std::string& name) { return name == "human_right" ? rig_.get() : nullptr; }) {
-    skeleton_.hand = {"c1", client::HandSide::kRight};
-    skeleton_.rig = "human_right";
-    skeleton_.X_WorldPalm.translation() = Eigen::Vector3d(0.4, 0, 0.2);
+  ViewModelTest() {
     for (std::size_t i = 0; i < rig_->phalanges().size(); ++i) {
       Eigen::Isometry3d X = skeleton_.X_WorldPalm;
       X.translation() += Eigen::Vector3d(0.02 * static_cast<double>(i), 0.01, 0);
@@ -82,9 +75,6 @@ class ViewModelTest : public ::testing::Test {
     return ids;
   }
 
-  std::unique_ptr<sim::HandRig> rig_;
-  ViewModel model_;
-  client::HandSkeleton skeleton_;
   client::GraspState state_;
 };
 
