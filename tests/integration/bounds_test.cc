@@ -27,17 +27,8 @@ namespace {
 
 using namespace std::chrono_literals;
 using client::Client;
-using client::ClientOptions;
 
-constexpr auto kStartGuard = 60s;
 constexpr auto kGuard = 20s;
-
-ClientOptions options(const std::string& id, int domain) {
-  ClientOptions o;
-  o.client_id = id;
-  o.domain = domain;
-  return o;
-}
 
 client::ControllerSample hand_at(double x) {
   client::ControllerSample s;
@@ -72,7 +63,7 @@ TEST(BoundsTest, AParticipantWritingThousandsOfClientIdsLocksNobodyOut) {
     std::vector<eprosima::fastdds::dds::DataWriter*> writers = {
         attacker.writer<msg::ControllerStatePubSubType>(idl::kControllerStateTopic),
         attacker.writer<msg::ControllerStatePubSubType>(idl::kControllerStateTopic)};
-    Client observer(options("observer", server.domain));
+    Client observer(client_options("observer", server.domain));
     ASSERT_TRUE(observer.wait_for_server(kStartGuard)) << "no server on domain " << server.domain;
     ASSERT_TRUE(eventually(
         [&] {
@@ -103,7 +94,7 @@ TEST(BoundsTest, AParticipantWritingThousandsOfClientIdsLocksNobodyOut) {
         << "the server did not count the minted ids as refused";
 
     // A newcomer, with the attacker still connected, gets its hand in the scene.
-    Client late(options("late", server.domain));
+    Client late(client_options("late", server.domain));
     ASSERT_TRUE(late.wait_for_server(kStartGuard));
     const bool in_scene = eventually(
         [&] {
@@ -121,7 +112,7 @@ TEST(BoundsTest, AParticipantWritingThousandsOfClientIdsLocksNobodyOut) {
 
 TEST(BoundsTest, AFloodingClientIsRateLimitedAndToldWhy) {
   Server server("bounds_rate");
-  Client flood(options("flood", server.domain));
+  Client flood(client_options("flood", server.domain));
   ASSERT_TRUE(flood.wait_for_server(kStartGuard)) << "no server on domain " << server.domain;
   std::mutex mutex;
   std::vector<client::Notice> notices;
@@ -169,7 +160,7 @@ TEST(BoundsTest, AFloodingClientIsRateLimitedAndToldWhy) {
 
 TEST(BoundsTest, OnlyAnOperatorResetsTheScene) {
   Server server("bounds_reset", {"--operator", "op"});
-  Client mallory(options("mallory", server.domain)), op(options("op", server.domain));
+  Client mallory(client_options("mallory", server.domain)), op(client_options("op", server.domain));
   ASSERT_TRUE(mallory.wait_for_server(kStartGuard)) << "no server on domain " << server.domain;
   ASSERT_TRUE(op.wait_for_server(kStartGuard));
   ASSERT_TRUE(eventually([&] { return mallory.latest_scene_state().has_value(); }, kGuard));
@@ -202,7 +193,7 @@ TEST(BoundsTest, OnlyAnOperatorResetsTheScene) {
 
 TEST(BoundsTest, ABotWhoseClientIdIsTakenIsToldAndExitsFour) {
   Server server("bounds_taken");
-  Client owner(options("taken", server.domain));
+  Client owner(client_options("taken", server.domain));
   ASSERT_TRUE(owner.wait_for_server(kStartGuard)) << "no server on domain " << server.domain;
   ASSERT_TRUE(eventually(
       [&] {

@@ -33,7 +33,6 @@ using client::GraspEvent;
 using telegrasp::testing::DomainLease;
 
 // Generous guards against hangs on a loaded machine: a passing test never waits that long.
-constexpr auto kStartGuard = 60s;  // a server answering, a bot lifting
 constexpr auto kEventGuard = 30s;  // something that follows from what the test just did
 constexpr auto kBotGuard = 300s;  // a bot's whole run
 
@@ -54,10 +53,7 @@ struct Observed {
 };
 
 std::unique_ptr<Client> observe(int domain, Observed& seen, const std::string& id = "observer") {
-  ClientOptions o;
-  o.client_id = id;
-  o.domain = domain;
-  auto c = std::make_unique<Client>(o);
+  auto c = std::make_unique<Client>(client_options(id, domain));
   c->on_grasp_event([&](const client::GraspEvent& e) {
     std::lock_guard l(seen.mutex);
     seen.events.push_back(e);
@@ -86,13 +82,7 @@ std::unique_ptr<Client> observe(int domain, Observed& seen, const std::string& i
 }
 
 // Options for a client `id` on `domain` that publishes and subscribes to no topic.
-ClientOptions publisher_options(const std::string& id, int domain) {
-  ClientOptions o;
-  o.client_id = id;
-  o.domain = domain;
-  o.topics = 0;
-  return o;
-}
+ClientOptions publisher_options(const std::string& id, int domain) { return client_options(id, domain, 0); }
 
 std::unique_ptr<ChildProcess> start_server(int domain, const std::string& config, const std::string& name) {
   std::vector<std::string> args{bin("telegrasp-server"), "--domain", std::to_string(domain), "--profile", "loopback"};

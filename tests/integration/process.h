@@ -3,6 +3,7 @@
 #pragma once
 
 #include "child_process.h"
+#include "telegrasp/client/client.h"
 
 #include <chrono>
 #include <string>
@@ -11,6 +12,20 @@
 namespace telegrasp::testing {
 
 using tools::ChildProcess;
+
+/// How long a test waits, against a hang only (never asserted), for its start: a server
+/// answering, a client (secure or not) matched with it, a bot started.
+inline constexpr std::chrono::seconds kStartGuard{60};
+
+/// Options for a client `id` on `domain` subscribed to `topics` (bits of client::Topics), every
+/// other option at its default.
+inline client::ClientOptions client_options(const std::string& id, int domain, unsigned topics = client::kAllTopics) {
+  client::ClientOptions o;
+  o.client_id = id;
+  o.domain = domain;
+  o.topics = topics;
+  return o;
+}
 
 /// The path of the tool `name`, built next to the test program (build/bin).
 std::string bin(const std::string& name);

@@ -29,7 +29,6 @@ namespace {
 using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
 
-constexpr auto kStartGuard = 60s;  // a server answering, a bot holding, a snapshot written
 constexpr auto kEventGuard = 30s;  // something that follows from what the test just did
 constexpr auto kBotGuard = 240s;  // the bot's whole run
 constexpr double kSamePosition = 0.003;  // m: a restored resting object after a tick or a few

@@ -21,15 +21,11 @@ using namespace std::chrono_literals;
 using client::Client;
 using client::ClientOptions;
 
-constexpr auto kStartGuard = 60s;
 constexpr auto kGuard = 20s;
 
 ClientOptions in_scene(const std::string& id, int domain, const std::string& scene, unsigned topics = client::kAllTopics) {
-  ClientOptions o;
-  o.client_id = id;
-  o.domain = domain;
+  ClientOptions o = client_options(id, domain, topics);
   o.scene = scene;
-  o.topics = topics;
   return o;
 }
 

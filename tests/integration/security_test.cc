@@ -26,7 +26,6 @@ using namespace std::chrono_literals;
 using client::Client;
 using client::ClientOptions;
 
-constexpr auto kStartGuard = 60s;  // a secure participant authenticated and matched
 constexpr auto kEventGuard = 20s;  // something that follows from what the test just did
 // How long an unauthorized participant is given to get anything through: several times what an
 // authorized one needs on this machine (about 1 s to authenticate and match).
@@ -70,9 +69,7 @@ class SecurityTest : public ::testing::Test {
       setenv("TELEGRASP_SECURITY_DIR", certs_->c_str(), 1);
       setenv("TELEGRASP_IDENTITY", identity.c_str(), 1);
     }
-    ClientOptions o;
-    o.client_id = client_id;
-    o.domain = lease_->domain();
+    ClientOptions o = client_options(client_id, lease_->domain());
     o.profile = profile;
     return std::make_unique<Client>(o);
   }
@@ -94,6 +91,16 @@ class SecurityTest : public ::testing::Test {
       c.publish(s);
       std::this_thread::sleep_for(11ms);
     }
+  }
+
+  // Drives `c` (as `client_id`) at `X_WorldPalm` for `duration`, meanwhile waiting up to
+  // kEventGuard for `w` to see that hand there; whether it did.
+  static bool seen_while_driving(const Client& w, Client& c, const std::string& client_id,
+                                 const Eigen::Isometry3d& X_WorldPalm, std::chrono::milliseconds duration) {
+    std::thread driver([&] { drive(c, X_WorldPalm, duration); });
+    const bool seen = eventually([&] { return sees_hand_at(w, client_id, X_WorldPalm); }, kEventGuard);
+    driver.join();
+    return seen;
   }
 
   // Whether `w` currently sees the right hand of `client_id` tracked at `X_WorldPalm`.
@@ -152,9 +159,7 @@ TEST_F(SecurityTest, ParticipantWithoutCertificateNeitherSeesTheSceneNorMovesAHa
   auto bob = join("bob", "bob-hands");
   ASSERT_TRUE(bob->wait_for_server(kStartGuard));
   const Eigen::Isometry3d X = palm_at(0.3, 0.0, 1.1);
-  std::thread driver([&] { drive(*bob, X, 3s); });
-  EXPECT_TRUE(eventually([&] { return sees_hand_at(*w, "bob-hands", X); }, kEventGuard));
-  driver.join();
+  EXPECT_TRUE(seen_while_driving(*w, *bob, "bob-hands", X, 3s));
 }
 
 TEST_F(SecurityTest, OnlyAnOperatorSpawnsRemovesOrResets) {
@@ -207,9 +212,7 @@ TEST_F(SecurityTest, ClientIdBelongsToTheIdentityThatDroveItFirst) {
   {
     auto alice = join("alice", id);
     ASSERT_TRUE(alice->wait_for_server(kStartGuard));
-    std::thread driver([&] { drive(*alice, X_alice, 2s); });
-    EXPECT_TRUE(eventually([&] { return sees_hand_at(*w, id, X_alice); }, kEventGuard));
-    driver.join();
+    EXPECT_TRUE(seen_while_driving(*w, *alice, id, X_alice, 2s));
   }
   ASSERT_TRUE(eventually([&] { return !sees_client(*w, id); }, kEventGuard)) << "alice's hand was never removed";
 
@@ -230,9 +233,7 @@ TEST_F(SecurityTest, ClientIdBelongsToTheIdentityThatDroveItFirst) {
   const Eigen::Isometry3d X_back = palm_at(0.3, 0.05, 1.15);
   auto alice = join("alice", id);
   ASSERT_TRUE(alice->wait_for_server(kStartGuard));
-  std::thread driver([&] { drive(*alice, X_back, 3s); });
-  EXPECT_TRUE(eventually([&] { return sees_hand_at(*w, id, X_back); }, kEventGuard));
-  driver.join();
+  EXPECT_TRUE(seen_while_driving(*w, *alice, id, X_back, 3s));
 }
 
 TEST_F(SecurityTest, ExpiredOrForeignCertificateIsRefused) {

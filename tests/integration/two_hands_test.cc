@@ -31,7 +31,6 @@ using client::Client;
 using client::ClientOptions;
 using client::HandKey;
 
-constexpr auto kStartGuard = 60s;
 constexpr auto kEventGuard = 30s;
 const Eigen::Vector3d kHalfExtents(0.3, 0.04, 0.04);  // a 0.6 x 0.08 x 0.08 m box
 
@@ -106,10 +105,7 @@ struct SceneLog {
 class Driver {
  public:
   Driver(const std::string& id, int domain) {
-    ClientOptions o;
-    o.client_id = id;
-    o.domain = domain;
-    client_ = std::make_unique<Client>(o);
+    client_ = std::make_unique<Client>(client_options(id, domain));
     client_->on_scene_state([this](const client::SceneState& s) { log.add(s); });
   }
   ~Driver() { stop(); }
