@@ -9,6 +9,7 @@
 // distinct contact sets held, the least any cache can do), last_only_hulls (what reusing only
 // the last hull's quality, for contacts within 1e-6 m and 1e-6 of it, would build: the rule before
 // the hand kept several) and hold_ms (CPU time in hold_metrics(): every hull but the grasp tick's).
+#include "sim_bench.h"
 #include "telegrasp/sim/grasp_quality.h"
 #include "telegrasp/sim/hand_controller.h"
 #include "telegrasp/sim/scripted_operator.h"
@@ -28,7 +29,7 @@
 namespace telegrasp::sim {
 namespace {
 
-constexpr double kDt = 1.0 / 90.0;
+using bench::kDt;
 
 void BM_GraspQuality(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
@@ -104,7 +105,7 @@ void BM_Epsilon(benchmark::State& state) {
 BENCHMARK(BM_Epsilon)->Arg(3)->Arg(5)->Arg(10)->Arg(16)->Arg(20)->Unit(benchmark::kMicrosecond);
 
 void BM_GraspQualityHeld(benchmark::State& state, const std::string& object) {
-  static const auto rig = std::make_shared<const HandRig>(HandRig::load(HandRig::builtin_path("human_right")));
+  const auto rig = bench::right_rig();
   const ObjectModelPtr model = make_standin_model(*find_protocol_object(object));
   const Eigen::Isometry3d X_WorldObject = World::resting_pose(*model, 0.45, 0.0, 0.4);
   const GraspPlan plan = plan_grasp(rig, {}, *model, X_WorldObject, kDt);
@@ -140,7 +141,7 @@ double cpu_seconds() {
 }
 
 void BM_GraspQualityTrial(benchmark::State& state, const std::string& object) {
-  static const auto rig = std::make_shared<const HandRig>(HandRig::load(HandRig::builtin_path("human_right")));
+  const auto rig = bench::right_rig();
   const ObjectModelPtr model = make_standin_model(*find_protocol_object(object));
   int held = 0, distinct = 0, last_only = 0;
   std::uint64_t hulls = 0;

@@ -12,6 +12,7 @@
 // for (tests/bench/unseen_meshes.h: those YCB meshes under random rotations, and procedural
 // markers, spoons and airplanes). bench_main.cc prints each set's worst object per kind.
 #include "hand_tick_bench.h"
+#include "sim_bench.h"
 #include "telegrasp/sim/hand_controller.h"
 #include "telegrasp/sim/mesh_loading.h"
 #include "telegrasp/sim/scripted_operator.h"
@@ -32,13 +33,7 @@
 namespace telegrasp::sim {
 namespace {
 
-constexpr double kDt = 1.0 / 90.0;
-
-std::string objects_dir() {
-  // The YCB meshes beside the repository when run from its root, as the README does.
-  const char* env = std::getenv("TELEGRASP_OBJECTS_DIR");
-  return env ? env : "../shared/data/ycb";
-}
+using bench::kDt;
 
 struct Fixture {
   ObjectModelPtr model;
@@ -46,11 +41,6 @@ struct Fixture {
   GraspPlan plan;
   int grasp_tick = -1;  // index of the tick on which the squeeze grasps
 };
-
-std::shared_ptr<const HandRig> rig() {
-  static auto r = std::make_shared<const HandRig>(HandRig::load(HandRig::builtin_path("human_right")));
-  return r;
-}
 
 // The squeeze: the trigger ramps from 0 to 1 in 0.35 s with the hand still at the planned pose.
 ControllerInput squeeze(const GraspPlan& plan, int tick) {
@@ -73,8 +63,8 @@ const Fixture& fixture(const std::string& name, const ModelMaker& make_model) {
   Fixture f;
   f.model = make_model();
   f.X_WorldObject = World::resting_pose(*f.model, 0.45, 0.0, 0.4);
-  f.plan = plan_grasp(rig(), {}, *f.model, f.X_WorldObject, kDt);
-  HandController dry_run(rig(), {});
+  f.plan = plan_grasp(bench::right_rig(), {}, *f.model, f.X_WorldObject, kDt);
+  HandController dry_run(bench::right_rig(), {});
   const ObjectView view{ObjectId(0), f.X_WorldObject, f.model.get()};
   for (int t = 0; t < 90 && f.grasp_tick < 0; ++t)
     if (dry_run.tick(squeeze(f.plan, t), kDt, {&view, 1}).grasped) f.grasp_tick = t;
@@ -96,7 +86,7 @@ void BM_Closing(benchmark::State& state, const std::string& name, const ModelMak
   const Fixture& f = fixture(name, make_model);
   const ObjectView view{ObjectId(0), f.X_WorldObject, f.model.get()};
   for (auto _ : state) {
-    HandController hand(rig(), {});
+    HandController hand(bench::right_rig(), {});
     for (int t = 0; t < f.grasp_tick; ++t) hand.tick(squeeze(f.plan, t), kDt, {&view, 1});
     benchmark::DoNotOptimize(hand.state().q.data());
   }
@@ -111,7 +101,7 @@ void BM_Closing(benchmark::State& state, const std::string& name, const ModelMak
 void BM_GraspTick(benchmark::State& state, const std::string& name, const ModelMaker& make_model) {
   const Fixture& f = fixture(name, make_model);
   const ObjectView view{ObjectId(0), f.X_WorldObject, f.model.get()};
-  HandController before(rig(), {});
+  HandController before(bench::right_rig(), {});
   before.defer_grasp_metrics();
   for (int t = 0; t < f.grasp_tick; ++t) before.tick(squeeze(f.plan, t), kDt, {&view, 1});
   bool grasped = false;
@@ -148,7 +138,7 @@ void BM_GraspTick(benchmark::State& state, const std::string& name, const ModelM
 void BM_Holding(benchmark::State& state, const std::string& name, const ModelMaker& make_model) {
   const Fixture& f = fixture(name, make_model);
   const ObjectView view{ObjectId(0), f.X_WorldObject, f.model.get()};
-  HandController hand(rig(), {});
+  HandController hand(bench::right_rig(), {});
   for (int t = 0; t <= f.grasp_tick; ++t) hand.tick(squeeze(f.plan, t), kDt, {&view, 1});
   ControllerInput in = squeeze(f.plan, 1000);
   for (auto _ : state) {
@@ -179,12 +169,7 @@ ModelMaker generated(std::string name, std::function<TriangleMesh()> make_mesh) 
 // The "ycb" set: one object per mesh file (or per stand-in when the folder is missing); the
 // "unseen" set: each of those files under a random rotation, then the procedural meshes.
 const bool registered = [] {
-  std::vector<std::pair<std::string, std::string>> files;  // stem, path
-  std::error_code ec;
-  if (std::filesystem::is_directory(objects_dir(), ec)) {
-    for (const auto& e : std::filesystem::directory_iterator(objects_dir(), ec))
-      if (is_mesh_file(e.path().string())) files.emplace_back(e.path().stem().string(), e.path().string());
-  }
+  std::vector<std::pair<std::string, std::string>> files = bench::object_mesh_files();  // stem, path
   std::sort(files.begin(), files.end());
   if (files.empty())
     for (const auto& o : protocol_objects())

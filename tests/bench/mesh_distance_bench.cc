@@ -133,75 +133,67 @@ void BM_MeshDistance_build(benchmark::State& state) {
 }
 BENCHMARK(BM_MeshDistance_build)->Unit(benchmark::kMillisecond);
 
+// Runs `query` on each of `inputs` in turn, one per iteration; how many iterations ran.
+template <class T, class Query>
+std::size_t each_in_turn(benchmark::State& state, const std::vector<T>& inputs, Query query) {
+  std::size_t i = 0;
+  for (auto _ : state) query(inputs[i++ % inputs.size()]);
+  return i;
+}
+
+// The share of `iterations` that hit.
+double hit_ratio(std::size_t hits, std::size_t iterations) {
+  return static_cast<double>(hits) / static_cast<double>(std::max<std::size_t>(iterations, 1));
+}
+
 void BM_MeshDistance_closest_point(benchmark::State& state) {
   const MeshDistance& md = object();
-  const auto points = near_points();
-  std::size_t i = 0;
-  for (auto _ : state) {
-    benchmark::DoNotOptimize(md.closest_point(points[i++ % points.size()]));
-  }
+  each_in_turn(state, near_points(), [&](const auto& p) { benchmark::DoNotOptimize(md.closest_point(p)); });
 }
 BENCHMARK(BM_MeshDistance_closest_point);
 
 void BM_MeshDistance_closest_to_segment(benchmark::State& state) {
   const MeshDistance& md = object();
-  const auto segs = near_segments();
-  std::size_t i = 0;
-  for (auto _ : state) {
-    const auto& s = segs[i++ % segs.size()];
-    benchmark::DoNotOptimize(md.closest_to_segment(s.first, s.second));
-  }
+  each_in_turn(state, near_segments(),
+               [&](const auto& s) { benchmark::DoNotOptimize(md.closest_to_segment(s.first, s.second)); });
 }
 BENCHMARK(BM_MeshDistance_closest_to_segment);
 
 void BM_MeshDistance_capsule_overlaps(benchmark::State& state) {
   const MeshDistance& md = object();
-  const auto segs = near_segments();
-  std::size_t i = 0;
   std::size_t hits = 0;
-  for (auto _ : state) {
-    const auto& s = segs[i++ % segs.size()];
+  const std::size_t n = each_in_turn(state, near_segments(), [&](const auto& s) {
     const bool hit = md.capsule_overlaps(s.first, s.second, kCapsuleRadius);
     hits += hit;
     benchmark::DoNotOptimize(hit);
-  }
-  state.counters["overlap_ratio"] = static_cast<double>(hits) / static_cast<double>(std::max<std::size_t>(i, 1));
+  });
+  state.counters["overlap_ratio"] = hit_ratio(hits, n);
 }
 BENCHMARK(BM_MeshDistance_capsule_overlaps);
 
 void BM_MeshDistance_capsule_signed_distance(benchmark::State& state) {
   const MeshDistance& md = object();
-  const auto segs = near_segments();
-  std::size_t i = 0;
-  for (auto _ : state) {
-    const auto& s = segs[i++ % segs.size()];
+  each_in_turn(state, near_segments(), [&](const auto& s) {
     benchmark::DoNotOptimize(md.capsule_signed_distance(s.first, s.second, kCapsuleRadius));
-  }
+  });
 }
 BENCHMARK(BM_MeshDistance_capsule_signed_distance);
 
 void BM_MeshDistance_sphere_cast(benchmark::State& state) {
   const MeshDistance& md = object();
-  const auto rays = casts();
-  std::size_t i = 0;
   std::size_t hits = 0;
-  for (auto _ : state) {
-    const auto& r = rays[i++ % rays.size()];
+  const std::size_t n = each_in_turn(state, casts(), [&](const auto& r) {
     const SweepHit h = md.sphere_cast(r.first, r.second, kCapsuleRadius, 0.05);
     hits += h.hit;
     benchmark::DoNotOptimize(h);
-  }
-  state.counters["hit_ratio"] = static_cast<double>(hits) / static_cast<double>(std::max<std::size_t>(i, 1));
+  });
+  state.counters["hit_ratio"] = hit_ratio(hits, n);
 }
 BENCHMARK(BM_MeshDistance_sphere_cast);
 
 void BM_MeshDistance_contains(benchmark::State& state) {
   const MeshDistance& md = object();
-  const auto points = near_points();
-  std::size_t i = 0;
-  for (auto _ : state) {
-    benchmark::DoNotOptimize(md.contains(points[i++ % points.size()]));
-  }
+  each_in_turn(state, near_points(), [&](const auto& p) { benchmark::DoNotOptimize(md.contains(p)); });
 }
 BENCHMARK(BM_MeshDistance_contains);
 

@@ -4,6 +4,7 @@
 // error. BM_HandTick/<object>/pushing_unresolved: the same with GraspSettings::resolve_pose off
 // (the hand follows the controller in, as before the resolved pose). Objects as in hand_tick_bench.cc:
 // $TELEGRASP_OBJECTS_DIR (default ../shared/data/ycb), or the built-in stand-ins.
+#include "sim_bench.h"
 #include "telegrasp/sim/hand_controller.h"
 #include "telegrasp/sim/mesh_loading.h"
 #include "telegrasp/sim/scripted_operator.h"
@@ -20,18 +21,8 @@
 namespace telegrasp::sim {
 namespace {
 
-constexpr double kDt = 1.0 / 90.0;
+using bench::kDt;
 constexpr int kTicks = 90;  // one second of pushing, repeated
-
-std::string objects_dir() {
-  const char* env = std::getenv("TELEGRASP_OBJECTS_DIR");
-  return env ? env : "../shared/data/ycb";
-}
-
-std::shared_ptr<const HandRig> rig() {
-  static auto r = std::make_shared<const HandRig>(HandRig::load(HandRig::builtin_path("human_right")));
-  return r;
-}
 
 // The controller at tick t: the planned pose moved along the approach by up to 40 mm past it and
 // 10 mm short, wobbling 5 mm sideways.
@@ -50,11 +41,11 @@ void BM_Pushing(benchmark::State& state, const std::string& source, bool resolve
   const ObjectModelPtr model =
       std::filesystem::exists(source) ? load_protocol_object_model(source) : make_standin_model(*known);
   const Eigen::Isometry3d X_WorldObject = World::resting_pose(*model, 0.45, 0.0, 0.4);
-  const GraspPlan plan = plan_grasp(rig(), {}, *model, X_WorldObject, kDt);
+  const GraspPlan plan = plan_grasp(bench::right_rig(), {}, *model, X_WorldObject, kDt);
   const ObjectView view{ObjectId(0), X_WorldObject, model.get()};
   GraspSettings settings;
   settings.resolve_pose = resolve;
-  HandController hand(rig(), settings);
+  HandController hand(bench::right_rig(), settings);
   int t = 0;
   for (auto _ : state) {
     hand.tick(pushing(plan, t), kDt, {&view, 1});
@@ -68,12 +59,7 @@ void BM_Pushing(benchmark::State& state, const std::string& source, bool resolve
 }
 
 const bool registered = [] {
-  std::vector<std::pair<std::string, std::string>> objects;  // name, source
-  std::error_code ec;
-  if (std::filesystem::is_directory(objects_dir(), ec)) {
-    for (const auto& e : std::filesystem::directory_iterator(objects_dir(), ec))
-      if (is_mesh_file(e.path().string())) objects.emplace_back(e.path().stem().string(), e.path().string());
-  }
+  std::vector<std::pair<std::string, std::string>> objects = bench::object_mesh_files();  // name, source
   if (objects.empty())
     for (const auto& o : protocol_objects()) objects.emplace_back(o.name + "_standin", o.name);
   std::sort(objects.begin(), objects.end());
