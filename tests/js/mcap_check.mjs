@@ -11,10 +11,7 @@
 // Usage: node tests/js/mcap_check.mjs SAMPLE_DIR   (run by ctest as mcap.reference_reader)
 import fs from "node:fs";
 import path from "node:path";
-import { fileURLToPath } from "node:url";
-
-const here = path.dirname(fileURLToPath(import.meta.url));
-const installHint = "run deploy/install-deps.sh (it runs npm ci in tests/js)";
+import { McapIndexedReader, Opcode, crc32, decompressHandlers, readableOf, streamRecords } from "./mcap_common.mjs";
 
 let failures = 0;
 let passes = 0;
@@ -31,31 +28,9 @@ function fatal(what) {
   process.exit(1);
 }
 
-if (!fs.existsSync(path.join(here, "node_modules"))) {
-  fatal(`${path.join(here, "node_modules")} is missing: ${installHint}`);
-}
-let McapIndexedReader, McapStreamReader, Opcode, decompressZstd, crc32;
-try {
-  ({ McapIndexedReader, McapStreamReader, Opcode } = await import("@mcap/core"));
-  ({ decompress: decompressZstd } = await import("fzstd"));
-  ({ crc32 } = await import("@foxglove/crc"));
-} catch (error) {
-  fatal(`cannot load @mcap/core, fzstd or @foxglove/crc (${error.message}): ${installHint}`);
-}
-
 const dir = process.argv[2];
 if (!dir) fatal("usage: node mcap_check.mjs SAMPLE_DIR");
 const expected = JSON.parse(fs.readFileSync(path.join(dir, "sample.json"), "utf8"));
-
-const decompressHandlers = {
-  zstd: (buffer, size) => {
-    const out = decompressZstd(buffer, new Uint8Array(Number(size)));
-    if (out.byteLength !== Number(size)) {
-      throw new Error(`zstd chunk decompressed to ${out.byteLength} bytes, header says ${size}`);
-    }
-    return out;
-  },
-};
 
 // Per-topic tally of messages: count, first and last log time, sequences in order.
 class Tally {
@@ -99,16 +74,6 @@ class Tally {
     }
     check(this.byTopic.size === channels.filter((c) => c.count > 0).length, `${where}: topics ${[...this.byTopic.keys()]}`);
   }
-}
-
-function readableOf(bytes) {
-  return {
-    size: async () => BigInt(bytes.byteLength),
-    read: async (offset, length) => {
-      if (offset + length > BigInt(bytes.byteLength)) throw new Error(`read past the end at ${offset}+${length}`);
-      return bytes.subarray(Number(offset), Number(offset + length));
-    },
-  };
 }
 
 // Reads records the way the spec lays them out: opcode, uint64 length, content.
@@ -178,22 +143,6 @@ async function checkIndexed(bytes) {
   check(tally.total === expected.message_count, `${where}: ${tally.total} messages, expected ${expected.message_count}`);
   tally.expect(expected.channels, where);
   return tally.total;
-}
-
-// Feeds `bytes` to a stream reader 64 KiB at a time; returns the records and any error.
-function streamRecords(bytes) {
-  const reader = new McapStreamReader({ decompressHandlers, validateCrcs: true });
-  const records = [];
-  let error;
-  try {
-    for (let at = 0; at < bytes.byteLength; at += 65536) {
-      reader.append(bytes.subarray(at, Math.min(at + 65536, bytes.byteLength)));
-      for (let record; (record = reader.nextRecord()); ) records.push(record);
-    }
-  } catch (e) {
-    error = e;
-  }
-  return { records, error, done: reader.done() };
 }
 
 function checkStream(bytes) {

@@ -7,7 +7,7 @@ import { need } from "./view_common.mjs";
 const core = await need("@mcap/core");
 const { decompress: decompressZstd } = await need("fzstd");
 const { crc32 } = await need("@foxglove/crc");
-export const { McapIndexedReader, McapStreamReader } = core;
+export const { McapIndexedReader, McapStreamReader, Opcode } = core;
 export { crc32 };
 
 export const decompressHandlers = {
