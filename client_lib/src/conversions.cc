@@ -4,6 +4,10 @@
 #include "telegrasp/idl/geometry_hash.h"
 
 #include <cmath>
+#include <map>
+#include <string>
+#include <type_traits>
+#include <vector>
 
 namespace telegrasp::client_lib {
 
@@ -13,20 +17,259 @@ client::HandKey hand_key(const std::string& client_id, std::uint8_t side) {
   return client::HandKey{client_id, from_msg_side(side)};
 }
 
-template <class Out, class In>
-std::vector<Out> to_msgs(const std::vector<In>& in) {
-  std::vector<Out> out;
-  out.reserve(in.size());
-  for (const In& x : in) out.push_back(to_msg(x));
+template <class T>
+struct is_vector : std::false_type {};
+template <class T, class A>
+struct is_vector<std::vector<T, A>> : std::true_type {};
+
+// The wire value of the client value `c`: `c` itself where the types convert (numbers, strings
+// into bounded strings), to_msg where they do not (poses, vectors, enums), element by element for
+// sequences.
+template <class W, class C>
+W wire(const C& c) {
+  if constexpr (std::is_convertible_v<const C&, W>) {
+    return static_cast<W>(c);
+  } else if constexpr (is_vector<W>::value) {
+    W out;
+    out.reserve(c.size());
+    for (const auto& x : c) out.push_back(wire<typename W::value_type>(x));
+    return out;
+  } else {
+    return to_msg(c);
+  }
+}
+
+// The client value of the wire value `w`: the reverse of wire().
+template <class C, class W>
+C native(const W& w) {
+  if constexpr (requires { w.to_string(); }) {
+    return w.to_string();
+  } else if constexpr (std::is_convertible_v<const W&, C>) {
+    return static_cast<C>(w);
+  } else if constexpr (is_vector<C>::value) {
+    C out;
+    out.reserve(w.size());
+    for (const auto& x : w) out.push_back(native<typename C::value_type>(x));
+    return out;
+  } else {
+    return from_msg(w);
+  }
+}
+
+// Each message type below lists its fields once (`..._fields(copy, m, s)`); to_msg runs the list
+// with ToWire (wire field <- client field), from_msg with FromWire (client field <- wire field).
+struct ToWire {
+  template <class W, class C>
+  void operator()(W& w, const C& c) const {
+    w = wire<W>(c);
+  }
+};
+struct FromWire {
+  template <class W, class C>
+  void operator()(const W& w, C& c) const {
+    c = native<C>(w);
+  }
+};
+
+// A hand is two wire fields, client_id and hand_side.
+void copy_hand(ToWire, auto& m, const client::HandKey& h) {
+  m.client_id(h.client_id);
+  m.hand_side(to_msg_side(h.side));
+}
+void copy_hand(FromWire, const auto& m, client::HandKey& h) { h = hand_key(m.client_id().to_string(), m.hand_side()); }
+
+constexpr auto controller_fields = [](auto copy, auto& m, auto& s) {
+  copy(m.sequence_number(), s.sequence_number);
+  copy(m.client_time_ns(), s.client_time_ns);
+  copy(m.palm(), s.X_WorldPalm);
+  copy(m.trigger(), s.trigger);
+  copy(m.curls(), s.curls);
+  copy(m.buttons(), s.buttons);
+  copy(m.tracking_valid(), s.tracking_valid);
+  copy(m.lockstep_tick(), s.lockstep_tick);
+};
+
+constexpr auto skeleton_fields = [](auto copy, auto& m, auto& s) {
+  copy_hand(copy, m, s.hand);
+  copy(m.rig(), s.rig);
+  copy(m.tick(), s.tick);
+  copy(m.time(), s.time);
+  copy(m.input_sequence(), s.input_sequence);
+  copy(m.input_client_time_ns(), s.input_client_time_ns);
+  copy(m.late_latched(), s.late_latched);
+  copy(m.frozen(), s.frozen);
+  copy(m.palm(), s.X_WorldPalm);
+  copy(m.phalanges(), s.X_WorldPhalanx);
+  copy(m.joint_angles(), s.joint_angles);
+  copy(m.tracked_palm(), s.X_WorldTracked);
+  copy(m.resolve_offset(), s.resolve_offset);
+  copy(m.resolve_angle(), s.resolve_angle);
+};
+
+constexpr auto grasp_state_fields = [](auto copy, auto& m, auto& s) {
+  copy_hand(copy, m, s.hand);
+  copy(m.tick(), s.tick);
+  copy(m.time(), s.time);
+  copy(m.selected_object(), s.selected_object);
+  copy(m.grasped_object(), s.grasped_object);
+  copy(m.trigger(), s.trigger);
+  copy(m.blocked(), s.blocked);
+  copy(m.palm_contact(), s.palm_contact);
+  copy(m.epsilon(), s.epsilon);
+  copy(m.volume(), s.volume);
+  copy(m.force_closure(), s.force_closure);
+  copy(m.grasp_type(), s.grasp_type);
+};
+
+constexpr auto contact_fields = [](auto copy, auto& m, auto& c) {
+  copy(m.phalanx(), c.phalanx);
+  copy(m.p_world(), c.p_WorldContact);
+  copy(m.n_world(), c.n_World);
+  copy(m.p_object(), c.p_ObjectContact);
+  copy(m.n_object(), c.n_Object);
+  copy(m.nd(), c.nd);
+  copy(m.nd_hit(), c.nd_hit);
+};
+
+constexpr auto contact_set_fields = [](auto copy, auto& m, auto& s) {
+  copy_hand(copy, m, s.hand);
+  copy(m.tick(), s.tick);
+  copy(m.time(), s.time);
+  copy(m.object_id(), s.object_id);
+  copy(m.object_pose(), s.X_WorldObject);
+  copy(m.contacts(), s.contacts);
+};
+
+constexpr auto capsule_fields = [](auto copy, auto& m, auto& r) {
+  copy(m.phalanx(), r.phalanx);
+  copy(m.phalanx_name(), r.phalanx_name);
+  copy(m.hit(), r.hit);
+  copy(m.nd(), r.nd);
+  copy(m.signed_distance(), r.signed_distance);
+  copy(m.blocked(), r.blocked);
+  copy(m.contact_hit(), r.contact_hit);
+  copy(m.nd_contact(), r.nd_contact);
+};
+
+constexpr auto grasp_event_fields = [](auto copy, auto& m, auto& e) {
+  copy(m.event_id(), e.event_id);
+  copy(m.kind(), e.kind);
+  copy_hand(copy, m, e.hand);
+  copy(m.object_id(), e.object_id);
+  copy(m.object_name(), e.object_name);
+  copy(m.tick(), e.tick);
+  copy(m.time(), e.time);
+  copy(m.object_spawn_time(), e.object_spawn_time);
+  copy(m.object_pose(), e.X_WorldObject);
+  copy(m.input_sequence(), e.input_sequence);
+  copy(m.hand_error_mm(), e.hand_error_mm);
+  copy(m.capsules_without_hit(), e.capsules_without_hit);
+  copy(m.capsules(), e.capsules);
+  copy(m.contacts(), e.contacts);
+  copy(m.palm_signed_distance(), e.palm_signed_distance);
+  copy(m.epsilon(), e.epsilon);
+  copy(m.volume(), e.volume);
+  copy(m.force_closure(), e.force_closure);
+  copy(m.release_velocity(), e.v_WorldObject);
+  copy(m.release_angular_velocity(), e.w_WorldObject);
+  copy(m.grasp_type(), e.grasp_type);
+};
+
+constexpr auto object_fields = [](auto copy, auto& m, auto& o) {
+  copy(m.id(), o.id);
+  copy(m.name(), o.name);
+  copy(m.pose(), o.X_WorldObject);
+  copy(m.linear_velocity(), o.v_WorldObject);
+  copy(m.held(), o.held);
+  copy(m.spawn_time(), o.spawn_time);
+};
+
+constexpr auto scene_fields = [](auto copy, auto& m, auto& s) {
+  copy(m.tick(), s.tick);
+  copy(m.time(), s.time);
+  copy(m.objects(), s.objects);
+  copy(m.incarnation(), s.incarnation);
+};
+
+constexpr auto command_fields = [](auto copy, auto& m, auto& c) {
+  copy(m.kind(), c.kind);
+  copy(m.model(), c.model);
+  copy(m.object_id(), c.object_id);
+  copy(m.on_table(), c.on_table);
+  copy(m.x(), c.x);
+  copy(m.y(), c.y);
+  copy(m.yaw(), c.yaw);
+  copy(m.pose(), c.X_WorldObject);
+};
+
+constexpr auto status_fields = [](auto copy, auto& m, auto& s) {
+  copy(m.tick(), s.tick);
+  copy(m.time(), s.time);
+  copy(m.tick_rate_hz(), s.tick_rate_hz);
+  copy(m.clients(), s.clients);
+  copy(m.hands(), s.hands);
+  copy(m.objects(), s.objects);
+  copy(m.tick_us_p50(), s.tick_us_p50);
+  copy(m.tick_us_max(), s.tick_us_max);
+  copy(m.tick_us_p99(), s.tick_us_p99);
+  copy(m.rss_kib(), s.rss_kib);
+  copy(m.heap_kib(), s.heap_kib);
+  copy(m.quality_late(), s.quality_late);
+  copy(m.missed_ticks(), s.missed_ticks);
+  copy(m.inputs_accepted(), s.inputs_accepted);
+  copy(m.inputs_rejected(), s.inputs_rejected);
+  copy(m.commands_accepted(), s.commands_accepted);
+  copy(m.commands_rejected(), s.commands_rejected);
+  copy(m.models(), s.models);
+  copy(m.notices_sent(), s.notices_sent);
+  copy(m.incarnation(), s.incarnation);
+};
+
+constexpr auto geometry_fields = [](auto copy, auto& m, auto& g) {
+  copy(m.model(), g.model);
+  copy(m.content_hash(), g.content_hash);
+  copy(m.vertex_count(), g.vertex_count);
+  copy(m.triangle_count(), g.triangle_count);
+  copy(m.mesh_omitted(), g.mesh_omitted);
+  copy(m.p_min(), g.p_ObjectMin);
+  copy(m.p_max(), g.p_ObjectMax);
+  copy(m.mass(), g.mass_kg);
+  copy(m.volume(), g.volume_m3);
+  copy(m.inertia_diagonal(), g.inertia_diagonal);
+  copy(m.p_source_origin(), g.p_ObjectSourceOrigin);
+};
+
+// Counts per reason as ServerStatus carries them (rejected, commands_rejected_by_reason).
+std::vector<msg::RejectCount> reject_counts(const std::map<std::string, std::uint64_t>& by_reason) {
+  std::vector<msg::RejectCount> out;
+  for (const auto& [reason, count] : by_reason) {
+    msg::RejectCount r;
+    r.reason(reason);
+    r.count(count);
+    out.push_back(r);
+  }
   return out;
 }
 
-template <class Out, class In>
-std::vector<Out> from_msgs(const std::vector<In>& in) {
-  std::vector<Out> out;
-  out.reserve(in.size());
-  for (const In& x : in) out.push_back(from_msg(x));
+// The reverse; a reason sent twice (not by our server) adds up rather than losing a count.
+std::map<std::string, std::uint64_t> reject_counts(const std::vector<msg::RejectCount>& counts) {
+  std::map<std::string, std::uint64_t> out;
+  for (const msg::RejectCount& r : counts) out[r.reason().to_string()] += r.count();
   return out;
+}
+
+// A message made from client value `s` with `fields`, and the reverse.
+template <class M, class S, class Fields>
+M to_wire(const S& s, Fields fields) {
+  M m;
+  fields(ToWire{}, m, s);
+  return m;
+}
+template <class S, class M, class Fields>
+S from_wire(const M& m, Fields fields) {
+  S s;
+  fields(FromWire{}, m, s);
+  return s;
 }
 
 }  // namespace
@@ -41,179 +284,35 @@ std::uint8_t to_msg_side(client::HandSide side) { return static_cast<std::uint8_
 client::HandSide from_msg_side(std::uint8_t side) { return static_cast<client::HandSide>(side); }
 
 msg::ControllerState to_msg(const client::ControllerSample& sample, const std::string& client_id) {
-  msg::ControllerState m;
+  msg::ControllerState m = to_wire<msg::ControllerState>(sample, controller_fields);
   m.client_id(client_id);
   m.hand_side(to_msg_side(sample.side));
-  m.sequence_number(sample.sequence_number);
-  m.client_time_ns(sample.client_time_ns);
-  m.palm(to_msg(sample.X_WorldPalm));
-  m.trigger(sample.trigger);
-  m.curls(sample.curls);
-  m.buttons(sample.buttons);
-  m.tracking_valid(sample.tracking_valid);
-  m.lockstep_tick(sample.lockstep_tick);
   return m;
 }
 
 client::ControllerSample from_msg(const msg::ControllerState& m) {
-  client::ControllerSample s;
+  client::ControllerSample s = from_wire<client::ControllerSample>(m, controller_fields);
   s.side = from_msg_side(m.hand_side());
-  s.X_WorldPalm = from_msg(m.palm());
-  s.trigger = m.trigger();
-  s.curls = m.curls();
-  s.buttons = m.buttons();
-  s.tracking_valid = m.tracking_valid();
-  s.sequence_number = m.sequence_number();
-  s.client_time_ns = m.client_time_ns();
-  s.lockstep_tick = m.lockstep_tick();
   return s;
 }
 
-msg::HandSkeleton to_msg(const client::HandSkeleton& s) {
-  msg::HandSkeleton m;
-  m.client_id(s.hand.client_id);
-  m.hand_side(to_msg_side(s.hand.side));
-  m.rig(s.rig);
-  m.tick(s.tick);
-  m.time(s.time);
-  m.input_sequence(s.input_sequence);
-  m.input_client_time_ns(s.input_client_time_ns);
-  m.late_latched(s.late_latched);
-  m.frozen(s.frozen);
-  m.palm(to_msg(s.X_WorldPalm));
-  m.phalanges(to_msgs<msg::Pose3>(s.X_WorldPhalanx));
-  m.joint_angles(s.joint_angles);
-  m.tracked_palm(to_msg(s.X_WorldTracked));
-  m.resolve_offset(to_msg(s.resolve_offset));
-  m.resolve_angle(s.resolve_angle);
-  return m;
-}
-
+msg::HandSkeleton to_msg(const client::HandSkeleton& s) { return to_wire<msg::HandSkeleton>(s, skeleton_fields); }
 client::HandSkeleton from_msg(const msg::HandSkeleton& m) {
-  client::HandSkeleton s;
-  s.hand = hand_key(m.client_id().to_string(), m.hand_side());
-  s.rig = m.rig().to_string();
-  s.tick = m.tick();
-  s.time = m.time();
-  s.input_sequence = m.input_sequence();
-  s.input_client_time_ns = m.input_client_time_ns();
-  s.late_latched = m.late_latched();
-  s.frozen = m.frozen();
-  s.X_WorldPalm = from_msg(m.palm());
-  s.X_WorldPhalanx = from_msgs<Eigen::Isometry3d>(m.phalanges());
-  s.joint_angles = m.joint_angles();
-  s.X_WorldTracked = from_msg(m.tracked_palm());
-  s.resolve_offset = from_msg(m.resolve_offset());
-  s.resolve_angle = m.resolve_angle();
-  return s;
+  return from_wire<client::HandSkeleton>(m, skeleton_fields);
 }
 
-msg::GraspState to_msg(const client::GraspState& s) {
-  msg::GraspState m;
-  m.client_id(s.hand.client_id);
-  m.hand_side(to_msg_side(s.hand.side));
-  m.tick(s.tick);
-  m.time(s.time);
-  m.selected_object(s.selected_object);
-  m.grasped_object(s.grasped_object);
-  m.trigger(s.trigger);
-  m.blocked(s.blocked);
-  m.palm_contact(s.palm_contact);
-  m.epsilon(s.epsilon);
-  m.volume(s.volume);
-  m.force_closure(s.force_closure);
-  m.grasp_type(s.grasp_type);
-  return m;
-}
+msg::GraspState to_msg(const client::GraspState& s) { return to_wire<msg::GraspState>(s, grasp_state_fields); }
+client::GraspState from_msg(const msg::GraspState& m) { return from_wire<client::GraspState>(m, grasp_state_fields); }
 
-client::GraspState from_msg(const msg::GraspState& m) {
-  client::GraspState s;
-  s.hand = hand_key(m.client_id().to_string(), m.hand_side());
-  s.tick = m.tick();
-  s.time = m.time();
-  s.selected_object = m.selected_object();
-  s.grasped_object = m.grasped_object();
-  s.trigger = m.trigger();
-  s.blocked = m.blocked();
-  s.palm_contact = m.palm_contact();
-  s.epsilon = m.epsilon();
-  s.volume = m.volume();
-  s.force_closure = m.force_closure();
-  s.grasp_type = m.grasp_type().to_string();
-  return s;
-}
+msg::ContactPoint to_msg(const client::ContactPoint& c) { return to_wire<msg::ContactPoint>(c, contact_fields); }
+client::ContactPoint from_msg(const msg::ContactPoint& m) { return from_wire<client::ContactPoint>(m, contact_fields); }
 
-msg::ContactPoint to_msg(const client::ContactPoint& c) {
-  msg::ContactPoint m;
-  m.phalanx(static_cast<std::int16_t>(c.phalanx));
-  m.p_world(to_msg(c.p_WorldContact));
-  m.n_world(to_msg(c.n_World));
-  m.p_object(to_msg(c.p_ObjectContact));
-  m.n_object(to_msg(c.n_Object));
-  m.nd(c.nd);
-  m.nd_hit(c.nd_hit);
-  return m;
-}
+msg::ContactSet to_msg(const client::ContactSet& s) { return to_wire<msg::ContactSet>(s, contact_set_fields); }
+client::ContactSet from_msg(const msg::ContactSet& m) { return from_wire<client::ContactSet>(m, contact_set_fields); }
 
-client::ContactPoint from_msg(const msg::ContactPoint& m) {
-  client::ContactPoint c;
-  c.phalanx = m.phalanx();
-  c.p_WorldContact = from_msg(m.p_world());
-  c.n_World = from_msg(m.n_world());
-  c.p_ObjectContact = from_msg(m.p_object());
-  c.n_Object = from_msg(m.n_object());
-  c.nd = m.nd();
-  c.nd_hit = m.nd_hit();
-  return c;
-}
-
-msg::ContactSet to_msg(const client::ContactSet& s) {
-  msg::ContactSet m;
-  m.client_id(s.hand.client_id);
-  m.hand_side(to_msg_side(s.hand.side));
-  m.tick(s.tick);
-  m.time(s.time);
-  m.object_id(s.object_id);
-  m.object_pose(to_msg(s.X_WorldObject));
-  m.contacts(to_msgs<msg::ContactPoint>(s.contacts));
-  return m;
-}
-
-client::ContactSet from_msg(const msg::ContactSet& m) {
-  client::ContactSet s;
-  s.hand = hand_key(m.client_id().to_string(), m.hand_side());
-  s.tick = m.tick();
-  s.time = m.time();
-  s.object_id = m.object_id();
-  s.X_WorldObject = from_msg(m.object_pose());
-  s.contacts = from_msgs<client::ContactPoint>(m.contacts());
-  return s;
-}
-
-msg::CapsuleReport to_msg(const client::CapsuleMetric& r) {
-  msg::CapsuleReport m;
-  m.phalanx(static_cast<std::int16_t>(r.phalanx));
-  m.phalanx_name(r.phalanx_name);
-  m.hit(r.hit);
-  m.nd(r.nd);
-  m.signed_distance(r.signed_distance);
-  m.blocked(r.blocked);
-  m.contact_hit(r.contact_hit);
-  m.nd_contact(r.nd_contact);
-  return m;
-}
-
+msg::CapsuleReport to_msg(const client::CapsuleMetric& r) { return to_wire<msg::CapsuleReport>(r, capsule_fields); }
 client::CapsuleMetric from_msg(const msg::CapsuleReport& m) {
-  client::CapsuleMetric r;
-  r.phalanx = m.phalanx();
-  r.phalanx_name = m.phalanx_name().to_string();
-  r.hit = m.hit();
-  r.nd = m.nd();
-  r.signed_distance = m.signed_distance();
-  r.blocked = m.blocked();
-  r.contact_hit = m.contact_hit();
-  r.nd_contact = m.nd_contact();
-  return r;
+  return from_wire<client::CapsuleMetric>(m, capsule_fields);
 }
 
 msg::GraspEventKind to_msg(client::GraspEvent::Kind kind) {
@@ -236,109 +335,30 @@ client::GraspEvent::Kind from_msg(msg::GraspEventKind kind) {
   return static_cast<client::GraspEvent::Kind>(kind);  // not a kind: kept unchanged
 }
 
-msg::GraspEvent to_msg(const client::GraspEvent& e) {
-  msg::GraspEvent m;
-  m.event_id(e.event_id);
-  m.kind(to_msg(e.kind));
-  m.client_id(e.hand.client_id);
-  m.hand_side(to_msg_side(e.hand.side));
-  m.object_id(e.object_id);
-  m.object_name(e.object_name);
-  m.tick(e.tick);
-  m.time(e.time);
-  m.object_spawn_time(e.object_spawn_time);
-  m.object_pose(to_msg(e.X_WorldObject));
-  m.input_sequence(e.input_sequence);
-  m.hand_error_mm(e.hand_error_mm);
-  m.capsules_without_hit(e.capsules_without_hit);
-  m.capsules(to_msgs<msg::CapsuleReport>(e.capsules));
-  m.contacts(to_msgs<msg::ContactPoint>(e.contacts));
-  m.palm_signed_distance(e.palm_signed_distance);
-  m.epsilon(e.epsilon);
-  m.volume(e.volume);
-  m.force_closure(e.force_closure);
-  m.release_velocity(to_msg(e.v_WorldObject));
-  m.release_angular_velocity(to_msg(e.w_WorldObject));
-  m.grasp_type(e.grasp_type);
-  return m;
-}
-
-client::GraspEvent from_msg(const msg::GraspEvent& m) {
-  client::GraspEvent e;
-  e.event_id = m.event_id();
-  e.kind = from_msg(m.kind());
-  e.hand = hand_key(m.client_id().to_string(), m.hand_side());
-  e.object_id = m.object_id();
-  e.object_name = m.object_name().to_string();
-  e.tick = m.tick();
-  e.time = m.time();
-  e.object_spawn_time = m.object_spawn_time();
-  e.X_WorldObject = from_msg(m.object_pose());
-  e.input_sequence = m.input_sequence();
-  e.hand_error_mm = m.hand_error_mm();
-  e.capsules_without_hit = m.capsules_without_hit();
-  e.capsules = from_msgs<client::CapsuleMetric>(m.capsules());
-  e.contacts = from_msgs<client::ContactPoint>(m.contacts());
-  e.palm_signed_distance = m.palm_signed_distance();
-  e.epsilon = m.epsilon();
-  e.volume = m.volume();
-  e.force_closure = m.force_closure();
-  e.v_WorldObject = from_msg(m.release_velocity());
-  e.w_WorldObject = from_msg(m.release_angular_velocity());
-  e.grasp_type = m.grasp_type().to_string();
-  return e;
-}
+msg::GraspEvent to_msg(const client::GraspEvent& e) { return to_wire<msg::GraspEvent>(e, grasp_event_fields); }
+client::GraspEvent from_msg(const msg::GraspEvent& m) { return from_wire<client::GraspEvent>(m, grasp_event_fields); }
 
 msg::ObjectState to_msg(const client::ObjectState& o) {
-  msg::ObjectState m;
-  m.id(o.id);
-  m.name(o.name);
-  m.pose(to_msg(o.X_WorldObject));
-  m.linear_velocity(to_msg(o.v_WorldObject));
-  m.held(o.held);
+  msg::ObjectState m = to_wire<msg::ObjectState>(o, object_fields);
   m.holder_client(o.holder.client_id);
   m.holder_hand(to_msg_side(o.holder.side));
-  m.spawn_time(o.spawn_time);
   for (const client::HandKey& h : o.holders) {
     msg::ObjectHolder holder;
-    holder.client_id(h.client_id);
-    holder.hand_side(to_msg_side(h.side));
+    copy_hand(ToWire{}, holder, h);
     m.holders().push_back(std::move(holder));
   }
   return m;
 }
 
 client::ObjectState from_msg(const msg::ObjectState& m) {
-  client::ObjectState o;
-  o.id = m.id();
-  o.name = m.name().to_string();
-  o.X_WorldObject = from_msg(m.pose());
-  o.v_WorldObject = from_msg(m.linear_velocity());
-  o.held = m.held();
+  client::ObjectState o = from_wire<client::ObjectState>(m, object_fields);
   o.holder = hand_key(m.holder_client().to_string(), m.holder_hand());
-  o.spawn_time = m.spawn_time();
-  for (const msg::ObjectHolder& h : m.holders())
-    o.holders.push_back(hand_key(h.client_id().to_string(), h.hand_side()));
+  for (const msg::ObjectHolder& h : m.holders()) copy_hand(FromWire{}, h, o.holders.emplace_back());
   return o;
 }
 
-msg::SceneState to_msg(const client::SceneState& s) {
-  msg::SceneState m;
-  m.tick(s.tick);
-  m.time(s.time);
-  m.objects(to_msgs<msg::ObjectState>(s.objects));
-  m.incarnation(s.incarnation);
-  return m;
-}
-
-client::SceneState from_msg(const msg::SceneState& m) {
-  client::SceneState s;
-  s.tick = m.tick();
-  s.time = m.time();
-  s.objects = from_msgs<client::ObjectState>(m.objects());
-  s.incarnation = m.incarnation();
-  return s;
-}
+msg::SceneState to_msg(const client::SceneState& s) { return to_wire<msg::SceneState>(s, scene_fields); }
+client::SceneState from_msg(const msg::SceneState& m) { return from_wire<client::SceneState>(m, scene_fields); }
 
 msg::SceneCommandKind to_msg(client::SceneCommand::Kind kind) {
   switch (kind) {
@@ -365,103 +385,25 @@ client::SceneCommand::Kind from_msg(msg::SceneCommandKind kind) {
 }
 
 msg::SceneCommand to_msg(const client::SceneCommand& c, const std::string& client_id, std::uint64_t command_id) {
-  msg::SceneCommand m;
+  msg::SceneCommand m = to_wire<msg::SceneCommand>(c, command_fields);
   m.client_id(client_id);
   m.command_id(command_id);
-  m.kind(to_msg(c.kind));
-  m.model(c.model);
-  m.object_id(c.object_id);
-  m.on_table(c.on_table);
-  m.x(c.x);
-  m.y(c.y);
-  m.yaw(c.yaw);
-  m.pose(to_msg(c.X_WorldObject));
   return m;
 }
 
-client::SceneCommand from_msg(const msg::SceneCommand& m) {
-  client::SceneCommand c;
-  c.kind = from_msg(m.kind());
-  c.model = m.model().to_string();
-  c.object_id = m.object_id();
-  c.on_table = m.on_table();
-  c.x = m.x();
-  c.y = m.y();
-  c.yaw = m.yaw();
-  c.X_WorldObject = from_msg(m.pose());
-  return c;
-}
-
-namespace {
-
-// Counts per reason as ServerStatus carries them (rejected, commands_rejected_by_reason).
-std::vector<msg::RejectCount> reject_counts(const std::map<std::string, std::uint64_t>& by_reason) {
-  std::vector<msg::RejectCount> out;
-  for (const auto& [reason, count] : by_reason) {
-    msg::RejectCount r;
-    r.reason(reason);
-    r.count(count);
-    out.push_back(r);
-  }
-  return out;
-}
-
-}  // namespace
+client::SceneCommand from_msg(const msg::SceneCommand& m) { return from_wire<client::SceneCommand>(m, command_fields); }
 
 msg::ServerStatus to_msg(const client::ServerStatus& s) {
-  msg::ServerStatus m;
-  m.tick(s.tick);
-  m.time(s.time);
-  m.tick_rate_hz(s.tick_rate_hz);
-  m.clients(s.clients);
-  m.hands(s.hands);
-  m.objects(s.objects);
-  m.tick_us_p50(s.tick_us_p50);
-  m.tick_us_max(s.tick_us_max);
-  m.tick_us_p99(s.tick_us_p99);
-  m.rss_kib(s.rss_kib);
-  m.heap_kib(s.heap_kib);
-  m.quality_late(s.quality_late);
-  m.missed_ticks(s.missed_ticks);
-  m.inputs_accepted(s.inputs_accepted);
-  m.inputs_rejected(s.inputs_rejected);
+  msg::ServerStatus m = to_wire<msg::ServerStatus>(s, status_fields);
   m.rejected(reject_counts(s.rejected));
-  m.commands_accepted(s.commands_accepted);
-  m.commands_rejected(s.commands_rejected);
-  for (const std::string& model : s.models) m.models().emplace_back(model);
   m.commands_rejected_by_reason(reject_counts(s.commands_rejected_by_reason));
-  m.notices_sent(s.notices_sent);
-  m.incarnation(s.incarnation);
   return m;
 }
 
 client::ServerStatus from_msg(const msg::ServerStatus& m) {
-  client::ServerStatus s;
-  s.tick = m.tick();
-  s.time = m.time();
-  s.tick_rate_hz = m.tick_rate_hz();
-  s.clients = m.clients();
-  s.hands = m.hands();
-  s.objects = m.objects();
-  s.tick_us_p50 = m.tick_us_p50();
-  s.tick_us_max = m.tick_us_max();
-  s.tick_us_p99 = m.tick_us_p99();
-  s.rss_kib = m.rss_kib();
-  s.heap_kib = m.heap_kib();
-  s.quality_late = m.quality_late();
-  s.missed_ticks = m.missed_ticks();
-  s.inputs_accepted = m.inputs_accepted();
-  s.inputs_rejected = m.inputs_rejected();
-  // A reason sent twice (not by our server) adds up rather than losing a count.
-  for (const msg::RejectCount& r : m.rejected()) s.rejected[r.reason().to_string()] += r.count();
-  s.commands_accepted = m.commands_accepted();
-  s.commands_rejected = m.commands_rejected();
-  s.models.reserve(m.models().size());
-  for (const auto& model : m.models()) s.models.push_back(model.to_string());
-  for (const msg::RejectCount& r : m.commands_rejected_by_reason())
-    s.commands_rejected_by_reason[r.reason().to_string()] += r.count();
-  s.notices_sent = m.notices_sent();
-  s.incarnation = m.incarnation();
+  client::ServerStatus s = from_wire<client::ServerStatus>(m, status_fields);
+  s.rejected = reject_counts(m.rejected());
+  s.commands_rejected_by_reason = reject_counts(m.commands_rejected_by_reason());
   return s;
 }
 
@@ -499,39 +441,16 @@ client::SceneInfo from_msg(const msg::SceneAnnouncement& m) {
 }
 
 msg::ObjectGeometry to_msg(const client::ObjectGeometry& g) {
-  msg::ObjectGeometry m;
-  m.model(g.model);
-  m.content_hash(g.content_hash);
-  m.vertex_count(g.vertex_count);
-  m.triangle_count(g.triangle_count);
-  m.mesh_omitted(g.mesh_omitted);
+  msg::ObjectGeometry m = to_wire<msg::ObjectGeometry>(g, geometry_fields);
   m.vertices().reserve(3 * g.vertices.size());
   for (const Eigen::Vector3f& v : g.vertices) m.vertices().insert(m.vertices().end(), {v.x(), v.y(), v.z()});
   m.triangles().reserve(3 * g.triangles.size());
   for (const auto& t : g.triangles) m.triangles().insert(m.triangles().end(), t.begin(), t.end());
-  m.p_min(to_msg(g.p_ObjectMin));
-  m.p_max(to_msg(g.p_ObjectMax));
-  m.mass(g.mass_kg);
-  m.volume(g.volume_m3);
-  m.inertia_diagonal(to_msg(g.inertia_diagonal));
-  m.p_source_origin(to_msg(g.p_ObjectSourceOrigin));
   return m;
 }
 
 client::ObjectGeometry from_msg_without_mesh(const msg::ObjectGeometry& m) {
-  client::ObjectGeometry g;
-  g.model = m.model().to_string();
-  g.content_hash = m.content_hash();
-  g.vertex_count = m.vertex_count();
-  g.triangle_count = m.triangle_count();
-  g.mesh_omitted = m.mesh_omitted();
-  g.p_ObjectMin = from_msg(m.p_min());
-  g.p_ObjectMax = from_msg(m.p_max());
-  g.mass_kg = m.mass();
-  g.volume_m3 = m.volume();
-  g.inertia_diagonal = from_msg(m.inertia_diagonal());
-  g.p_ObjectSourceOrigin = from_msg(m.p_source_origin());
-  return g;
+  return from_wire<client::ObjectGeometry>(m, geometry_fields);
 }
 
 client::ObjectGeometry from_msg(const msg::ObjectGeometry& m) {
