@@ -98,33 +98,17 @@ Options parse(int argc, char** argv) {
 
 constexpr double kDt = 1.0 / 90.0;
 
-}  // namespace
-
-int telegrasp::eval::run_nd_bound(int argc, char** argv) {
-  using namespace telegrasp::eval;
-  const Options opt = parse(argc, argv);
-  std::shared_ptr<const HandRig> rig;
-  std::vector<ObjectModelPtr> models;
-  try {
-    EvalInputs in = load_eval_inputs(opt.rig_path, opt.objects_dir);
-    rig = std::move(in.rig);
-    models = std::move(in.models);
-  } catch (const std::exception& e) {
-    std::cerr << kTool << ": " << e.what() << "\n";
-    return telegrasp::cli::kExitFailure;
-  }
-  std::ofstream json_out;
-  if (const std::string error = prepare_outputs(opt.json_path, json_out, opt.svg_dir); !error.empty()) {
-    std::cerr << kTool << ": " << error << "\n";
-    return telegrasp::cli::kExitFailure;
-  }
-
+// Searches every object, on --jobs workers, showing a progress line. `poses` gets each object's
+// resting pose, the pose its search is made in.
+std::vector<NdSearchResult> search_all(const Options& opt, const std::shared_ptr<const HandRig>& rig,
+                                       const std::vector<ObjectModelPtr>& models,
+                                       std::vector<Eigen::Isometry3d>& poses) {
   NdSearchSettings search;
   search.random_poses = opt.poses;
   search.refinements = opt.refine;
   search.min_hits = opt.min_hits;
   std::vector<NdSearchResult> kept(models.size());
-  std::vector<Eigen::Isometry3d> poses(models.size());
+  poses.assign(models.size(), Eigen::Isometry3d::Identity());
   std::atomic<std::size_t> next{0}, finished{0};
   std::mutex log_mutex;
   telegrasp::tools::ProgressLine progress;
@@ -148,6 +132,65 @@ int telegrasp::eval::run_nd_bound(int argc, char** argv) {
   std::vector<std::thread> pool;
   for (int i = 0; i < opt.threads; ++i) pool.emplace_back(worker);
   for (auto& t : pool) t.join();
+  return kept;
+}
+
+// One object's row of the table, its JSON and (--svg) its picture; its |ND| values join `pooled`.
+json report_object(const Options& opt, const HandRig& rig, const ObjectModelPtr& model, const Eigen::Isometry3d& pose,
+                   const NdSearchResult& k, std::vector<double>& pooled) {
+  json o = {{"object", model->name}, {"poses_tried", k.poses_tried}, {"clean_grasps", k.clean_grasps}};
+  if (!k.best) {
+    std::printf("%-28s %7d %7d %9s\n", model->name.c_str(), k.poses_tried, k.clean_grasps, "no clean grasp");
+    o["kept"] = nullptr;
+    return o;
+  }
+  std::vector<double> v;
+  for (const CapsuleMetric& c : k.best->metrics.capsules)
+    if (c.hit) v.push_back(1000.0 * std::abs(c.nd));
+  pooled.insert(pooled.end(), v.begin(), v.end());
+  std::printf("%-28s %7d %7d %9s %9s %9s %5zu %8d\n", model->name.c_str(), k.poses_tried, k.clean_grasps,
+              fmt(k.nd_mean_mm, 3).c_str(), fmt(percentile(v, 0.5), 3).c_str(), fmt(percentile(v, 1.0), 3).c_str(),
+              v.size(), k.best->blocked);
+  const Eigen::Isometry3d X_ObjectPalm = pose.inverse() * k.best->hand.state().X_WorldPalm;
+  const Eigen::Quaterniond q(X_ObjectPalm.linear());
+  o["kept"] = {{"nd_mean_mm", k.nd_mean_mm},
+               {"hand_error_mm", k.best->metrics.hand_error_mm},
+               {"blocked", k.best->blocked},
+               {"capsules", capsule_json(capsule_records(k.best->metrics, rig))},
+               {"p_object_palm",
+                {X_ObjectPalm.translation().x(), X_ObjectPalm.translation().y(), X_ObjectPalm.translation().z()}},
+               {"q_object_palm_wxyz", {q.w(), q.x(), q.y(), q.z()}}};
+  if (!opt.svg_dir.empty()) {
+    const ObjectView view{ObjectId(0), pose, model.get()};
+    const std::string title = model->name + ", nd-bound (oracle pose): mean |ND| " + fmt(k.nd_mean_mm, 2) + " mm";
+    std::ofstream(opt.svg_dir + "/" + model->name + "_nd_bound.svg") << render_svg(snapshot(k.best->hand, view, title));
+  }
+  return o;
+}
+
+}  // namespace
+
+int telegrasp::eval::run_nd_bound(int argc, char** argv) {
+  using namespace telegrasp::eval;
+  const Options opt = parse(argc, argv);
+  std::shared_ptr<const HandRig> rig;
+  std::vector<ObjectModelPtr> models;
+  try {
+    EvalInputs in = load_eval_inputs(opt.rig_path, opt.objects_dir);
+    rig = std::move(in.rig);
+    models = std::move(in.models);
+  } catch (const std::exception& e) {
+    std::cerr << kTool << ": " << e.what() << "\n";
+    return telegrasp::cli::kExitFailure;
+  }
+  std::ofstream json_out;
+  if (const std::string error = prepare_outputs(opt.json_path, json_out, opt.svg_dir); !error.empty()) {
+    std::cerr << kTool << ": " << error << "\n";
+    return telegrasp::cli::kExitFailure;
+  }
+
+  std::vector<Eigen::Isometry3d> poses;
+  const std::vector<NdSearchResult> kept = search_all(opt, rig, models, poses);
 
   std::printf("\n== nd-bound: rig %s, %d random poses + %d refinements per object, >= %d hits ==\n",
               rig->name().c_str(), opt.poses, opt.refine, opt.min_hits);
@@ -155,39 +198,8 @@ int telegrasp::eval::run_nd_bound(int argc, char** argv) {
               "hits", "blocked");
   json objects = json::array();
   std::vector<double> pooled;
-  for (std::size_t j = 0; j < models.size(); ++j) {
-    const NdSearchResult& k = kept[j];
-    json o = {{"object", models[j]->name}, {"poses_tried", k.poses_tried}, {"clean_grasps", k.clean_grasps}};
-    if (!k.best) {
-      std::printf("%-28s %7d %7d %9s\n", models[j]->name.c_str(), k.poses_tried, k.clean_grasps, "no clean grasp");
-      o["kept"] = nullptr;
-      objects.push_back(o);
-      continue;
-    }
-    std::vector<double> v;
-    for (const CapsuleMetric& c : k.best->metrics.capsules)
-      if (c.hit) v.push_back(1000.0 * std::abs(c.nd));
-    pooled.insert(pooled.end(), v.begin(), v.end());
-    std::printf("%-28s %7d %7d %9s %9s %9s %5zu %8d\n", models[j]->name.c_str(), k.poses_tried, k.clean_grasps,
-                fmt(k.nd_mean_mm, 3).c_str(), fmt(percentile(v, 0.5), 3).c_str(), fmt(percentile(v, 1.0), 3).c_str(),
-                v.size(), k.best->blocked);
-    const Eigen::Isometry3d X_ObjectPalm = poses[j].inverse() * k.best->hand.state().X_WorldPalm;
-    const Eigen::Quaterniond q(X_ObjectPalm.linear());
-    o["kept"] = {{"nd_mean_mm", k.nd_mean_mm},
-                 {"hand_error_mm", k.best->metrics.hand_error_mm},
-                 {"blocked", k.best->blocked},
-                 {"capsules", capsule_json(capsule_records(k.best->metrics, *rig))},
-                 {"p_object_palm",
-                  {X_ObjectPalm.translation().x(), X_ObjectPalm.translation().y(), X_ObjectPalm.translation().z()}},
-                 {"q_object_palm_wxyz", {q.w(), q.x(), q.y(), q.z()}}};
-    objects.push_back(o);
-    if (!opt.svg_dir.empty()) {
-      const ObjectView view{ObjectId(0), poses[j], models[j].get()};
-      const std::string title = models[j]->name + ", nd-bound (oracle pose): mean |ND| " + fmt(k.nd_mean_mm, 2) + " mm";
-      std::ofstream(opt.svg_dir + "/" + models[j]->name + "_nd_bound.svg")
-          << render_svg(snapshot(k.best->hand, view, title));
-    }
-  }
+  for (std::size_t j = 0; j < models.size(); ++j)
+    objects.push_back(report_object(opt, *rig, models[j], poses[j], kept[j], pooled));
   const json summary = {{"objects", models.size()},
                         {"capsules_hit", pooled.size()},
                         {"nd_abs_median_mm", percentile(pooled, 0.5)},
