@@ -314,12 +314,24 @@ bool HandController::unblock_phalanges(const FingerStep& step) {
       const MeshDistance& mesh = step.object->model->distance;
       unblock = !mesh.capsule_overlaps(c.a, c.b, c.radius + release_gap, hint_[id]);
       cache = {step.object->id, c.a, c.b, !unblock};
-      // Precise mode: the hand's own motion pushed this finger into the object.
-      if (!unblock && step.precise && mesh.capsule_overlaps(c.a, c.b, c.radius - step.tol, hint_[id])) pushed_in = true;
+      // Precise mode: the hand's own motion pushed this finger into the object (the capsule's
+      // last closest pair, when taken at this very pose, spares the search).
+      if (!unblock && step.precise && pushed_into(step, id, c)) pushed_in = true;
     }
     if (unblock) state_.blocked[id] = 0;
   }
   return pushed_in;
+}
+
+// Whether capsule c (phalanx id, posed in the object frame) overlaps the object by more than the
+// tolerance: capsule_overlaps with the radius less the tolerance, helped by the capsule's last
+// exact closest pair when it was taken at this very pose (the same answer, bit for bit).
+bool HandController::pushed_into(const FingerStep& step, int id, const Capsule& c) const {
+  const MeshDistance& mesh = step.object->model->distance;
+  const Scratch::ClosestCache& cache = scratch_->closest[id];
+  if (cache.matches(step.object->id, mesh, c.a, c.b))
+    return mesh.capsule_overlaps(c.a, c.b, c.radius - step.tol, cache.pair, hint_[id]);
+  return mesh.capsule_overlaps(c.a, c.b, c.radius - step.tol, hint_[id]);
 }
 
 // Finger movement: rate-limited steps toward the targets into the work space's delta, where
@@ -358,7 +370,7 @@ void HandController::block_at_rest(const FingerStep& step) {
     cache = {step.object->id, c.a, c.b, touching};
     if (!touching) continue;
     // Pushed in, not just touching: precise mode bends the finger back onto the surface.
-    if (step.precise && mesh.capsule_overlaps(c.a, c.b, c.radius - step.tol, hint_[id]) &&
+    if (step.precise && pushed_into(step, id, c) &&
         depenetrate(step.finger, step.X_ObjectPalm, *step.object)) {
       forget_bounds(step);
       return;

@@ -4,6 +4,10 @@
 // Segment searches prune a box or triangle by the plane through the segment point nearest its
 // centre (separated_beyond): a finger capsule lies along the surface, many millimetres above many
 // small triangles, where bounding balls or inflated boxes let almost every nearby one through.
+// A triangle large against the distance searched is first bounded in the segment's own frame
+// (SegmentFrame: the 2-D distance across the segment's axis, with the gap along it), which is
+// exact for a segment lying across long sliver triangles, where the plane bound is loose by
+// about the sliver's length squared over twice the distance.
 //
 // Conventions:
 //  * A point exactly on the surface (distance 0) has signed distance 0 and counts as inside
@@ -61,7 +65,19 @@ void MeshDistance::traverse(Reach&& reach, Leaf&& leaf) const {
   }
 }
 
+namespace {
+// A triangle whose bounding radius exceeds this fraction of the distance searched is "large".
+constexpr double kLargeTriangle = 0.15;
+}  // namespace
+
 std::size_t MeshDistance::triangle_count() const { return triangles_.size(); }
+
+double MeshDistance::coordinate_extent(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
+  double e = std::max(a.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff());
+  if (!nodes_.empty())
+    for (int i = 0; i < 3; ++i) e = std::max({e, std::abs(double{nodes_[0].lo[i]}), std::abs(double{nodes_[0].hi[i]})});
+  return e;
+}
 
 Eigen::Vector3d MeshDistance::feature_normal(std::uint32_t slot, int feature) const {
   switch (feature) {
@@ -145,6 +161,7 @@ MeshDistance::Candidate MeshDistance::nearest_to_segment(const Eigen::Vector3d& 
   best.distance_sq = max_distance * max_distance;
   double best_d = max_distance;
   const SegmentProbe seg(a, b);
+  SegmentFrame frame(a, seg.d, seg.dd, coordinate_extent(a, b));
   if (hint < slot_of_triangle_.size()) {  // a near triangle first: a tight bound prunes the tree
     const std::uint32_t s = slot_of_triangle_[hint];
     double t = 0;
@@ -158,7 +175,11 @@ MeshDistance::Candidate MeshDistance::nearest_to_segment(const Eigen::Vector3d& 
   traverse([&](const Node& n, double& key) { return segment_may_reach(seg, n, oriented_boxes_, best_d, key); },
            [&](const Node& nd) {
              for (std::uint32_t s = nd.first; s < nd.first + nd.count; ++s) {
+               // The frame's bound, first, for a triangle large against the distance (a sliver:
+               // the centroid's bounds are loose by about its size squared over the distance);
+               // for the others the centroid's bounds are nearly as tight and cheaper.
                const auto& bs = bounding_spheres_[s];
+               if (bs[3] > kLargeTriangle * best_d && frame.beyond(corners_[s], best_d)) continue;
                const Vector3d centroid(bs[0], bs[1], bs[2]);
                const Vector3d w = seg.offset_from(centroid);
                const double w2 = w.squaredNorm();
@@ -234,12 +255,29 @@ bool MeshDistance::capsule_overlaps(const Eigen::Vector3d& a, const Eigen::Vecto
              return false;
            });
   if (overlaps) return true;
+  return segment_inside(a);
+}
+
+bool MeshDistance::segment_inside(const Eigen::Vector3d& a) const {
   // No surface within the radius: the capsule overlaps the solid only if it lies entirely inside.
   // a is farther than r from the surface, so a ray-parity test is well conditioned; it falls back
   // to the pseudo-normal test (contains) whenever the ray passes near an edge or grazes a plane.
   bool decided = false;
   const bool inside = inside_by_ray_parity(a, decided);
   return decided ? inside : contains(a);
+}
+
+bool MeshDistance::capsule_overlaps(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius,
+                                    const SegmentQuery& nearest, std::uint32_t hint) const {
+  if (nodes_.empty()) return false;
+  // The search that found `nearest` tested every triangle its sound bounds did not exclude, so no
+  // triangle's computed distance lies below nearest.distance by more than rounding (far below
+  // 1e-9 relative, or 1e-9 of the coordinates' size): capsule_overlaps' triangle phase, whose
+  // tests (the exact one and the centroid shortcut) pass only within the radius, finds nothing.
+  const double r = std::max(radius, 0.0);
+  const double slack = 1e-9 * (coordinate_extent(a, b) + (b - a).norm());
+  if (nearest.found && nearest.distance > r * (1 + 1e-8) + slack) return segment_inside(a);
+  return capsule_overlaps(a, b, radius, hint);
 }
 
 bool MeshDistance::inside_by_ray_parity(const Eigen::Vector3d& p, bool& decided) const {

@@ -511,6 +511,89 @@ struct OrientedBox {
   }
 };
 
+/// A lower bound on the distance between a segment and triangles, from the segment's own frame:
+/// unit axis u along the segment and e1, e2 across it. Every point x of the segment has
+/// u.(x - a) in [0, len] and projects onto the same point across (a), so for a triangle point y
+///   |x - y|^2 = |across(y - a)|^2 + (u.(y - a) - u.(x - a))^2
+/// and the distance to the triangle is at least sqrt(A^2 + G^2): A the 2-D distance from the
+/// origin to the triangle projected across the axis (a convex polygon: the projected triangle),
+/// G the gap between [0, len] and the corners' range along it. Exact when the closest pair is
+/// interior to the segment (a finger lying across a thin part), where the bounding-sphere and
+/// plane tests are loose by the triangle's spread squared over twice the distance.
+struct SegmentFrame {
+  /// The frame is set up on the first test (most queries end on their hint or test no triangle).
+  SegmentFrame(const Vector3d& a_in, const Vector3d& d_in, double dd_in, double extent_in)
+      : a(a_in), d(d_in), dd(dd_in), extent(extent_in) {}
+
+  Vector3d a, d;
+  double dd, extent;
+  bool ready = false, valid = false;
+  Vector3d u, e1, e2;
+  double len = 0;
+  double slack = 0;  // absolute rounding allowance: 1e-9 of the largest coordinate in play
+
+  void prepare() {
+    ready = true;
+    if (!(dd > 0) || !std::isfinite(dd)) return;
+    len = std::sqrt(dd);
+    u = d / len;
+    // e1: u crossed with the coordinate axis it is least aligned with.
+    int k = 0;
+    if (std::abs(u[1]) < std::abs(u[k])) k = 1;
+    if (std::abs(u[2]) < std::abs(u[k])) k = 2;
+    e1 = u.cross(Vector3d::Unit(k)).normalized();
+    e2 = u.cross(e1);
+    slack = 1e-9 * (extent + len);
+    valid = std::isfinite(slack);
+  }
+
+  /// True when the triangle is provably farther than e from the segment: its computed exact
+  /// distance would exceed e as well (the slack covers the rounding of both computations).
+  [[nodiscard]] bool beyond(const Corners& v, double e) {
+    if (!ready) prepare();
+    if (!valid) return false;
+    const Vector3d z[3] = {v[0] - a, v[1] - a, v[2] - a};
+    double lo = kInf, hi = -kInf;
+    for (int k = 0; k < 3; ++k) {
+      const double ax = u.dot(z[k]);
+      lo = std::min(lo, ax);
+      hi = std::max(hi, ax);
+    }
+    const double g = std::max({lo - len, -hi, 0.0});
+    const double reach = e * (1 + 1e-9) + slack;
+    const double reach2 = reach * reach;
+    const double g2 = g * g;
+    if (g2 > reach2) return true;
+    // Across an end's plane the nearest pair is usually that end's, which the axis's distance
+    // underestimates: not worth the rest.
+    if ((lo < 0 && hi > 0) || (lo < len && hi > len)) return false;
+    double px[3], py[3];
+    for (int k = 0; k < 3; ++k) {
+      px[k] = e1.dot(z[k]);
+      py[k] = e2.dot(z[k]);
+    }
+    // Every point of the projected triangle must lie farther than sqrt(rest) from the origin:
+    // its corners, the origin outside it, and each edge's interior (the squared distance to an
+    // edge's line is cross^2 / |edge|^2, compared without dividing).
+    const double rest = reach2 - g2;
+    for (int k = 0; k < 3; ++k)
+      if (px[k] * px[k] + py[k] * py[k] <= rest) return false;
+    bool pos = false, neg = false;
+    for (int k = 0; k < 3; ++k) {
+      const int j = k == 2 ? 0 : k + 1;
+      const double ex = px[j] - px[k];
+      const double ey = py[j] - py[k];
+      const double cr = px[k] * ey - py[k] * ex;  // sign: which side of the edge the origin lies
+      pos |= cr > 0;
+      neg |= cr < 0;
+      const double along = -(px[k] * ex + py[k] * ey);  // the origin's foot on the edge, times |edge|^2
+      const double ee = ex * ex + ey * ey;
+      if (along > 0 && along < ee && !(cr * cr > rest * ee)) return false;
+    }
+    return pos && neg;  // else the origin is inside (or on) the projected triangle
+  }
+};
+
 /// A segment a + s d (s in [0, 1]) with the quantities its box tests reuse.
 struct SegmentProbe {
   SegmentProbe(const Vector3d& a_in, const Vector3d& b_in)

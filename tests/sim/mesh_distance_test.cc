@@ -4,6 +4,8 @@
 // independent brute-force reference over all triangles.
 #include "telegrasp/sim/mesh_distance.h"
 
+#include "test_meshes.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -1019,6 +1021,110 @@ TEST_F(TiltedThinPlateBruteForce, SphereCastIsFirstContact) {
     hits += expect_first_contact(mesh_, md_, o, dir, r, 0.1);
   }
   EXPECT_GT(hits, 20);
+}
+
+// ---------------------------------------------------------------- long sliver triangles
+
+// A capped cylinder (radius 10 mm, 120 mm long) of 256 sides, whose side triangles are 120 mm
+// long and 0.25 mm wide, turned off the axes: segments lying across it, as a finger across a
+// thin handle, are where the segment's own frame (its axis and the plane across it) prunes
+// triangles that the bounding-sphere and plane bounds let through.
+class SliverCylinder : public ::testing::Test {
+ protected:
+  static constexpr double kRadius = 0.01;
+  static TriangleMesh make_mesh() {
+    TriangleMesh m = testing::cylinder_mesh(kRadius, 0.06, 256);
+    const Eigen::Matrix3d turn =
+        Eigen::AngleAxisd(0.7, Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+    for (Vector3d& v : m.vertices) v = turn * v;
+    return m;
+  }
+  TriangleMesh mesh_ = make_mesh();
+  MeshDistance md_{mesh_};
+  Eigen::Matrix3d turn_ = Eigen::AngleAxisd(0.7, Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  std::mt19937 rng_{77};
+
+  /// A segment up to 30 mm long near the side (gap -2 to 12 mm): across the axis, along it, or
+  /// any direction; centred on the side or starting there (its end nearest).
+  std::pair<Vector3d, Vector3d> random_segment() {
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const double phi = 2 * kPi * u(rng_);
+    const Vector3d radial(std::cos(phi), std::sin(phi), 0);
+    const Vector3d across(-std::sin(phi), std::cos(phi), 0);
+    const Vector3d centre = (kRadius - 0.002 + 0.014 * u(rng_)) * radial + Vector3d(0, 0, 0.1 * (u(rng_) - 0.5));
+    const double kind = u(rng_);
+    Vector3d dir = kind < 0.5 ? across : kind < 0.7 ? Vector3d::UnitZ() : random_unit(rng_);
+    dir = (dir + 0.05 * (u(rng_) - 0.5) * radial).normalized();
+    const double len = 0.03 * u(rng_);
+    const Vector3d a = u(rng_) < 0.7 ? centre - 0.5 * len * dir : centre;
+    return {turn_ * a, turn_ * (a + len * dir)};
+  }
+};
+
+TEST_F(SliverCylinder, ClosestToSegmentMatchesBruteForceWithAndWithoutHint) {
+  std::uint32_t hint = MeshDistance::kNoHint;
+  for (int i = 0; i < 3000; ++i) {
+    const auto [a, b] = random_segment();
+    const double expected = brute_segment_distance(mesh_, a, b);
+    const SegmentQuery q = md_.closest_to_segment(a, b);
+    ASSERT_TRUE(q.found);
+    ASSERT_NEAR(q.distance, expected, kExact) << i;
+    // The reported triangle is one of the nearest.
+    const auto& t = mesh_.triangles[q.triangle];
+    EXPECT_NEAR(std::sqrt(ref_segment_triangle_sq(a, b, mesh_.vertices[t[0]], mesh_.vertices[t[1]], mesh_.vertices[t[2]])),
+                expected, kExact)
+        << i;
+    // A hint (the last answer: usually far) and a tight search radius change nothing.
+    const SegmentQuery h = md_.closest_to_segment(a, b, expected * (1 + 1e-6) + 1e-9, hint);
+    ASSERT_TRUE(h.found) << i;
+    EXPECT_NEAR(h.distance, expected, kExact) << i;
+    hint = q.triangle;
+    // Capsules just within and just beyond the gap.
+    if (expected > 1e-6) {
+      EXPECT_TRUE(md_.capsule_overlaps(a, b, expected + 1e-9)) << i;
+      EXPECT_EQ(md_.capsule_overlaps(a, b, expected - 1e-9), md_.contains(a)) << i;
+    }
+  }
+}
+
+TEST_F(SliverCylinder, CapsuleOverlapsGivenTheClosestPairAgreesWithTheSearch) {
+  int inside = 0, shortcut = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const auto [a, b] = random_segment();
+    const SegmentQuery q = md_.closest_to_segment(a, b);
+    ASSERT_TRUE(q.found);
+    const double d = q.distance;
+    inside += md_.contains(a) && d > 0;
+    for (const double r : {0.0, d - 1e-3, d * (1 - 1e-6), d * (1 - 1e-9), d * (1 - 1e-15), d, d * (1 + 1e-15),
+                           d * (1 + 1e-9), d * (1 + 1e-6), d + 1e-3}) {
+      EXPECT_EQ(md_.capsule_overlaps(a, b, r, q), md_.capsule_overlaps(a, b, r)) << i << " r = " << r;
+      shortcut += r < d * (1 - 1e-6);
+    }
+  }
+  EXPECT_GT(inside, 50);  // segments wholly inside: the shortcut's inside test decides them
+  EXPECT_GT(shortcut, 2000);
+}
+
+TEST(MeshDistance, CapsuleOverlapsGivenTheClosestPairOnABox) {
+  const MeshDistance md(make_box(kBoxHalf));
+  const double gap = 0.005;
+  const Vector3d a(-0.02, 0.01, kBoxHalf.z() + gap), b(0.03, -0.01, kBoxHalf.z() + gap);
+  const SegmentQuery q = md.closest_to_segment(a, b);
+  ASSERT_TRUE(q.found);
+  EXPECT_NEAR(q.distance, gap, kExact);
+  EXPECT_FALSE(md.capsule_overlaps(a, b, gap - 1e-6, q));  // decided by the pair: outside
+  EXPECT_FALSE(md.capsule_overlaps(a, b, gap * (1 - 1e-10), q));  // too close to call: the full query
+  EXPECT_TRUE(md.capsule_overlaps(a, b, gap + 1e-6, q));
+  // Wholly inside: no surface within 5 mm, the inside test decides.
+  const Vector3d c(-0.01, 0, 0), e(0.01, 0, 0);
+  const SegmentQuery in = md.closest_to_segment(c, e);
+  ASSERT_TRUE(in.found);
+  EXPECT_GT(in.distance, 0.005);
+  EXPECT_TRUE(md.capsule_overlaps(c, e, 0.005, in));
+  // Not found (searched within 1 mm only): the full query.
+  const SegmentQuery none = md.closest_to_segment(a, b, 0.001);
+  ASSERT_FALSE(none.found);
+  EXPECT_TRUE(md.capsule_overlaps(a, b, gap + 1e-6, none));
 }
 
 }  // namespace

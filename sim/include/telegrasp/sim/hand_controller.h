@@ -130,6 +130,7 @@ class HandController {
   bool unblock_phalanges(const FingerStep& step);
   bool plan_motion(const FingerStep& step, double dt, int held, bool& closing);
   void block_at_rest(const FingerStep& step);
+  bool pushed_into(const FingerStep& step, int id, const Capsule& c) const;
   void close_discrete(const FingerStep& step);
   void close_precise(const FingerStep& step);
   Probe probe_capsule(const FingerStep& step, std::size_t m, double s, double rate, double& ds);

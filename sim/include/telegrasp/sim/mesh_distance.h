@@ -75,6 +75,14 @@ class MeshDistance {
   [[nodiscard]] bool capsule_overlaps(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius,
                                       std::uint32_t hint = kNoHint) const;
 
+  /// capsule_overlaps(a, b, radius, hint) for a segment whose closest pair with the surface is
+  /// known: `nearest`, a found answer of closest_to_segment for this very a and b. When its distance
+  /// exceeds the radius by more than the searches' rounding, no triangle comes within the radius and
+  /// only the inside test is left; otherwise (or when not found) it is capsule_overlaps itself. The
+  /// same answer as capsule_overlaps, bit for bit.
+  [[nodiscard]] bool capsule_overlaps(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius,
+                                      const SegmentQuery& nearest, std::uint32_t hint = kNoHint) const;
+
   /// Exact signed distance between the capsule (segment [a, b], `radius`) and the solid:
   /// min over segment points of signed_distance, minus radius. Positive = gap, negative = depth.
   [[nodiscard]] double capsule_signed_distance(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius,
@@ -137,11 +145,15 @@ class MeshDistance {
   [[nodiscard]] Candidate nearest_to_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double max_distance,
                                              std::uint32_t hint = kNoHint) const;
   [[nodiscard]] Eigen::Vector3d feature_normal(std::uint32_t slot, int feature) const;
+  /// Largest absolute coordinate of the mesh's box and of a and b (the scale of rounding errors).
+  [[nodiscard]] double coordinate_extent(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const;
   [[nodiscard]] bool sweep_forward(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double radius,
                                    double max_length, double& t, std::uint32_t& slot) const;
   [[nodiscard]] bool sweep_exit(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double radius, double& s,
                                 std::uint32_t& slot) const;
   [[nodiscard]] bool inside_by_ray_parity(const Eigen::Vector3d& p, bool& decided) const;
+  /// capsule_overlaps' answer once no triangle lies within the radius: whether a lies inside.
+  [[nodiscard]] bool segment_inside(const Eigen::Vector3d& a) const;
   [[nodiscard]] double min_signed_distance_on_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                                       double hint_t) const;
 
