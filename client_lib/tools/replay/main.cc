@@ -55,10 +55,7 @@ Exit status (the same meanings in every telegrasp tool):
 [[noreturn]] void usage_error(const std::string& what) { telegrasp::cli::usage_exit("telegrasp-replay", what); }
 
 // An export's exit status: damaged, or done.
-template <class Damage>
-int exported_status(const Damage& damage) {
-  return damage ? telegrasp::cli::kExitDamaged : 0;
-}
+int exported_status(const std::optional<RecordingDamage>& damage) { return damage ? telegrasp::cli::kExitDamaged : 0; }
 
 // Progress on stderr for files big enough to take a while.
 class Progress {
@@ -105,8 +102,10 @@ Args parse(int argc, char** argv) {
   bool mcap_rate_given = false;
   telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
     if (telegrasp::cli::text_flag(a, value,
-                                  {{"--objects", &o.objects_dir}, {"--export-contacts", &o.csv_path},
-                                   {"--export-mcap", &o.mcap_path}, {"--json", &o.json_path}}))
+                                  {{"--objects", &o.objects_dir},
+                                   {"--export-contacts", &o.csv_path},
+                                   {"--export-mcap", &o.mcap_path},
+                                   {"--json", &o.json_path}}))
       ;
     else if (a == "--mcap-rate") {
       o.mcap_options.rate_hz = telegrasp::cli::parse_number(a, value(), 1, 240, usage_error);
@@ -126,18 +125,23 @@ Args parse(int argc, char** argv) {
   return o;
 }
 
+// The end of an export: the damage said, the result (`j`, with the recording, the damage and the
+// exit status) written to --json, and that exit status returned.
+int finish_export(const Args& o, nlohmann::json j, const std::optional<RecordingDamage>& damage) {
+  if (damage) std::cout << damage->message << "\n";
+  if (!o.json_path.empty()) {
+    j["recording"] = o.recording;
+    j["damage"] = damage_json(damage);
+    j["exit_code"] = exported_status(damage);
+    write_json(o.json_path, j);
+  }
+  return exported_status(damage);
+}
+
 int export_contacts(const Args& o) {
   const ContactExport e = export_contacts_csv(o.recording, o.csv_path);
   std::cout << "exported " << e.rows << " contacts of " << e.events << " grasps to " << o.csv_path << "\n";
-  if (e.damage) std::cout << e.damage->message << "\n";
-  if (!o.json_path.empty())
-    write_json(o.json_path, {{"recording", o.recording},
-                             {"csv", o.csv_path},
-                             {"grasps", e.events},
-                             {"contacts", e.rows},
-                             {"damage", damage_json(e.damage)},
-                             {"exit_code", exported_status(e.damage)}});
-  return exported_status(e.damage);
+  return finish_export(o, {{"csv", o.csv_path}, {"grasps", e.events}, {"contacts", e.rows}}, e.damage);
 }
 
 int export_mcap_file(const Args& o) {
@@ -147,19 +151,15 @@ int export_mcap_file(const Args& o) {
             << telegrasp::cli::format_number(std::round(seconds * 10) / 10) << " s, "
             << telegrasp::cli::format_number(std::round(static_cast<double>(e.bytes) / 1024.0)) << " KiB) to "
             << o.mcap_path << "\n";
-  if (e.damage) std::cout << e.damage->message << "\n";
-  if (!o.json_path.empty())
-    write_json(o.json_path, {{"recording", o.recording},
-                             {"mcap", o.mcap_path},
-                             {"outputs", e.outputs},
-                             {"view_updates", e.steps},
-                             {"messages", e.messages},
-                             {"bytes", e.bytes},
-                             {"start_time_ns", e.start_time_ns},
-                             {"end_time_ns", e.end_time_ns},
-                             {"damage", damage_json(e.damage)},
-                             {"exit_code", exported_status(e.damage)}});
-  return exported_status(e.damage);
+  return finish_export(o,
+                       {{"mcap", o.mcap_path},
+                        {"outputs", e.outputs},
+                        {"view_updates", e.steps},
+                        {"messages", e.messages},
+                        {"bytes", e.bytes},
+                        {"start_time_ns", e.start_time_ns},
+                        {"end_time_ns", e.end_time_ns}},
+                       e.damage);
 }
 
 int replay(const Args& o) {
