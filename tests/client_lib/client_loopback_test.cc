@@ -517,8 +517,8 @@ TEST_F(ClientLoopbackTest, NoCallbackRunsAfterTheDestructorReturns) {
 
 TEST_F(ClientLoopbackTest, AThrowingCallbackDoesNotStopDelivery) {
   dds::DataWriter* skeleton_writer = server().writer<msg::HandSkeletonPubSubType>(idl::kHandSkeletonTopic);
+  std::atomic<int> calls{0};  // before the client: its callbacks may run until its destructor returns
   Client client(options("thrower", domain, kHandSkeletons));
-  std::atomic<int> calls{0};
   client.on_hand_skeleton([&](const HandSkeleton&) {
     ++calls;
     throw std::runtime_error("thrown on purpose by the test");
@@ -550,8 +550,8 @@ msg::ObjectGeometry tetrahedron_geometry(const std::string& model) {
 // arriving again is the same object, and the same mesh under another name is taken from the cache.
 TEST_F(ClientLoopbackTest, ObjectGeometriesAreCheckedAndCachedByHash) {
   dds::DataWriter* writer = server().writer<msg::ObjectGeometryPubSubType>(idl::kObjectGeometryTopic);
+  std::atomic<int> calls{0};  // before the client: its callbacks may run until its destructor returns
   Client client(options("viewer", domain, kObjectGeometries));
-  std::atomic<int> calls{0};
   client.on_object_geometry([&](const std::shared_ptr<const ObjectGeometry>&) { ++calls; });
 
   // Transient local: written before or after the client matched, it arrives.
@@ -624,9 +624,9 @@ struct FakeServer {
 // incarnation of the run that sent them. The old run stays on the wire here (a hung server, or
 // one whose last samples are late), so nothing of it is disposed by its writers going away.
 TEST_F(ClientLoopbackTest, ANewIncarnationIsNoticedOnceAndTheOldRunsStateDropped) {
-  Client client(options("restarts", domain, kServerStatuses | kGraspStates | kGraspEvents));
-  std::mutex mutex;
+  std::mutex mutex;  // these two before the client: its callbacks may run until its destructor returns
   std::vector<ServerRestart> restarts;
+  Client client(options("restarts", domain, kServerStatuses | kGraspStates | kGraspEvents));
   client.on_server_restart([&](const ServerRestart& r) {
     std::lock_guard l(mutex);
     restarts.push_back(r);
