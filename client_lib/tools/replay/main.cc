@@ -54,9 +54,6 @@ Exit status (the same meanings in every telegrasp tool):
 
 [[noreturn]] void usage_error(const std::string& what) { telegrasp::cli::usage_exit("telegrasp-replay", what); }
 
-// An export's exit status: damaged, or done.
-int exported_status(const std::optional<RecordingDamage>& damage) { return damage ? telegrasp::cli::kExitDamaged : 0; }
-
 // Progress on stderr for files big enough to take a while.
 class Progress {
  public:
@@ -128,14 +125,15 @@ Args parse(int argc, char** argv) {
 // The end of an export: the damage said, the result (`j`, with the recording, the damage and the
 // exit status) written to --json, and that exit status returned.
 int finish_export(const Args& o, nlohmann::json j, const std::optional<RecordingDamage>& damage) {
+  const int status = damage ? telegrasp::cli::kExitDamaged : 0;
   if (damage) std::cout << damage->message << "\n";
   if (!o.json_path.empty()) {
     j["recording"] = o.recording;
     j["damage"] = damage_json(damage);
-    j["exit_code"] = exported_status(damage);
+    j["exit_code"] = status;
     write_json(o.json_path, j);
   }
-  return exported_status(damage);
+  return status;
 }
 
 int export_contacts(const Args& o) {
