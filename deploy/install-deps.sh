@@ -9,7 +9,7 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
 packages=(
-  build-essential cmake pkg-config
+  build-essential cmake pkg-config ccache
   libeigen3-dev libbullet-dev libbullet-extras-dev libassimp-dev libqhull-dev
   libprotobuf-dev protobuf-compiler nlohmann-json3-dev
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
