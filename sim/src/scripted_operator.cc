@@ -541,9 +541,9 @@ ControllerInput ScriptedOperator::next(double t, bool grasped) {
       if (grasped) {
         phase_ = OperatorPhase::kLift;
         t_phase_ = t;
-        X_start_ = X_last_;
+        X_start_ = X_grasped_ = X_last_;
         X_lifted_ = X_last_;
-        X_lifted_.translation().z() += kLiftHeight;
+        X_lifted_.translation().z() += kLiftHeight + std::max(0.0, hand_raised_);
       } else if (t - t_phase_ > skill_.squeeze_time + 0.3) {
         // Missed: open, back off and try again with a fresh attempt, or give up.
         trigger_ = 0;
@@ -573,10 +573,24 @@ ControllerInput ScriptedOperator::next(double t, bool grasped) {
         t_phase_ = t;
       } else if (t - t_phase_ >= kHoldTime) {
         held_after_lift_ = true;
+        phase_ = put_down_ ? OperatorPhase::kPutDown : OperatorPhase::kRelease;
+        t_phase_ = t;
+        X_start_ = X_last_;
+      }
+      break;
+    case OperatorPhase::kPutDown: {
+      // Back down the way it went up, to just above where the hand grasped (the resolved pose
+      // stops the object on the table), then open.
+      const double duration = std::max(0.2, 1.5 * kLiftHeight / skill_.reach_speed);
+      Eigen::Isometry3d X_down = X_grasped_;
+      X_down.translation().z() += kPutDownClearance;
+      X_last_ = interpolate(X_start_, X_down, min_jerk((t - t_phase_) / duration));
+      if (!grasped || t - t_phase_ >= duration) {
         phase_ = OperatorPhase::kRelease;
         t_phase_ = t;
       }
       break;
+    }
     case OperatorPhase::kRelease:
       trigger_ = std::max(0.0, trigger_ - dt_ / 0.2);
       if (trigger_ <= 0 && !grasped) phase_ = OperatorPhase::kDone;

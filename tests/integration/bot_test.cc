@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <map>
 #include <string>
 #include <vector>
@@ -65,6 +66,19 @@ Outcome read_records(const std::string& path) {
       out.misses.push_back(object + ": " + (g["reason"].is_string() ? g["reason"].get<std::string>() : "no reason"));
   }
   return out;
+}
+
+// A bot that cannot load its hand's rig stops at once with the file's name (it used to wait for
+// a server, then abort on the uncaught exception).
+TEST(BotTest, WithoutItsRigTheBotStopsAtOnceNamingTheFile) {
+  const std::string log = work_path("bot_without_rig.log");
+  ChildProcess bot({"/usr/bin/env", "TELEGRASP_DATA_DIR=" + work_path("no_such_data"), bin("telegrasp-bot"), "--domain",
+                    "0", "--timeout-s", "60"},
+                   log);
+  EXPECT_EQ(bot.wait(30s), 1) << bot.log_tail();
+  std::ifstream in(log);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("human_right.textproto: cannot open rig file"), std::string::npos) << text;
 }
 
 // The bot plans on the server's published geometry only (no --objects) and holds the hardest

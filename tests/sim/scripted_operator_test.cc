@@ -12,6 +12,7 @@
 #include <fstream>
 #include <numbers>
 #include <optional>
+#include <vector>
 
 namespace telegrasp::sim {
 namespace {
@@ -174,6 +175,53 @@ TEST(ScriptedOperatorTest, PerfectOperatorLiftsACan) {
 }
 TEST(ScriptedOperatorTest, LeftHandLiftsABox) { EXPECT_TRUE(trial("human_left", "004_sugar_box", "perfect")); }
 TEST(ScriptedOperatorTest, GripperLiftsABall) { EXPECT_TRUE(trial("gripper3", "055_baseball", "perfect")); }
+
+// The phases an operator goes through from its squeeze, told that the hand it sees stands
+// `raised` above its controller, holding until it lets go; with the squeeze pose's z and the
+// hold's and the last input's.
+struct AfterSqueeze {
+  std::vector<OperatorPhase> phases;
+  double z_grasp = 0, z_hold = 0, z_last = 0;
+};
+AfterSqueeze run_after_squeeze(ScriptedOperator& op, double raised) {
+  const auto model = standin("005_tomato_soup_can");
+  op.begin(*model, World::resting_pose(*model, 0.45, 0.0, 0.0), Eigen::Isometry3d(Eigen::Translation3d(0.15, -0.2, 0.3)),
+           0.0);
+  AfterSqueeze out;
+  double t = 0;
+  ControllerInput in;
+  while (op.phase() != OperatorPhase::kSqueeze && t < 10) in = op.next(t += 1.0 / 90, false);
+  out.z_grasp = in.X_WorldPalm.translation().z();
+  op.see_hand_raised(raised);
+  while (!op.done() && t < 20) {
+    const OperatorPhase before = op.phase();
+    in = op.next(t += 1.0 / 90, before != OperatorPhase::kRelease);  // held until it opens
+    if (op.phase() == OperatorPhase::kHold) out.z_hold = in.X_WorldPalm.translation().z();
+    if (out.phases.empty() || out.phases.back() != op.phase()) out.phases.push_back(op.phase());
+  }
+  out.z_last = in.X_WorldPalm.translation().z();
+  return out;
+}
+
+// A person lifts the hand they see: a hand the table held 20 mm above its controller has its
+// controller lifted 10 + 2 cm (it rejoins the controller on the way, so the object still rises
+// 10 cm). Asked to, the operator puts the object back down, 5 mm above where it grasped, before
+// it opens; by default it opens at the top.
+TEST(ScriptedOperatorTest, LiftsTheHandItSeesAndPutsTheObjectBackDownWhenAsked) {
+  using P = OperatorPhase;
+  ScriptedOperator tidy(rig("human_right"), skill_profile("perfect"), 3, {});
+  tidy.put_down_before_release(true);
+  const AfterSqueeze a = run_after_squeeze(tidy, 0.02);
+  EXPECT_NEAR(a.z_hold - a.z_grasp, ScriptedOperator::kLiftHeight + 0.02, 1e-12);
+  EXPECT_NEAR(a.z_last - a.z_grasp, ScriptedOperator::kPutDownClearance, 1e-12);
+  EXPECT_EQ(a.phases, (std::vector<P>{P::kLift, P::kHold, P::kPutDown, P::kRelease, P::kDone}));
+
+  ScriptedOperator plain(rig("human_right"), skill_profile("perfect"), 3, {});
+  const AfterSqueeze b = run_after_squeeze(plain, -0.01);  // a hand below its controller: lifted 10 cm
+  EXPECT_NEAR(b.z_hold - b.z_grasp, ScriptedOperator::kLiftHeight, 1e-12);
+  EXPECT_NEAR(b.z_last, b.z_hold, 1e-12);
+  EXPECT_EQ(b.phases, (std::vector<P>{P::kLift, P::kHold, P::kRelease, P::kDone}));
+}
 
 // close_offline measures how far the open hand reaches under the table top: nothing from a metre
 // above it; with the palm's centre half a metre below it, at least that plus the palm's half

@@ -203,13 +203,17 @@ std::map<std::string, sim::ObjectModelPtr> resolve_models(const client::Client& 
   return models;
 }
 
+std::shared_ptr<const sim::HandRig> hand_rig(client::HandSide side) {
+  return std::make_shared<const sim::HandRig>(
+      sim::HandRig::load(sim::HandRig::builtin_path(side == client::HandSide::kRight ? "human_right" : "human_left")));
+}
+
 Bot::Bot(Options opt, client::Client& c, std::map<std::string, sim::ObjectModelPtr> models)
     : opt_(std::move(opt)), client_(c), models_(std::move(models)), skill_(sim::skill_profile(opt_.skill)) {
   for (client::HandSide side : opt_.hands) {
     Hand h;
     h.key = {client_.client_id(), side};
-    h.rig = std::make_shared<const sim::HandRig>(sim::HandRig::load(
-        sim::HandRig::builtin_path(side == client::HandSide::kRight ? "human_right" : "human_left")));
+    h.rig = hand_rig(side);
     h.input.X_WorldPalm.translation() = Eigen::Vector3d(0.0, side == client::HandSide::kRight ? -0.3 : 0.3, 0.3);
     hands_.push_back(std::move(h));
   }
@@ -609,6 +613,8 @@ void Bot::step(Hand& h, std::int64_t tick, const client::SceneState& scene,
       h.note = "removed from the scene during the trial";
     else if (h.seen_grasped && !grasped && o->held && !(o->holder == h.key))
       h.note = "taken by " + hand_name(o->holder);
+    for (const client::HandSkeleton& s : own_)
+      if (s.hand == h.key) h.op->see_hand_raised(s.resolve_offset.z());
     h.input = h.op->next(t_op, grasped);
     h.input.X_WorldPalm = h.correction * h.input.X_WorldPalm;
     if (h.op->phase() == sim::OperatorPhase::kHold && o)
@@ -692,6 +698,7 @@ void Bot::begin_operator(Hand& h, const Eigen::Isometry3d& X_WorldObject, const 
   const std::uint64_t seed = opt_.seed * 1000003ULL + h.target->scene_index * 1009ULL +
                              static_cast<std::uint64_t>(h.trial) + 7919ULL * static_cast<std::uint64_t>(h.plans);
   h.op = std::make_unique<sim::ScriptedOperator>(h.rig, skill_, seed, sim::GraspSettings{}, 1.0 / kRate);
+  h.op->put_down_before_release(true);  // the scene is shared: a dropped object may land on another
   sim::ScriptedOperator* op = h.op.get();
   h.planning = std::async(std::launch::async, [op, model = h.target->model, X_WorldObject, X_WorldPalm] {
     op->begin(*model, X_WorldObject, X_WorldPalm, 0.0);

@@ -43,6 +43,9 @@ struct Options {
   double timeout_s = 20;
 };
 
+// The shipped human rig of a hand. Throws sim::RigError naming the file if it cannot be loaded.
+std::shared_ptr<const sim::HandRig> hand_rig(client::HandSide side);
+
 // True once the server's geometry (ObjectGeometry) of every object in `scene` with no model in
 // `local` has arrived.
 bool geometry_complete(const client::Client& c, const client::SceneState& scene,

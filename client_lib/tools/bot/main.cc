@@ -50,8 +50,9 @@ constexpr const char* kUsage = R"(Usage: telegrasp-bot [options]
 
 The scripted operator of telegrasp-eval driving one or two hands of a telegrasp server over DDS.
 Each hand picks a free object from the server's SceneState (resting on the table, held by
-nobody, no other client's hand at it), appears 30 cm from it, reaches, grasps, lifts 10 cm,
-holds 1 s and releases, publishing its controller at 90 Hz. It plans on the object's pose of
+nobody, no other client's hand at it), appears 30 cm from it, reaches, grasps, lifts 10 cm (the
+hand it sees: more if the table held the hand up), holds 1 s, puts the object back down and
+releases, publishing its controller at 90 Hz. It plans on the object's pose of
 the newest SceneState and moves its hand with the object until it squeezes; an object that moved
 over 2 cm (or 0.25 rad) since its plan is planned again. A missed squeeze is tried again; after 3
 misses the bot plans again and tries up to 3 more times (6 attempts a trial at most, the JSON
@@ -271,6 +272,12 @@ int main(int argc, char** argv) {
   std::map<std::string, sim::ObjectModelPtr> models = load_models(opt);
   if (!opt.json_path.empty() && !std::ofstream(opt.json_path, std::ios::app)) {
     std::cerr << "telegrasp-bot: --json " << opt.json_path << ": cannot write\n";
+    return telegrasp::cli::kExitFailure;
+  }
+  try {  // the rigs first: an installation without them fails before any waiting
+    for (client::HandSide side : opt.hands) telegrasp::bot::hand_rig(side);
+  } catch (const std::exception& e) {
+    std::cerr << "telegrasp-bot: " << e.what() << "\n";
     return telegrasp::cli::kExitFailure;
   }
   std::signal(SIGINT, on_signal);

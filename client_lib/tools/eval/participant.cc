@@ -187,6 +187,9 @@ class Participant {
           break;
         }
         const double t = static_cast<double>(scene.tick - start_tick_) * kDt;
+        for (const client::HandSkeleton& s : client_.latest_hand_skeletons())
+          if (s.hand.client_id == client_.client_id() && s.hand.side == client::HandSide::kRight)
+            op_->see_hand_raised(s.resolve_offset.z());
         input_ = op_->next(t, holding);
         if (op_->phase() == sim::OperatorPhase::kHold) z_max_ = std::max(z_max_, o->X_WorldObject.translation().z());
         if (op_->done() || t > kTrialLimit) {

@@ -26,8 +26,6 @@ constexpr double kUprightTilt = 0.3;  // rad: an object tilted more has fallen o
 constexpr double kPause = 0.3;  // s open at the release pose between two trials
 constexpr double kRetry = 1.0;  // s before a hand whose object is not found tries again
 constexpr double kPosesMaxAge = 0.2;  // s: object poses are taken again when older
-constexpr double kPutDown = 0.4;  // s to lower a held object back ...
-constexpr double kPutDownHeight = sim::ScriptedOperator::kLiftHeight - 0.005;  // ... by this, m
 
 // The hand of a bench client id "scale-<c>" and side, or -1.
 int hand_of(const std::string& client_id, int side) {
@@ -178,30 +176,15 @@ msg::ControllerState ActiveHands::sample(const std::string& client_id, int clien
         hand.op = std::make_unique<sim::ScriptedOperator>(rigs_[side], sim::skill_profile("perfect"),
                                                           static_cast<std::uint64_t>(h) + 1, sim::GraspSettings{},
                                                           1.0 / sample_hz_);
+        hand.op->put_down_before_release(true);  // a dropped can may fall over
         hand.op->begin(plan, *model_, hand.X_WorldPalm, t);
         hand.t_begin = t;
-        hand.put_down_t = -1;
       } else {
         hand.t_next = t + kRetry;
       }
     }
-    if (hand.op && hand.put_down_t >= 0 && t - hand.put_down_t < kPutDown) {
-      // Putting the object back down before the operator opens the hand (the operator releases
-      // where it held, 10 cm up: a dropped can may fall over).
-      const double u = std::clamp((t - hand.put_down_t) / kPutDown, 0.0, 1.0);
-      input.X_WorldPalm = hand.X_WorldLifted;
-      input.X_WorldPalm.translation().z() -= (u * u * u * (10 - 15 * u + 6 * u * u)) * kPutDownHeight;
-      input.trigger = 1;
-    } else if (hand.op) {
+    if (hand.op) {
       input = hand.op->next(t, grasped_[h].load());
-      if (hand.put_down_t >= 0) {
-        input.X_WorldPalm = hand.X_WorldLifted;  // put down: open there
-        input.X_WorldPalm.translation().z() -= kPutDownHeight;
-      } else if (hand.op->phase() == sim::OperatorPhase::kRelease && hand.op->held_after_lift()) {
-        hand.put_down_t = t;
-        hand.X_WorldLifted = input.X_WorldPalm;
-        input.trigger = 1;
-      }
       if (hand.op->done()) {
         std::lock_guard lock(mutex_);
         ++counts_.cycles;

@@ -87,8 +87,6 @@ class ActiveHands : public eprosima::fastdds::dds::DataReaderListener {
   struct Hand {
     std::unique_ptr<sim::ScriptedOperator> op;
     double t_begin = 0, t_next = -1;  // current trial's start; when the next may start (-1: unset)
-    double put_down_t = -1;  // when the put-down began (-1: not yet)
-    Eigen::Isometry3d X_WorldLifted = Eigen::Isometry3d::Identity();  // the palm where the hold ended
     Eigen::Isometry3d X_WorldPalm = Eigen::Isometry3d::Identity();  // the last commanded palm pose
   };
   /// The pose of object `hand` as last published, if it stands upright within 0.12 m of its place.

@@ -63,7 +63,7 @@ server: first idle (each hand hovers 0.3 m above its object, moving, trigger osc
 on nothing), then active: each hand runs the sim's scripted operator ("perfect" skill; the grasp
 planned once per hand side by sim::plan_grasp and moved onto the object's pose from the newest
 SceneState): reach, close until the server's GraspEvent says it holds, lift 10 cm, hold 1 s,
-put it down (0.4 s), release, pause 0.3 s, again (trials start staggered over 2 s; each active
+put it down (as long as the lift took), release, pause 0.3 s, again (trials start staggered over 2 s; each active
 level's window opens 3 s after its hands were added). Per level it also reports the
 GraspEvents (grasps, releases; grasps/s), the hands that grasped in the window, and the held
 fraction (trials held through lift and hold / trials finished). An active level is sustained only

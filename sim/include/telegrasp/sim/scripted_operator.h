@@ -79,7 +79,8 @@ double fitts_time(double a, double b, double distance, double width);
 double practice_factor(const OperatorSkill& skill, int grasps_done);
 
 /// Phases of one trial.
-enum class OperatorPhase { kReact, kReach, kSqueeze, kLift, kHold, kRelease, kDone };
+/// kPutDown only with ScriptedOperator::put_down_before_release.
+enum class OperatorPhase { kReact, kReach, kSqueeze, kLift, kHold, kPutDown, kRelease, kDone };
 
 /// A hand pose chosen by the planner, with what the offline closing predicted.
 struct GraspPlan {
@@ -164,6 +165,15 @@ class ScriptedOperator {
              std::optional<int> grasps_done = std::nullopt);
   /// The input for time `t`; `grasped` is whether the hand holds the trial's object now.
   ControllerInput next(double t, bool grasped);
+  /// What the operator sees of the hand before next(): how far the shown hand (the resolved pose)
+  /// stands above the controller, m. A person lifts the hand they see: at the lift the controller
+  /// rises kLiftHeight plus this (a hand the table held up rejoins its controller on the way up,
+  /// so it and the object still rise kLiftHeight). 0 until told.
+  void see_hand_raised(double metres) { hand_raised_ = metres; }
+  /// After the hold, lower the object back to where it was grasped (kPutDown) and open there, as
+  /// a person tidies a shared table; by default the hand opens at the top and the object drops
+  /// (telegrasp-eval removes it after each trial). Call before begin().
+  void put_down_before_release(bool on) { put_down_ = on; }
 
   OperatorPhase phase() const { return phase_; }
   bool done() const { return phase_ == OperatorPhase::kDone; }
@@ -175,6 +185,7 @@ class ScriptedOperator {
   static constexpr double kLiftHeight = 0.10;
   static constexpr double kHoldTime = 1.0;
   static constexpr int kMaxAttempts = 3;
+  static constexpr double kPutDownClearance = 0.005;  ///< kPutDown ends this far above the grasp pose, m.
 
  private:
   void start_attempt(double t);
@@ -194,6 +205,9 @@ class ScriptedOperator {
   Eigen::Isometry3d X_last_ = Eigen::Isometry3d::Identity();
   double t_phase_ = 0, t_via_ = 0, t_end_ = 0, t_fixed_ = 0;
   double trigger_ = 0;
+  double hand_raised_ = 0;  // see_hand_raised
+  bool put_down_ = false;  // put_down_before_release
+  Eigen::Isometry3d X_grasped_ = Eigen::Isometry3d::Identity();  // the controller when the lift began
   double practice_ = 1;  // practice_factor of this trial
   double standoff_ = 0.10;  // pre-grasp stand-off of this trial's object, m
   double aperture_s_ = 0;  // extra final-approach time for this trial's object's size, s
