@@ -114,6 +114,7 @@ ResolverSettings resolver_settings(const GraspSettings& s) {
   ResolverSettings out;
   out.rejoin_speed = s.rejoin_speed;
   out.rejoin_turn = s.rejoin_turn;
+  out.snap_distance = s.snap_distance;
   out.table_half_extent = s.table_half_extent;
   out.tolerance = s.contact_tolerance;
   out.fingers_may_rest_inside = s.mode == ClosingMode::kDiscrete;

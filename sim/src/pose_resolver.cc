@@ -216,6 +216,18 @@ Eigen::Isometry3d PoseResolver::resolve(const Eigen::Isometry3d& X_WorldResolved
                                         const Eigen::Isometry3d& X_WorldTracked, bool has_previous, double dt,
                                         std::span<const HandVolume> volumes, std::span<const ObjectView> objects,
                                         ObjectId held) {
+  if (has_previous && settings_.snap_distance > 0 && !held.valid() &&
+      (X_WorldTracked.translation() - X_WorldResolved.translation()).norm() > settings_.snap_distance) {
+    // Caught far behind: at the tracked pose if nothing has to be pushed out there.
+    const bool pushed = pushed_;
+    const Eigen::Vector3d push_normal = push_normal_;
+    last_valid_ = false;  // last tick's bounds hold where it left the hand, not there
+    const Eigen::Isometry3d X = resolve(X_WorldTracked, X_WorldTracked, X_WorldTracked, false, dt, volumes, objects, held);
+    if (!pushed_ && X.matrix() == X_WorldTracked.matrix()) return X;
+    last_valid_ = false;  // the bounds now hold at the tracked pose
+    pushed_ = pushed;
+    push_normal_ = push_normal;
+  }
   const Eigen::Isometry3d X1 =
       has_previous ? candidate(X_WorldResolved, X_WorldTrackedBefore, X_WorldTracked, dt) : X_WorldTracked;
   const Eigen::Isometry3d X0 = has_previous ? X_WorldResolved : X1;

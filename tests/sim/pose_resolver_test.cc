@@ -130,6 +130,41 @@ TEST(PoseResolverTest, RejoinsTheTrackedPoseAtABoundedSpeed) {
   EXPECT_LE(ticks, 10);
 }
 
+// The controller passes through a wall (4 cm thick) and stops 0.3 m beyond it: the hand, caught on
+// the near side, never enters the wall and, once the tracked pose is clear and more than the snap
+// distance away, is at the tracked pose. With snapping off it stays caught behind the wall.
+TEST(PoseResolverTest, AHandCaughtFarBehindAWallJumpsToItsControllerOnceClear) {
+  Box wall({0.02, 0.3, 0.3}, {0.25, 0, 0.3});
+  for (const double snap : {0.2, 0.0}) {
+    GraspSettings settings;
+    settings.snap_distance = snap;
+    HandController hand(human(), settings);
+    for (int t = 0; t <= 120; ++t) {
+      hand.tick(palm_at({std::min(0.5 * t * kDt, 0.55), 0, 0.3}), kDt, {&wall.view, 1});
+      ASSERT_GE(min_gap(hand, wall.view), kFloor) << "snap " << snap << " tick " << t;
+    }
+    const HandState& s = hand.state();
+    if (snap > 0) {
+      EXPECT_EQ(s.X_WorldPalm.matrix(), s.X_WorldTracked.matrix());
+    } else {
+      EXPECT_LT(s.X_WorldPalm.translation().x(), 0.23) << "still on the near side";
+    }
+  }
+}
+
+// A controller 0.3 m deep in a block: farther than the snap distance, but the tracked pose is not
+// clear, so the hand stays on the top (every tick it looks again).
+TEST(PoseResolverTest, NeverJumpsIntoAnObject) {
+  Box block({0.5, 0.5, 0.5}, {0.03, 0, -0.5});  // top at z = 0
+  HandController hand(human(), {});
+  for (int t = 0; t <= 90; ++t) {
+    hand.tick(palm_at({0, 0, std::max(0.06 - 0.5 * t * kDt, -0.3)}), kDt, {&block.view, 1});
+    ASSERT_GE(min_gap(hand, block.view), kFloor) << "tick " << t;
+  }
+  EXPECT_NEAR(lowest_z(hand), 0.0, 0.1e-3) << "resting on the top";
+  EXPECT_GT((hand.state().X_WorldPalm.translation() - hand.state().X_WorldTracked.translation()).norm(), 0.3);
+}
+
 // The World's table: a controller below z = 0 leaves the hand above it.
 TEST(PoseResolverTest, HandStaysAboveTheTable) {
   World world;

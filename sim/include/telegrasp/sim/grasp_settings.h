@@ -39,6 +39,9 @@ struct GraspSettings {
   double table_half_extent = 0;  ///< > 0: the table top z = 0 over [-this, this]^2 is an obstacle (m).
   double rejoin_speed = 1.0;  ///< The resolved pose closes its offset to the tracked one at most this fast (m/s).
   double rejoin_turn = 6.283185307179586;  ///< ... and its turn at most this fast (rad/s).
+  /// A hand holding nothing whose resolved pose is more than this (m) from the tracked one, caught
+  /// behind an object, jumps to the tracked pose when every volume is clear there; 0: never.
+  double snap_distance = 0.2;
   /// Whether grasp qualities include the wrench hull's volume (the full Qhull hull: milliseconds
   /// per contact set); kSkip: GraspQuality::volume is kVolumeNotComputed.
   QualityVolume quality_volume = QualityVolume::kSkip;

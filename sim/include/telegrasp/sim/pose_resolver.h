@@ -32,6 +32,10 @@ struct ResolverSettings {
   double rejoin_speed = 1.0;  ///< The resolved pose closes its offset to the tracked one at most this fast, m/s.
   double rejoin_turn = 2.0 * 3.141592653589793;  ///< ... and turns toward it at most this fast, rad/s.
   double table_half_extent = 0;  ///< > 0: the table top z = 0 over [-this, this]^2 is an obstacle, m.
+  /// Holding nothing and farther than this from the tracked pose (caught behind an object while
+  /// the controller went on), the hand jumps to the tracked pose if it is clear there, as VR hands
+  /// do; m, 0: never.
+  double snap_distance = 0.2;
   double tolerance = 0.05e-3;  ///< A pushed-out volume ends within [0, this] of the surface, m.
   bool fingers_may_rest_inside = false;  ///< Discrete closing: hand motion only never deepens a finger's overlap.
 };
