@@ -518,6 +518,8 @@ void ScriptedOperator::start_attempt(double t) {
 
 // Where the reach puts the hand at `t`: transport, final approach, then the correction, each a
 // minimum-jerk move.
+double ScriptedOperator::lift_duration() const { return std::max(0.2, 1.5 * kLiftHeight / skill_.reach_speed); }
+
 Eigen::Isometry3d ScriptedOperator::reach_pose(double t) const {
   if (t < t_via_) return interpolate(X_start_, X_pre_, min_jerk((t - t_phase_) / (t_via_ - t_phase_)));
   if (t < t_end_ || t_fixed_ <= t_end_) return interpolate(X_pre_, X_goal_, min_jerk((t - t_via_) / (t_end_ - t_via_)));
@@ -541,7 +543,7 @@ ControllerInput ScriptedOperator::next(double t, bool grasped) {
       if (grasped) {
         phase_ = OperatorPhase::kLift;
         t_phase_ = t;
-        X_start_ = X_grasped_ = X_last_;
+        X_start_ = X_last_;
         X_lifted_ = X_last_;
         X_lifted_.translation().z() += kLiftHeight + std::max(0.0, hand_raised_);
       } else if (t - t_phase_ > skill_.squeeze_time + 0.3) {
@@ -555,7 +557,7 @@ ControllerInput ScriptedOperator::next(double t, bool grasped) {
       break;
     case OperatorPhase::kLift: {
       trigger_ = std::min(1.0, trigger_ + dt_ / skill_.squeeze_time);  // firm up the grip
-      const double duration = std::max(0.2, 1.5 * kLiftHeight / skill_.reach_speed);
+      const double duration = lift_duration();
       X_last_ = interpolate(X_start_, X_lifted_, min_jerk((t - t_phase_) / duration));
       if (!grasped) {
         phase_ = OperatorPhase::kRelease;
@@ -575,17 +577,16 @@ ControllerInput ScriptedOperator::next(double t, bool grasped) {
         held_after_lift_ = true;
         phase_ = put_down_ ? OperatorPhase::kPutDown : OperatorPhase::kRelease;
         t_phase_ = t;
-        X_start_ = X_last_;
+        X_lifted_ = X_last_;  // where the hold ended; X_start_ is still where the lift began
       }
       break;
     case OperatorPhase::kPutDown: {
       // Back down the way it went up, to just above where the hand grasped (the resolved pose
       // stops the object on the table), then open.
-      const double duration = std::max(0.2, 1.5 * kLiftHeight / skill_.reach_speed);
-      Eigen::Isometry3d X_down = X_grasped_;
+      Eigen::Isometry3d X_down = X_start_;
       X_down.translation().z() += kPutDownClearance;
-      X_last_ = interpolate(X_start_, X_down, min_jerk((t - t_phase_) / duration));
-      if (!grasped || t - t_phase_ >= duration) {
+      X_last_ = interpolate(X_lifted_, X_down, min_jerk((t - t_phase_) / lift_duration()));
+      if (!grasped || t - t_phase_ >= lift_duration()) {
         phase_ = OperatorPhase::kRelease;
         t_phase_ = t;
       }

@@ -203,17 +203,22 @@ std::map<std::string, sim::ObjectModelPtr> resolve_models(const client::Client& 
   return models;
 }
 
-std::shared_ptr<const sim::HandRig> hand_rig(client::HandSide side) {
-  return std::make_shared<const sim::HandRig>(
-      sim::HandRig::load(sim::HandRig::builtin_path(side == client::HandSide::kRight ? "human_right" : "human_left")));
+std::vector<std::shared_ptr<const sim::HandRig>> load_hand_rigs(const std::vector<client::HandSide>& hands) {
+  std::vector<std::shared_ptr<const sim::HandRig>> out;
+  for (client::HandSide side : hands)
+    out.push_back(std::make_shared<const sim::HandRig>(sim::HandRig::load(
+        sim::HandRig::builtin_path(side == client::HandSide::kRight ? "human_right" : "human_left"))));
+  return out;
 }
 
-Bot::Bot(Options opt, client::Client& c, std::map<std::string, sim::ObjectModelPtr> models)
+Bot::Bot(Options opt, client::Client& c, std::map<std::string, sim::ObjectModelPtr> models,
+         std::vector<std::shared_ptr<const sim::HandRig>> rigs)
     : opt_(std::move(opt)), client_(c), models_(std::move(models)), skill_(sim::skill_profile(opt_.skill)) {
-  for (client::HandSide side : opt_.hands) {
+  for (std::size_t i = 0; i < opt_.hands.size(); ++i) {
+    const client::HandSide side = opt_.hands[i];
     Hand h;
     h.key = {client_.client_id(), side};
-    h.rig = hand_rig(side);
+    h.rig = std::move(rigs.at(i));
     h.input.X_WorldPalm.translation() = Eigen::Vector3d(0.0, side == client::HandSide::kRight ? -0.3 : 0.3, 0.3);
     hands_.push_back(std::move(h));
   }

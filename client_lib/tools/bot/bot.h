@@ -43,8 +43,9 @@ struct Options {
   double timeout_s = 20;
 };
 
-// The shipped human rig of a hand. Throws sim::RigError naming the file if it cannot be loaded.
-std::shared_ptr<const sim::HandRig> hand_rig(client::HandSide side);
+// The shipped human rig of each hand, in the order given. Throws sim::RigError naming the file if
+// one cannot be loaded.
+std::vector<std::shared_ptr<const sim::HandRig>> load_hand_rigs(const std::vector<client::HandSide>& hands);
 
 // True once the server's geometry (ObjectGeometry) of every object in `scene` with no model in
 // `local` has arrived.
@@ -141,7 +142,9 @@ struct Hand {
 // records. One thread calls everything.
 class Bot {
  public:
-  Bot(Options opt, client::Client& c, std::map<std::string, sim::ObjectModelPtr> models);
+  /// `rigs`: load_hand_rigs(opt.hands).
+  Bot(Options opt, client::Client& c, std::map<std::string, sim::ObjectModelPtr> models,
+      std::vector<std::shared_ptr<const sim::HandRig>> rigs);
 
   // Takes the scene's objects as the work list; false if the scene is empty.
   bool set_scene(const client::SceneState& scene);

@@ -274,8 +274,9 @@ int main(int argc, char** argv) {
     std::cerr << "telegrasp-bot: --json " << opt.json_path << ": cannot write\n";
     return telegrasp::cli::kExitFailure;
   }
+  std::vector<std::shared_ptr<const sim::HandRig>> rigs;
   try {  // the rigs first: an installation without them fails before any waiting
-    for (client::HandSide side : opt.hands) telegrasp::bot::hand_rig(side);
+    rigs = telegrasp::bot::load_hand_rigs(opt.hands);
   } catch (const std::exception& e) {
     std::cerr << "telegrasp-bot: " << e.what() << "\n";
     return telegrasp::cli::kExitFailure;
@@ -303,7 +304,7 @@ int main(int argc, char** argv) {
   if (g_stop) return kExitInterrupted;
 
   refusals.listen(opt, *c);
-  Bot bot(opt, *c, telegrasp::bot::resolve_models(*c, *scene, std::move(models)));
+  Bot bot(opt, *c, telegrasp::bot::resolve_models(*c, *scene, std::move(models)), std::move(rigs));
   if (!bot.set_scene(*scene)) {
     std::cerr << "telegrasp-bot: the server's scene has no objects\n";
     bot.report_results();

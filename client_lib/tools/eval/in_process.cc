@@ -175,8 +175,7 @@ Trial run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRig
   GraspSnapshot picture;
   while (!op.done() && world.time() - t0 < 30.0) {
     const bool grasped = world.holder(object) == hand;
-    const HandState& seen = world.hand(hand).state();
-    op.see_hand_raised(seen.X_WorldPalm.translation().z() - seen.X_WorldTracked.translation().z());
+    op.see_hand_raised(world.hand(hand).state().resolve_offset().z());
     const ControllerInput in = op.next(world.time(), grasped);
     world.set_input(hand, in);
     world.step();

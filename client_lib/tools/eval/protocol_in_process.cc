@@ -44,8 +44,7 @@ class InProcessTrial {
         continue;
       }
       const double t = static_cast<double>(world_.tick() - start_tick) * world_.dt();
-      const sim::HandState& seen = world_.hand(hand_).state();
-      op.see_hand_raised(seen.X_WorldPalm.translation().z() - seen.X_WorldTracked.translation().z());
+      op.see_hand_raised(world_.hand(hand_).state().resolve_offset().z());
       input = op.next(t, holding);
       if (op.phase() == sim::OperatorPhase::kHold)
         z_max = std::max(z_max, world_.object_pose(object_).translation().z());

@@ -33,6 +33,9 @@ struct HandState {
   GraspType grasp_type = GraspType::kOther;
   ObjectId grasped;
   Eigen::Isometry3d X_PalmObject = Eigen::Isometry3d::Identity();  ///< While grasped.
+
+  /// X_WorldPalm minus X_WorldTracked position, world frame, m (what a person sees of the resolve).
+  [[nodiscard]] Eigen::Vector3d resolve_offset() const { return X_WorldPalm.translation() - X_WorldTracked.translation(); }
 };
 
 }  // namespace telegrasp::sim

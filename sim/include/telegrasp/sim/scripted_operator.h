@@ -192,6 +192,7 @@ class ScriptedOperator {
   Eigen::Isometry3d noisy(const Eigen::Isometry3d& X);
   double leg_time(double distance, double width) const;
   Eigen::Isometry3d reach_pose(double t) const;
+  double lift_duration() const;  // of the lift, and of the put-down
 
   std::shared_ptr<const HandRig> rig_;
   OperatorSkill skill_;
@@ -207,7 +208,6 @@ class ScriptedOperator {
   double trigger_ = 0;
   double hand_raised_ = 0;  // see_hand_raised
   bool put_down_ = false;  // put_down_before_release
-  Eigen::Isometry3d X_grasped_ = Eigen::Isometry3d::Identity();  // the controller when the lift began
   double practice_ = 1;  // practice_factor of this trial
   double standoff_ = 0.10;  // pre-grasp stand-off of this trial's object, m
   double aperture_s_ = 0;  // extra final-approach time for this trial's object's size, s
