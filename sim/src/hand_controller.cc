@@ -464,11 +464,11 @@ HandController::Probe HandController::probe_capsule(const FingerStep& step, std:
   const MeshDistance& mesh = step.object->model->distance;
   const Capsule c = capsule_in_object(step.chain[m], step.X_ObjectPalm);
   std::uint32_t& hint = hint_[step.id(m)];
-  if (!mesh.capsule_overlaps(c.a, c.b, c.radius + horizon, hint)) {  // free for the rest of the step
+  const SegmentQuery hit = mesh.closest_to_segment(c.a, c.b, c.radius + horizon, hint);
+  if (!hit.found && !mesh.segment_inside(c.a)) {  // free for the rest of the step
     bound = horizon;
     return Probe::kFree;
   }
-  const SegmentQuery hit = mesh.closest_to_segment(c.a, c.b, c.radius + horizon, hint);
   if (hit.found) {
     hint = hit.triangle;
     scratch_->closest[step.id(m)] = {step.object->id, &mesh, c.a, c.b, hit};

@@ -82,6 +82,9 @@ class MeshDistance {
   /// same answer as capsule_overlaps, bit for bit.
   [[nodiscard]] bool capsule_overlaps(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius,
                                       const SegmentQuery& nearest, std::uint32_t hint = kNoHint) const;
+  /// capsule_overlaps' answer once no triangle lies within the radius of a segment from a: whether
+  /// the segment lies inside the solid (it then does entirely).
+  [[nodiscard]] bool segment_inside(const Eigen::Vector3d& a) const;
 
   /// Exact signed distance between the capsule (segment [a, b], `radius`) and the solid:
   /// min over segment points of signed_distance, minus radius. Positive = gap, negative = depth.
@@ -152,8 +155,6 @@ class MeshDistance {
   [[nodiscard]] bool sweep_exit(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double radius, double& s,
                                 std::uint32_t& slot) const;
   [[nodiscard]] bool inside_by_ray_parity(const Eigen::Vector3d& p, bool& decided) const;
-  /// capsule_overlaps' answer once no triangle lies within the radius: whether a lies inside.
-  [[nodiscard]] bool segment_inside(const Eigen::Vector3d& a) const;
   [[nodiscard]] double min_signed_distance_on_segment(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                                       double hint_t) const;
 
