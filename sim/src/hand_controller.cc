@@ -14,6 +14,9 @@ namespace telegrasp::sim {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// A predicted advance (close_precise) may leave a capsule unaware of a graze this deep, as a
+// fraction of the contact tolerance.
+constexpr double kGrazeAllowance = 0.5;
 // Precise mode gives up refining a contact after this many advancement steps in one tick; the
 // finger then stops short (free, not blocked) and continues next tick.
 constexpr int kMaxAdvancementSteps = 64;
@@ -90,6 +93,11 @@ struct HandController::Scratch {
   struct StepWork {
     std::vector<double> q0, delta, rate;  // per position along the finger
     std::vector<std::size_t> affected;
+    // The predicted advance (close_precise): per position, the longest advance whose unseen
+    // graze is certified below the allowance, and the last exact gap this step and where.
+    std::vector<double> certified, last_s, last_gap, closing;
+    std::vector<double> saved_bound;  // per position: the gap bounds before a predicted advance
+    std::vector<int> blocked_now;  // phalanges blocked at the pose being probed
   };
 
   std::vector<TouchCache> touch;  // per phalanx
@@ -424,41 +432,89 @@ void HandController::close_precise(const FingerStep& step) {
     }
   }
 
+  // The predicted advance: once a capsule's gap has been measured twice in this step, the next
+  // advance may aim at contact by the rate the gap actually fell at (a secant) instead of the
+  // rate's bound, up to the length certified_advance allows for a graze of kGrazeAllowance of
+  // the tolerance, and is checked by a query at its end.
+  std::vector<double>& certified = work.certified;
+  certified.assign(step.size(), 0.0);
+  work.last_s.assign(step.size(), -1.0);
+  work.last_gap.assign(step.size(), kInf);
+  work.closing.assign(step.size(), 0.0);
+  for (std::size_t m : affected) {
+    double turn = 0, reach = 0;
+    for (std::size_t k = 0; k <= m; ++k) {
+      turn += std::abs(work.delta[k]);
+      reach = std::max(reach, reach_[step.id(k)][step.id(m)]);
+    }
+    certified[m] = certified_advance(rate[m], turn, reach, specs[step.id(m)].capsule->radius,
+                                     kGrazeAllowance * step.tol);
+  }
+
   // Each affected capsule carries a lower bound on its gap (from earlier ticks, or from its last
   // exact query this step, minus its motion since): while the bound exceeds the tolerance it
   // replaces the query.
   double s = 0;
+  double s_before = 0;  // where the last advance started
+  bool predicted = false;  // the last advance went past what the gap bounds guarantee
+  bool may_predict = true;
   for (int iter = 0; iter < kMaxAdvancementSteps; ++iter) {
     set_fraction(step, s);
     double ds = kInf;
+    double ds_safe = kInf;
     bool touched = false;
+    bool overshot = false;
+    work.blocked_now.clear();
     for (std::size_t m : affected) {
-      const Probe probe = probe_capsule(step, m, s, rate[m], ds);
+      const Probe probe = probe_capsule(step, m, s, rate[m], ds, ds_safe, may_predict ? certified[m] : 0.0, predicted);
       if (probe == Probe::kDepenetrated) return;
       touched |= probe == Probe::kBlocked;
+      overshot |= probe == Probe::kOvershot;
+    }
+    if (overshot) {  // a predicted advance went into the object: back to its start, advancing safely
+      for (int id : work.blocked_now) state_.blocked[id] = 0;
+      for (std::size_t m : affected) gap_bound_[step.id(m)] = work.saved_bound[m];
+      s = s_before;
+      predicted = false;
+      may_predict = false;
+      continue;
     }
     if (touched || s >= 1.0) return;
     const double advance = std::isfinite(ds) ? std::min(1.0 - s, ds) : 1.0 - s;  // all free: to the end
+    predicted = advance > ds_safe;
+    if (predicted) {
+      work.saved_bound.resize(step.size());
+      for (std::size_t m : affected) work.saved_bound[m] = gap_bound_[step.id(m)];
+    }
     for (std::size_t m : affected) gap_bound_[step.id(m)] -= rate[m] * advance;
+    s_before = s;
     s += advance;
     if (s >= 1.0) {
-      set_fraction(step, 1.0);
-      return;
+      s = 1.0;
+      if (!predicted) {  // the bounds prove every capsule free to the end
+        set_fraction(step, 1.0);
+        return;
+      }
     }
   }
 }
 
 // One affected capsule m at fraction s of the step: its gap bound, refreshed by an exact query
 // when it no longer proves the capsule free until the step's end; blocks the capsule on contact.
-// Lowers `ds` to the advance its gap allows.
+// Lowers `ds_safe` to the advance its gap bound allows and `ds` to that or, when longer, the
+// predicted advance (at most `certified` past its last query); after a predicted advance
+// (`predicted`) a capsule found inside reports kOvershot instead of blocking.
 HandController::Probe HandController::probe_capsule(const FingerStep& step, std::size_t m, double s, double rate,
-                                                    double& ds) {
+                                                    double& ds, double& ds_safe, double certified, bool predicted) {
   const double tol = step.tol;
   double& bound = gap_bound_[step.id(m)];
   const double horizon = rate * (1.0 - s) + tol;  // beyond it, no contact this step
   if (bound > horizon) return Probe::kFree;  // free for the rest of the step
+  Scratch::StepWork& work = scratch_->work;
   if (bound > tol) {
-    ds = std::min(ds, (bound - 0.5 * tol) / rate);
+    const double safe = (bound - 0.5 * tol) / rate;
+    ds = std::min(ds, std::max(safe, predicted_advance(m, s, certified, tol)));
+    ds_safe = std::min(ds_safe, safe);
     return Probe::kFree;
   }
   const MeshDistance& mesh = step.object->model->distance;
@@ -483,12 +539,29 @@ HandController::Probe HandController::probe_capsule(const FingerStep& step, std:
     block(step.id(m));
     return Probe::kBlocked;
   }
+  if (predicted && gap < 0) return Probe::kOvershot;
   if (gap <= tol) {
     block(step.id(m));
+    work.blocked_now.push_back(step.id(m));
     return Probe::kBlocked;
   }
-  ds = std::min(ds, (gap - 0.5 * tol) / rate);
+  const double safe = (gap - 0.5 * tol) / rate;
+  if (work.last_s[m] >= 0 && s > work.last_s[m] && work.last_gap[m] > gap)
+    work.closing[m] = (work.last_gap[m] - gap) / (s - work.last_s[m]);  // the gap's fall per unit s
+  work.last_s[m] = s;
+  work.last_gap[m] = gap;
+  ds = std::min(ds, std::max(safe, predicted_advance(m, s, certified, tol)));
+  ds_safe = std::min(ds_safe, safe);
   return Probe::kFree;
+}
+
+// The advance from s that takes capsule m's gap, falling as it did between its last two exact
+// queries this step, to half the tolerance; no farther than `certified` past its last query.
+double HandController::predicted_advance(std::size_t m, double s, double certified, double tol) const {
+  const Scratch::StepWork& work = scratch_->work;
+  if (!(work.closing[m] > 0) || work.last_s[m] < 0) return 0;
+  const double gap = work.last_gap[m] - work.closing[m] * (s - work.last_s[m]);
+  return std::min((gap - 0.5 * tol) / work.closing[m], work.last_s[m] + certified - s);
 }
 
 void HandController::step_finger(int finger, double u, double dt, const ObjectView* object,

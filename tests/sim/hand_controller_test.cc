@@ -12,9 +12,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <optional>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -180,6 +182,124 @@ TEST(HandControllerTest, FastCloseOnThinPlateDoesNotTunnel) {
   EXPECT_LE(gap, kTol);
   const double discrete_gap = close_on(thin.view, ClosingMode::kDiscrete, 64.0, &blocked);
   EXPECT_TRUE(!blocked || discrete_gap < -1e-3) << "discrete mode tunnels or sinks deep";
+}
+
+// The finger3 rig's distal capsule axis (palm frame, the finger moving in the x-z plane) at joint
+// angles q: joints at x = 0.04, then 0.03 and 0.025 along the turned phalanges, each turning
+// about +y (x toward -z); the capsule runs 15 mm along the distal phalanx.
+std::pair<Eigen::Vector2d, Eigen::Vector2d> distal_axis(double q1, double q2, double q3) {
+  const auto dir = [](double q) { return Eigen::Vector2d(std::cos(q), -std::sin(q)); };  // (x, z)
+  const Eigen::Vector2d j3 = Eigen::Vector2d(0.04, 0) + 0.03 * dir(q1) + 0.025 * dir(q1 + q2);
+  return {j3, j3 + 0.015 * dir(q1 + q2 + q3)};
+}
+
+// The middle capsule's axis: its 25 mm from the middle joint.
+std::pair<Eigen::Vector2d, Eigen::Vector2d> middle_axis(double q1, double q2) {
+  const auto dir = [](double q) { return Eigen::Vector2d(std::cos(q), -std::sin(q)); };
+  const Eigen::Vector2d j2 = Eigen::Vector2d(0.04, 0) + 0.03 * dir(q1);
+  return {j2, j2 + 0.025 * dir(q1 + q2)};
+}
+
+// 2-D distance between segment [a, b] and the rectangle [x0, x1] x [z0, z1] (disjoint from it).
+double segment_rectangle_distance(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double x0, double x1, double z0,
+                                  double z1) {
+  const auto to_rect = [&](const Eigen::Vector2d& p) {
+    return std::hypot(std::max({x0 - p.x(), 0.0, p.x() - x1}), std::max({z0 - p.y(), 0.0, p.y() - z1}));
+  };
+  const auto to_seg = [&](const Eigen::Vector2d& p) {
+    const Eigen::Vector2d d = b - a;
+    const double t = std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+    return (a + t * d - p).norm();
+  };
+  return std::min({to_rect(a), to_rect(b), to_seg({x0, z0}), to_seg({x0, z1}), to_seg({x1, z0}), to_seg({x1, z1})});
+}
+
+// A fingertip sweeping past the corner of a thin plate blocks on it whenever its path would take
+// it into the plate by more than half the tolerance, at any closing speed, and passes when the
+// path clears it: the advancement's predicted steps (close_precise) never jump over a graze the
+// size of the tolerance. The path and its deepest reach into the plate are computed here from
+// the rig's kinematics: each tick every joint turns toward its closed angle by at most 2 degrees
+// times the speed (180 deg/s), linearly in between, sampled 400 times a tick.
+TEST(HandControllerTest, AFingertipGrazingACornerBlocksOnItWhenItWouldGoInDeeperThanHalfTheTolerance) {
+  constexpr double kRadius = 0.005;
+  const std::array<double, 3> closed = {90 * kDeg, 90 * kDeg, 70 * kDeg};
+  struct Plate {  // cross-section in the x-z plane; long in y
+    double x0, x1, z0, z1;
+  };
+  int must_block = 0, must_pass = 0;
+  for (double speed : {1.0, 4.0, 16.0}) {
+    std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> path, middle;  // the axes, densely
+    std::vector<std::array<double, 3>> ticks = {{0, 0, 0}};
+    while (ticks.back() != closed) {
+      std::array<double, 3> q = ticks.back();
+      for (int k = 0; k < 3; ++k) q[k] = std::min(closed[k], q[k] + 2 * kDeg * speed);
+      ticks.push_back(q);
+    }
+    for (std::size_t t = 1; t < ticks.size(); ++t)
+      for (int i = 0; i <= 400; ++i) {
+        const double f = i / 400.0;
+        const auto q = [&](int k) { return ticks[t - 1][k] + f * (ticks[t][k] - ticks[t - 1][k]); };
+        path.push_back(distal_axis(q(0), q(1), q(2)));
+        middle.push_back(middle_axis(q(0), q(1)));
+      }
+    const auto deepest_reach = [&](const Plate& p, const auto& axes) {  // min over the path of the gap
+      double gap = 1e9;
+      for (const auto& [a, b] : axes) gap = std::min(gap, segment_rectangle_distance(a, b, p.x0, p.x1, p.z0, p.z1) - kRadius);
+      return gap;
+    };
+    // A plate 0.3 mm thick and 20 mm long, lying along the fingertip's direction at the path's
+    // sample i, its near edge `beyond` past the capsule's end.
+    const auto plate_beyond = [&](std::size_t i, double beyond) {
+      const auto [a, b] = path[i];
+      const Eigen::Vector2d u = (b - a).normalized();
+      const Eigen::Vector2d near = b + (kRadius + beyond) * u;
+      if (std::abs(u.x()) >= std::abs(u.y())) {
+        const double far = near.x() + 0.02 * (u.x() > 0 ? 1 : -1);
+        return Plate{std::min(near.x(), far), std::max(near.x(), far), near.y() - 1.5e-4, near.y() + 1.5e-4};
+      }
+      const double far = near.y() + 0.02 * (u.y() > 0 ? 1 : -1);
+      return Plate{near.x() - 1.5e-4, near.x() + 1.5e-4, std::min(near.y(), far), std::max(near.y(), far)};
+    };
+    for (double along : {0.25, 0.45, 0.65, 0.85}) {
+      const auto i = static_cast<std::size_t>(along * static_cast<double>(path.size() - 1));
+      for (double wanted : {-0.3e-3, -0.1e-3, -0.04e-3, 0.2e-3}) {
+        // How far beyond the fingertip the plate must lie for the path to reach `wanted`
+        // (bisection: the farther the plate, the shallower the reach).
+        double lo = -3e-3, hi = 6e-3;
+        for (int it = 0; it < 30; ++it) {
+          const double mid = 0.5 * (lo + hi);
+          (deepest_reach(plate_beyond(i, mid), path) < wanted ? lo : hi) = mid;
+        }
+        const Plate p = plate_beyond(i, hi);
+        const double reach = deepest_reach(p, path);  // < 0: the path goes into the plate that deep
+        if (reach > -0.5 * kTol - 1e-6 && reach < kTol + 1e-6) continue;  // either outcome is right
+        if (deepest_reach(p, middle) < 1e-3) continue;  // the middle capsule would meet it: another case
+        BoxScene plate({(p.x1 - p.x0) / 2, 0.05, (p.z1 - p.z0) / 2}, {(p.x0 + p.x1) / 2, 0, (p.z0 + p.z1) / 2});
+        GraspSettings settings;
+        settings.speed_scale = speed;
+        settings.resolve_pose = false;  // the finger layer alone: the palm stays put, even over the plate
+        HandController hand(finger_rig_without_grasp(), settings);
+        for (int t = 0; t < 120; ++t) hand.tick(at_identity(1.0), kDt, {&plate.view, 1});
+        const HandState& s = hand.state();
+        const std::string where = "speed x" + std::to_string(speed) + ", plate at " + std::to_string(along) +
+                                  " of the path, reach " + std::to_string(reach * 1e3) + " mm";
+        const auto [a, b] = distal_axis(s.q[0], s.q[1], s.q[2]);
+        const double gap = segment_rectangle_distance(a, b, p.x0, p.x1, p.z0, p.z1) - kRadius;
+        if (reach < 0) {
+          ++must_block;
+          EXPECT_TRUE(s.blocked[2]) << where;
+          EXPECT_GE(gap, -1e-9) << where;
+          EXPECT_LE(gap, kTol + 1e-9) << where;
+        } else {
+          ++must_pass;
+          EXPECT_FALSE(s.blocked[1] || s.blocked[2]) << where;
+          EXPECT_EQ(s.q[2], closed[2]) << where << ": the finger closes fully past the plate";
+        }
+      }
+    }
+  }
+  EXPECT_GE(must_block, 30);
+  EXPECT_GE(must_pass, 10);
 }
 
 TEST(HandControllerTest, UnblocksWhenTheHandOpens) {

@@ -3,9 +3,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <random>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace telegrasp::sim {
 namespace {
@@ -145,6 +149,95 @@ void expect_mirrored(const std::string& right_name, const std::string& left_name
 TEST(HandKinematicsTest, LeftHandMirrorsRight) {
   expect_mirrored("human_right", "human_left");
   expect_mirrored("human_right_opposable", "human_left_opposable");
+}
+
+// A three-joint finger turning about z, then y, then x (a path that leaves every plane), with a
+// capsule on its last phalanx.
+const std::string kTwistedRig = std::string("name: \"twisted\"") + kPalm + R"(
+fingers {
+  name: "f"
+  phalanges { name: "f_prox" rest { translation { x: 0.04 } }
+    joint { axis { z: 1 } open_deg: -90 closed_deg: 90 min_deg: -90 max_deg: 90 } length: 0.03 }
+  phalanges { name: "f_mid" rest { translation { x: 0.03 } }
+    joint { axis { y: 1 } open_deg: -90 closed_deg: 90 min_deg: -90 max_deg: 90 } length: 0.025 }
+  phalanges { name: "f_dist" rest { translation { x: 0.025 } }
+    joint { axis { x: 1 } open_deg: -90 closed_deg: 90 min_deg: -90 max_deg: 90 } length: 0.02
+    capsule { a { y: 0.004 } b { x: 0.018 z: 0.003 } radius: 0.007 ctc { x: 0.009 z: -0.007 } sp { x: 0.009 } } }
+}
+grasp_rule { members: ["f_dist"] }
+)";
+
+// The certified advance's claim, checked by sampling: over random joint angles and steps of the
+// twisted finger, no point outside both end capsules of an advance lies deeper than the graze
+// inside the capsule anywhere in between. The rate, turn and reach are measured here from the
+// sampled motion (the controller bounds them from the rig). Advances three times as long do
+// leave deeper points uncovered, so the sampling would see a bound that claimed too much.
+TEST(HandKinematicsTest, ACertifiedAdvanceLeavesNoPointDeeperThanTheGrazeUncovered) {
+  const HandRig rig = HandRig::parse(kTwistedRig, "inline");
+  const CapsuleSpec& cap = *rig.phalanges()[2].capsule;
+  const double r = cap.radius;
+  constexpr double kGraze = 25e-6;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> angle(-1.2, 1.2), delta(-0.4, 0.4), unit(0.0, 1.0);
+  const auto segment_distance = [](const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    const Eigen::Vector3d d = b - a;
+    const double t = std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+    return (a + t * d - p).norm();
+  };
+  int checked = 0, in_band = 0, longer_uncovered = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const std::vector<double> q0 = {angle(rng), angle(rng), angle(rng)};
+    const std::vector<double> dq = {delta(rng), delta(rng), delta(rng)};
+    std::vector<Eigen::Isometry3d> X;
+    const auto axis_at = [&](double s) {  // the capsule's axis at fraction s of the step
+      forward_kinematics(rig, {q0[0] + s * dq[0], q0[1] + s * dq[1], q0[2] + s * dq[2]}, &X);
+      return std::pair(X[2] * cap.p_PhalanxA, X[2] * cap.p_PhalanxB);
+    };
+    // rate: the fastest axis end per unit step; reach: the farthest axis end from a joint origin.
+    double rate = 0, reach = 0;
+    constexpr int kSamples = 2000;
+    for (int i = 0; i < kSamples; ++i) {
+      const double s = static_cast<double>(i) / kSamples, ds = 1.0 / kSamples;
+      const auto [a0, b0] = axis_at(s);
+      for (int k = 0; k < 3; ++k) reach = std::max({reach, (a0 - X[k].translation()).norm(), (b0 - X[k].translation()).norm()});
+      const auto [a1, b1] = axis_at(s + ds);
+      rate = std::max({rate, (a1 - a0).norm() / ds, (b1 - b0).norm() / ds});
+    }
+    rate *= 1.01;
+    const double turn = std::abs(dq[0]) + std::abs(dq[1]) + std::abs(dq[2]);
+    const double h = certified_advance(rate, turn, reach, r, kGraze);
+    ASSERT_GT(h, 0);
+    for (double factor : {1.0, 3.0}) {
+      const double span = std::min(1.0, factor * h);
+      const auto [a0, b0] = axis_at(0);
+      const auto [a1, b1] = axis_at(span);
+      for (int i = 0; i < 400; ++i) {
+        // A point at depth r - rho inside the capsule at a moment in between, across the path of
+        // an axis point from its chord (where the end capsules leave room).
+        const double u = unit(rng), s = span * (0.05 + 0.9 * unit(rng));
+        const Eigen::Vector3d chord = (a1 + u * (b1 - a1)) - (a0 + u * (b0 - a0));
+        const auto [a, b] = axis_at(s);
+        Eigen::Vector3d n = chord.cross(b - a);  // square to the chord and to the axis
+        if (!(n.norm() > 1e-15)) continue;
+        n = (unit(rng) < 0.5 ? 1.0 : -1.0) * n.normalized();
+        const double rho = r - 3 * kGraze * unit(rng);
+        const Eigen::Vector3d y = a + u * (b - a) + rho * n;
+        if (segment_distance(y, a, b) < rho - 1e-12) continue;  // nearer another axis point: deeper than drawn
+        if (segment_distance(y, a0, b0) < r || segment_distance(y, a1, b1) < r) continue;  // inside an end
+        if (factor == 1.0) {
+          ++checked;
+          in_band += rho >= r - kGraze;
+          EXPECT_GE(rho, r - kGraze) << "trial " << trial << ": a point " << (r - rho) * 1e6
+                                     << " um deep is outside both end capsules of a certified advance";
+        } else {
+          longer_uncovered += rho < r - kGraze;
+        }
+      }
+    }
+  }
+  EXPECT_GT(checked, 100) << "points outside both ends were drawn";
+  EXPECT_GT(in_band, 0);
+  EXPECT_GT(longer_uncovered, 0) << "three times the certified advance leaves deeper points uncovered";
 }
 
 }  // namespace

@@ -126,14 +126,16 @@ class HandController {
   void apply_grasp_rule(const ObjectView* object, const Eigen::Isometry3d& X_ObjectPalm, HandTickEvents& events);
   // The phases of step_finger(), on one finger's FingerStep.
   struct FingerStep;
-  enum class Probe { kFree, kBlocked, kDepenetrated };  // what probe_capsule found
+  enum class Probe { kFree, kBlocked, kDepenetrated, kOvershot };  // what probe_capsule found
   bool unblock_phalanges(const FingerStep& step);
   bool plan_motion(const FingerStep& step, double dt, int held, bool& closing);
   void block_at_rest(const FingerStep& step);
   bool pushed_into(const FingerStep& step, int id, const Capsule& c) const;
   void close_discrete(const FingerStep& step);
   void close_precise(const FingerStep& step);
-  Probe probe_capsule(const FingerStep& step, std::size_t m, double s, double rate, double& ds);
+  Probe probe_capsule(const FingerStep& step, std::size_t m, double s, double rate, double& ds, double& ds_safe,
+                      double certified, bool predicted);
+  [[nodiscard]] double predicted_advance(std::size_t m, double s, double certified, double tol) const;
   void set_fraction(const FingerStep& step, double s);
   void forget_bounds(const FingerStep& step);
   void block(int id);
