@@ -519,7 +519,10 @@ struct OrientedBox {
 /// origin to the triangle projected across the axis (a convex polygon: the projected triangle),
 /// G the gap between [0, len] and the corners' range along it. Exact when the closest pair is
 /// interior to the segment (a finger lying across a thin part), where the bounding-sphere and
-/// plane tests are loose by the triangle's spread squared over twice the distance.
+/// plane tests are loose by the triangle's spread squared over twice the distance. A triangle
+/// reaching past an end's plane (G = 0) is still bounded by A, its distance from the segment's
+/// line: on a coarse mesh of large facets that rejects most of what the exact test would
+/// otherwise take (the hammer stand-in's grasp tick: 562 exact tests -> 19).
 struct SegmentFrame {
   /// The frame is set up on the first test (most queries end on their hint or test no triangle).
   SegmentFrame(const Vector3d& a_in, const Vector3d& d_in, double dd_in, double extent_in)
@@ -564,9 +567,6 @@ struct SegmentFrame {
     const double reach2 = reach * reach;
     const double g2 = g * g;
     if (g2 > reach2) return true;
-    // Across an end's plane the nearest pair is usually that end's, which the axis's distance
-    // underestimates: not worth the rest.
-    if ((lo < 0 && hi > 0) || (lo < len && hi > len)) return false;
     double px[3], py[3];
     for (int k = 0; k < 3; ++k) {
       px[k] = e1.dot(z[k]);
