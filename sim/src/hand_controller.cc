@@ -511,10 +511,14 @@ HandController::Probe HandController::probe_capsule(const FingerStep& step, std:
   const double horizon = rate * (1.0 - s) + tol;  // beyond it, no contact this step
   if (bound > horizon) return Probe::kFree;  // free for the rest of the step
   Scratch::StepWork& work = scratch_->work;
-  if (bound > tol) {
-    const double safe = (bound - 0.5 * tol) / rate;
+  // The advance a gap (bound) allows, and the predicted one when longer.
+  const auto allow = [&](double gap) {
+    const double safe = (gap - 0.5 * tol) / rate;
     ds = std::min(ds, std::max(safe, predicted_advance(m, s, certified, tol)));
     ds_safe = std::min(ds_safe, safe);
+  };
+  if (bound > tol) {
+    allow(bound);
     return Probe::kFree;
   }
   const MeshDistance& mesh = step.object->model->distance;
@@ -545,13 +549,11 @@ HandController::Probe HandController::probe_capsule(const FingerStep& step, std:
     work.blocked_now.push_back(step.id(m));
     return Probe::kBlocked;
   }
-  const double safe = (gap - 0.5 * tol) / rate;
   if (work.last_s[m] >= 0 && s > work.last_s[m] && work.last_gap[m] > gap)
     work.closing[m] = (work.last_gap[m] - gap) / (s - work.last_s[m]);  // the gap's fall per unit s
   work.last_s[m] = s;
   work.last_gap[m] = gap;
-  ds = std::min(ds, std::max(safe, predicted_advance(m, s, certified, tol)));
-  ds_safe = std::min(ds_safe, safe);
+  allow(gap);
   return Probe::kFree;
 }
 
@@ -559,7 +561,7 @@ HandController::Probe HandController::probe_capsule(const FingerStep& step, std:
 // queries this step, to half the tolerance; no farther than `certified` past its last query.
 double HandController::predicted_advance(std::size_t m, double s, double certified, double tol) const {
   const Scratch::StepWork& work = scratch_->work;
-  if (!(work.closing[m] > 0) || work.last_s[m] < 0) return 0;
+  if (!(work.closing[m] > 0)) return 0;  // set only from two queries
   const double gap = work.last_gap[m] - work.closing[m] * (s - work.last_s[m]);
   return std::min((gap - 0.5 * tol) / work.closing[m], work.last_s[m] + certified - s);
 }

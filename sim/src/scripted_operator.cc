@@ -516,10 +516,11 @@ void ScriptedOperator::start_attempt(double t) {
   }
 }
 
-// Where the reach puts the hand at `t`: transport, final approach, then the correction, each a
-// minimum-jerk move.
+// The lift's duration (and the put-down's): 1.5 times its height at the reach speed, at least 0.2 s.
 double ScriptedOperator::lift_duration() const { return std::max(0.2, 1.5 * kLiftHeight / skill_.reach_speed); }
 
+// Where the reach puts the hand at `t`: transport, final approach, then the correction, each a
+// minimum-jerk move.
 Eigen::Isometry3d ScriptedOperator::reach_pose(double t) const {
   if (t < t_via_) return interpolate(X_start_, X_pre_, min_jerk((t - t_phase_) / (t_via_ - t_phase_)));
   if (t < t_end_ || t_fixed_ <= t_end_) return interpolate(X_pre_, X_goal_, min_jerk((t - t_via_) / (t_end_ - t_via_)));

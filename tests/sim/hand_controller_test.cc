@@ -184,20 +184,17 @@ TEST(HandControllerTest, FastCloseOnThinPlateDoesNotTunnel) {
   EXPECT_TRUE(!blocked || discrete_gap < -1e-3) << "discrete mode tunnels or sinks deep";
 }
 
-// The finger3 rig's distal capsule axis (palm frame, the finger moving in the x-z plane) at joint
-// angles q: joints at x = 0.04, then 0.03 and 0.025 along the turned phalanges, each turning
-// about +y (x toward -z); the capsule runs 15 mm along the distal phalanx.
-std::pair<Eigen::Vector2d, Eigen::Vector2d> distal_axis(double q1, double q2, double q3) {
+// The finger3 rig's middle and distal capsule axes (palm frame, the finger moving in the x-z
+// plane) at joint angles q: joints at x = 0.04, then 0.03 and 0.025 along the turned phalanges,
+// each turning about +y (x toward -z); the capsules run 25 mm and 15 mm along their phalanges.
+struct Finger3Axes {
+  std::pair<Eigen::Vector2d, Eigen::Vector2d> middle, distal;
+};
+Finger3Axes finger3_axes(double q1, double q2, double q3) {
   const auto dir = [](double q) { return Eigen::Vector2d(std::cos(q), -std::sin(q)); };  // (x, z)
-  const Eigen::Vector2d j3 = Eigen::Vector2d(0.04, 0) + 0.03 * dir(q1) + 0.025 * dir(q1 + q2);
-  return {j3, j3 + 0.015 * dir(q1 + q2 + q3)};
-}
-
-// The middle capsule's axis: its 25 mm from the middle joint.
-std::pair<Eigen::Vector2d, Eigen::Vector2d> middle_axis(double q1, double q2) {
-  const auto dir = [](double q) { return Eigen::Vector2d(std::cos(q), -std::sin(q)); };
   const Eigen::Vector2d j2 = Eigen::Vector2d(0.04, 0) + 0.03 * dir(q1);
-  return {j2, j2 + 0.025 * dir(q1 + q2)};
+  const Eigen::Vector2d j3 = j2 + 0.025 * dir(q1 + q2);
+  return {{j2, j3}, {j3, j3 + 0.015 * dir(q1 + q2 + q3)}};
 }
 
 // 2-D distance between segment [a, b] and the rectangle [x0, x1] x [z0, z1] (disjoint from it).
@@ -239,8 +236,9 @@ TEST(HandControllerTest, AFingertipGrazingACornerBlocksOnItWhenItWouldGoInDeeper
       for (int i = 0; i <= 400; ++i) {
         const double f = i / 400.0;
         const auto q = [&](int k) { return ticks[t - 1][k] + f * (ticks[t][k] - ticks[t - 1][k]); };
-        path.push_back(distal_axis(q(0), q(1), q(2)));
-        middle.push_back(middle_axis(q(0), q(1)));
+        const Finger3Axes axes = finger3_axes(q(0), q(1), q(2));
+        path.push_back(axes.distal);
+        middle.push_back(axes.middle);
       }
     const auto deepest_reach = [&](const Plate& p, const auto& axes) {  // min over the path of the gap
       double gap = 1e9;
@@ -283,7 +281,7 @@ TEST(HandControllerTest, AFingertipGrazingACornerBlocksOnItWhenItWouldGoInDeeper
         const HandState& s = hand.state();
         const std::string where = "speed x" + std::to_string(speed) + ", plate at " + std::to_string(along) +
                                   " of the path, reach " + std::to_string(reach * 1e3) + " mm";
-        const auto [a, b] = distal_axis(s.q[0], s.q[1], s.q[2]);
+        const auto [a, b] = finger3_axes(s.q[0], s.q[1], s.q[2]).distal;
         const double gap = segment_rectangle_distance(a, b, p.x0, p.x1, p.z0, p.z1) - kRadius;
         if (reach < 0) {
           ++must_block;
