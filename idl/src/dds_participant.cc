@@ -99,16 +99,19 @@ dds::Topic* DdsParticipant::topic(const std::string& name, TypeFactory type) {
   return t;
 }
 
+// Every endpoint goes without Fast DDS's data-sharing, which 2.9 otherwise uses by default for
+// bounded types between processes of one host, whatever the transport. A writer notifies each
+// data-sharing reader under a mutex in that reader's shared memory: a reader's process killed
+// while holding it left the server's next write blocked for the mutex's timeout, then throwing
+// "Interprocess mutex timeout when locking" (a SIGKILLed bot stopped the server that way, one
+// run in a few under ASan). And under DDS Security it would hand readers buffers that were never
+// encoded for them (Fast DDS 2.9.1 then fails to decode every sample). The transports copy.
 dds::DataWriter* DdsParticipant::make_writer(const std::string& name, TypeFactory type, const std::string& qos_of) {
   const std::string profile = (qos_of.empty() ? name : qos_of) + kWriterSuffix;
   dds::Publisher* publisher = name == kSceneDirectoryTopic ? directory_publisher_ : publisher_;
   dds::DataWriterQos qos;
   dds::DataWriter* w = nullptr;
-  if (!secure_) {
-    w = publisher->create_datawriter_with_profile(topic(name, type), profile);
-  } else if (publisher->get_datawriter_qos_from_profile(profile, qos) == ReturnCode_t::RETCODE_OK) {
-    // Data-sharing hands readers the writer's buffer, which DDS Security has not encoded for them
-    // (Fast DDS 2.9 then fails to decode every sample): off with security.
+  if (publisher->get_datawriter_qos_from_profile(profile, qos) == ReturnCode_t::RETCODE_OK) {
     qos.data_sharing().off();
     w = publisher->create_datawriter(topic(name, type), qos);
   }
@@ -124,9 +127,7 @@ dds::DataReader* DdsParticipant::make_reader(const std::string& name, TypeFactor
   dds::Subscriber* subscriber = name == kSceneDirectoryTopic ? directory_subscriber_ : subscriber_;
   dds::DataReaderQos qos;
   dds::DataReader* r = nullptr;
-  if (!secure_) {
-    r = subscriber->create_datareader_with_profile(topic(name, type), profile, listener);
-  } else if (subscriber->get_datareader_qos_from_profile(profile, qos) == ReturnCode_t::RETCODE_OK) {
+  if (subscriber->get_datareader_qos_from_profile(profile, qos) == ReturnCode_t::RETCODE_OK) {
     qos.data_sharing().off();  // as for writers
     r = subscriber->create_datareader(topic(name, type), qos, listener);
   }

@@ -128,6 +128,18 @@ class SceneCommandListener : public InputListener {
   std::vector<msg::SceneCommand> queue;
 };
 
+// A failed write is not fatal (a reliable reader is slow, or Fast DDS threw on the way: a peer's
+// process may die holding a lock in shared memory): the next tick publishes again.
+template <typename Message>
+bool write(dds::DataWriter* writer, const Message& m, const char* what) {
+  try {
+    return writer->write(const_cast<Message*>(&m));
+  } catch (const std::exception& e) {
+    std::cerr << "telegrasp-server: could not publish a " << what << ": " << e.what() << "\n";
+    return false;
+  }
+}
+
 }  // namespace
 
 // Members in destruction order: the participant (and its readers) goes before the listeners.
@@ -203,7 +215,7 @@ void DdsNode::announce_status(const msg::ServerStatus& status) {
   Impl& d = *impl_;
   msg::SceneAnnouncement a =
       make_announcement(*d.facts, status, d.load.cpu_percent(), ProcessLoad::host_cores(), ProcessLoad::host_load());
-  d.directory_writer->write(&a);
+  write(d.directory_writer, a, "SceneAnnouncement");
   // Another run serving this scene too (e.g. the network between them was cut while both
   // started): the newer one refused to start if it saw this one; say so once per run.
   for (const msg::SceneAnnouncement& other : directory()) {
@@ -230,17 +242,16 @@ std::vector<msg::SceneCommand> DdsNode::take_commands() {
   return std::exchange(impl_->command_listener.queue, {});
 }
 
-// A failed write is not fatal (e.g. a reliable reader is slow): the next tick publishes again.
-void DdsNode::publish(const msg::HandSkeleton& m) { impl_->skeleton->write(const_cast<msg::HandSkeleton*>(&m)); }
-void DdsNode::publish(const msg::GraspState& m) { impl_->grasp_state->write(const_cast<msg::GraspState*>(&m)); }
-void DdsNode::publish(const msg::ContactSet& m) { impl_->contacts->write(const_cast<msg::ContactSet*>(&m)); }
-void DdsNode::publish(const msg::SceneState& m) { impl_->scene->write(const_cast<msg::SceneState*>(&m)); }
+void DdsNode::publish(const msg::HandSkeleton& m) { write(impl_->skeleton, m, "HandSkeleton"); }
+void DdsNode::publish(const msg::GraspState& m) { write(impl_->grasp_state, m, "GraspState"); }
+void DdsNode::publish(const msg::ContactSet& m) { write(impl_->contacts, m, "ContactSet"); }
+void DdsNode::publish(const msg::SceneState& m) { write(impl_->scene, m, "SceneState"); }
 void DdsNode::publish(const msg::ServerStatus& m) {
-  impl_->status->write(const_cast<msg::ServerStatus*>(&m));
+  write(impl_->status, m, "ServerStatus");
   if (impl_->facts) announce_status(m);
 }
 void DdsNode::publish(const msg::GraspEvent& m) {
-  if (!impl_->events->write(const_cast<msg::GraspEvent*>(&m)))
+  if (!write(impl_->events, m, "GraspEvent"))
     std::cerr << "telegrasp-server: could not publish grasp event " << m.event_id() << "\n";
 }
 
@@ -257,7 +268,7 @@ void DdsNode::publish(const msg::ClientNotice& m) {
     d.notices->unregister_instance(&oldest, dds::HANDLE_NIL);
     d.notice_clients.pop_front();
   }
-  d.notices->write(const_cast<msg::ClientNotice*>(&m));
+  write(d.notices, m, "ClientNotice");
 }
 
 void DdsNode::hand_removed(const HandAddress& hand) {
