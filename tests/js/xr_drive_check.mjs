@@ -13,7 +13,7 @@
 //      dropped link gets its id back with the resume token; a foreign Origin may not drive and
 //      is closed after 32 bad messages; an oversized message closes a connection; with a token
 //      (and TLS from deploy/make-cert.sh) only the token drives, over WSS, from an https page;
-//   4. closing the page releases a held object within 1 s; recentre is kept for the next visit
+//   4. closing the page releases a held object within 0.5 s; recentre is kept for the next visit
 //      and ?align=default ignores it; a bridge on every interface generates a token.
 // Usage: BUILD/bin/telegrasp-test-domains node xr_drive_check.mjs --bin BUILD/bin --out DIR
 //   (ctest: client_lib.view.xr_drive; the wrapper leases the DDS domain)
@@ -439,7 +439,7 @@ try {
   await securePage.close();
   await stop(tokened.view);
 
-  // 4. Closing the page releases what it holds within a second.
+  // 4. Closing the page releases what it holds at once.
   const canNow = canAt();
   const grip2 = [canNow[0], canNow[1], canNow[2]];
   await moveTo(page, "controller", [grip2[0], grip2[1] - 0.15, grip2[2] + 0.1], grip2, kGripSideGrasp, 40);
@@ -456,7 +456,9 @@ try {
   const released = await until(() => events.some((e) => e.kind === "release" && e.hand.client_id === me &&
     e.time_s > (events.filter((g) => g.kind === "grasp" && g.hand.client_id === me).at(-1)?.time_s ?? 0)), 3000, "the release");
   const releaseMs = Date.now() - closedAt;
-  checks.check(released && releaseMs <= 1000, `closing the page released the can in ${releaseMs} ms (at most 1000)`);
+  // The bridge opens a closed page's hands at once; the server alone would remove them (and so
+  // release) only after 0.5 s of silence.
+  checks.check(released && releaseMs <= 500, `closing the page released the can in ${releaseMs} ms (at most 500)`);
 
   // Recentre (here from the desktop camera, at (0, 1.45, 0.1) looking down the -z axis): the table
   // goes 0.45 m ahead of the eyes and 0.45 m below them, kept for the next visit; ?align=default

@@ -102,8 +102,15 @@ void Drive::closed(std::uint64_t connection, bool clean) {
   Driver* driver = it->second;
   by_connection_.erase(it);
   if (clean) {
-    std::cerr << "telegrasp-view: " << driver->client_id << " closed; its hands leave\n";
-    drivers_.erase(driver->client_id);  // no more samples: the server removes the hands within 0.5 s
+    // A closed tab lets go at once: one last sample opens each hand where it was (the server
+    // releases at its next tick), then no more: the server removes the silent hands within 0.5 s.
+    std::cerr << "telegrasp-view: " << driver->client_id << " closed; its hands let go and leave\n";
+    for (auto& [side, hand] : driver->hands) {
+      if (hand.seq == 0) continue;
+      open(hand.sample);
+      send(*driver, hand, side, 0, 0);
+    }
+    drivers_.erase(driver->client_id);
     return;
   }
   std::cerr << "telegrasp-view: " << driver->client_id << "'s link dropped; its hands are held " << options_.resume_window_s

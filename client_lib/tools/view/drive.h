@@ -7,8 +7,8 @@
 // tracking grace, then opens. A page that reconnects with its resume token gets its id and hands
 // back, taking over from its old connection if that has gone quiet (a link that died without a
 // word) or failed (then the hands are held for the resume window); a page that closes (a
-// WebSocket close, or its TCP connection closed) stops its hands at once (the server removes
-// silent hands within 0.5 s).
+// WebSocket close, or its TCP connection closed) opens its hands with one last sample and stops
+// them (the server removes silent hands within 0.5 s).
 // Everything runs on the bridge's io_context thread.
 #pragma once
 
