@@ -104,11 +104,11 @@ struct ServedDomain {
 };
 
 std::unique_ptr<ChildProcess> start_bot(int domain, const std::string& id, const std::string& hands, int trials,
-                                        const std::string& json, const std::string& profile = "loopback") {
+                                        const std::string& json) {
   return std::make_unique<ChildProcess>(
       std::vector<std::string>{bin("telegrasp-bot"), "--client-id", id, "--hands", hands, "--trials",
                                std::to_string(trials), "--seed", "3", "--domain", std::to_string(domain), "--profile",
-                               profile, "--json", json, "--timeout-s", "30"},
+                               "loopback", "--json", json, "--timeout-s", "30"},
       work_path(id + ".log"));
 }
 
