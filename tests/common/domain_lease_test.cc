@@ -149,14 +149,33 @@ TEST(DomainLeaseTest, StartsWithoutTheSharedMemoryPortsAKilledParticipantLeft) {
   for (const std::string& f : left_on(other)) EXPECT_TRUE(std::filesystem::exists(f)) << f << ": not the lease's";
 }
 
+TEST(DomainLeaseTest, SkipsADomainWhoseSharedMemoryDiscoveryPortIsLocked) {
+  PrivatePool pool(1);
+  const int d = pool.get().first;
+  // A program outside the scheme on domain d over shared memory: it holds a shared lock on the
+  // file beside the domain's discovery port, as Fast DDS's shared-memory transport does.
+  const std::string path = "/dev/shm/fastrtps_port" + std::to_string(7400 + 250 * d) + "_sl";
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CREAT, 0666);
+  ASSERT_GE(fd, 0) << path;
+  EXPECT_FALSE(domain_ports_in_use(d)) << "a file nobody locks is not a participant";
+  ASSERT_EQ(::flock(fd, LOCK_SH | LOCK_NB), 0);
+  EXPECT_TRUE(domain_ports_in_use(d));
+  EXPECT_TRUE(pool_exhausted(pool.get()));
+  ::close(fd);
+  EXPECT_FALSE(pool_exhausted(pool.get()));
+  std::filesystem::remove(path);
+}
+
 TEST(DomainLeaseTest, SeesAFastDdsParticipantOnTheDomain) {
   const DomainLease lease;
-  EXPECT_FALSE(domain_ports_in_use(lease.domain()));
-  {
-    idl::DdsParticipant participant(lease.domain(), "loopback");
-    EXPECT_TRUE(domain_ports_in_use(lease.domain())) << "the loopback profile's ports were not seen";
+  for (const char* profile : {"loopback", "udp"}) {
+    EXPECT_FALSE(domain_ports_in_use(lease.domain())) << profile;
+    {
+      idl::DdsParticipant participant(lease.domain(), profile);
+      EXPECT_TRUE(domain_ports_in_use(lease.domain())) << "the " << profile << " profile's ports were not seen";
+    }
+    EXPECT_FALSE(domain_ports_in_use(lease.domain())) << profile;
   }
-  EXPECT_FALSE(domain_ports_in_use(lease.domain()));
 }
 
 // A telegrasp-test-domain-probe process (domain_probe_main.cc) and what it has printed so far.

@@ -6,11 +6,13 @@
 #include <sys/file.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <mutex>
 #include <regex>
 #include <stdexcept>
@@ -41,6 +43,20 @@ bool udp_port_free(int port) {
   const int error = errno;
   ::close(s);
   return bound || error != EADDRINUSE;
+}
+
+// Whether some process holds a file lock on `path`: its device and inode in /proc/locks. Only read,
+// never locked here: a participant taking its own lock at that moment must not fail.
+bool file_locked(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return false;
+  char id[64];
+  std::snprintf(id, sizeof id, "%02x:%02x:%lu", ::major(st.st_dev), ::minor(st.st_dev),
+                static_cast<unsigned long>(st.st_ino));
+  std::ifstream locks("/proc/locks");
+  for (std::string token; locks >> token;)
+    if (token == id) return true;
+  return false;
 }
 
 void make_lock_dir(const std::string& dir) {
@@ -87,14 +103,18 @@ void remove_shared_memory_ports(int domain) {
   const int first = kPortBase + kDomainGain * domain;
   for (int port = first; port < first + kDomainGain; ++port) {
     const std::string name = "/dev/shm/fastrtps_port" + std::to_string(port);
-    for (const std::string& path : {name, name + "_el", "/dev/shm/sem.fastrtps_port" + std::to_string(port) + "_mutex"})
+    for (const std::string& path :
+         {name, name + "_el", name + "_sl", "/dev/shm/sem.fastrtps_port" + std::to_string(port) + "_mutex"})
       ::unlink(path.c_str());  // mostly ENOENT: nothing to remove
   }
 }
 
 bool domain_ports_in_use(int domain) {
   const int base = kPortBase + kDomainGain * domain;
-  return !udp_port_free(base + kDiscoveryMulticastOffset) || !udp_port_free(base + kDiscoveryUnicastOffset);
+  // Over shared memory, every live participant of the domain holds a shared lock on the file
+  // beside its discovery multicast port.
+  return !udp_port_free(base + kDiscoveryMulticastOffset) || !udp_port_free(base + kDiscoveryUnicastOffset) ||
+         file_locked("/dev/shm/fastrtps_port" + std::to_string(base + kDiscoveryMulticastOffset) + "_sl");
 }
 
 DomainLease::DomainLease(int count, const DomainPool& pool) {

@@ -37,8 +37,9 @@ DomainPool test_domain_pool();
 /// `count` consecutive DDS domains held for this object's lifetime (and by any child process
 /// started meanwhile until it exits). Two leases, in one process or in two, never share a
 /// domain; successive leases in one process do not reuse a domain while others are free, so
-/// tests run one after another in one process do not meet either. The loopback profile's
-/// discovery probes participant ids 0..3 only: keep at most four participants on one domain.
+/// tests run one after another in one process do not meet either. The udp profile's unicast
+/// discovery probes participant ids 0..3 only: keep at most four of its participants on one
+/// domain (the loopback profile discovers over shared memory, with no such limit).
 class DomainLease {
  public:
   /// Leases `count` >= 1 consecutive free domains of `pool`. Throws std::runtime_error if none
@@ -74,7 +75,9 @@ void remove_shared_memory_ports(int domain);
 
 /// Whether a process outside the lease scheme runs a Fast DDS participant on `domain`: its
 /// discovery multicast port (7400 + 250 domain) or participant 0's unicast discovery port is
-/// bound. A heuristic for participants on this host's network namespace only.
+/// bound (UDP, in this host's network namespace), or a process holds the lock of the domain's
+/// shared-memory discovery port (/dev/shm/fastrtps_port<7400 + 250 domain>_sl, the loopback
+/// profile).
 bool domain_ports_in_use(int domain);
 
 }  // namespace telegrasp::testing

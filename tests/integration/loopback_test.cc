@@ -1,6 +1,6 @@
 // Integration tests on loopback with real processes: telegrasp-server, telegrasp-bot, and a
 // telegrasp::client observer in the test. Each test runs on a DDS domain leased for it
-// (tests/common/test_domain.h) with the loopback profile (shared memory and 127.0.0.1 only), so
+// (tests/common/test_domain.h) with the loopback profile (shared memory only), so
 // concurrent runs never cross. The tests assert on what happened and in which order; timeouts
 // only guard against hangs, and durations are printed, not asserted.
 #include "process.h"
