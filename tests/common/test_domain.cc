@@ -45,6 +45,9 @@ bool udp_port_free(int port) {
   return bound || error != EADDRINUSE;
 }
 
+// Fast DDS's shared-memory port `port`: its segment file; its lock files add "_el" or "_sl".
+std::string shm_port_file(int port) { return "/dev/shm/fastrtps_port" + std::to_string(port); }
+
 // Whether some process holds a file lock on `path`: its device and inode in /proc/locks. Only read,
 // never locked here: a participant taking its own lock at that moment must not fail.
 bool file_locked(const std::string& path) {
@@ -102,7 +105,7 @@ DomainPool test_domain_pool() {
 void remove_shared_memory_ports(int domain) {
   const int first = kPortBase + kDomainGain * domain;
   for (int port = first; port < first + kDomainGain; ++port) {
-    const std::string name = "/dev/shm/fastrtps_port" + std::to_string(port);
+    const std::string name = shm_port_file(port);
     for (const std::string& path :
          {name, name + "_el", name + "_sl", "/dev/shm/sem.fastrtps_port" + std::to_string(port) + "_mutex"})
       ::unlink(path.c_str());  // mostly ENOENT: nothing to remove
@@ -114,7 +117,7 @@ bool domain_ports_in_use(int domain) {
   // Over shared memory, every live participant of the domain holds a shared lock on the file
   // beside its discovery multicast port.
   return !udp_port_free(base + kDiscoveryMulticastOffset) || !udp_port_free(base + kDiscoveryUnicastOffset) ||
-         file_locked("/dev/shm/fastrtps_port" + std::to_string(base + kDiscoveryMulticastOffset) + "_sl");
+         file_locked(shm_port_file(base + kDiscoveryMulticastOffset) + "_sl");
 }
 
 DomainLease::DomainLease(int count, const DomainPool& pool) {
