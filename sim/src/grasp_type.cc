@@ -1,11 +1,14 @@
 // Grasp types from shape classes.
 #include "telegrasp/sim/grasp_type.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
 namespace telegrasp::sim {
 namespace {
+
+constexpr double kCos45 = 0.7071067811865476;
 
 constexpr std::array<const char*, kGraspTypeCount> kNames = {
     "other", "power_sphere", "tripod", "small_wrap", "medium_wrap", "large_wrap", "disk", "prismatic", "lateral_pinch"};
@@ -31,15 +34,20 @@ double box_width_along(const ObjectShape& shape, const Eigen::Vector3d& d_Object
 }
 
 bool closes_across_shortest_side(const ObjectShape& shape, const Eigen::Isometry3d& X_ObjectPalm,
-                                 const ShapeRules& rules) {
-  // The shortest side and the sides as short as it (within the rules' round ratio: a ball's three,
-  // a can's two across its axis) span where closing counts as across the smallest dimension.
+                                 const ShapeRules& rules, const std::optional<Eigen::Vector3d>& up_Object) {
   const Eigen::Matrix3d& R = shape.X_ObjectBox.linear();
+  const Eigen::Vector3d& h = shape.half_extent;  // ascending
+  // A side within 45 degrees of the table's normal cannot be closed across while the object lies
+  // there (the thumb would go under it): with a table, the shortest side is the shortest of the rest.
+  int shortest = 0;
+  while (up_Object && shortest < 2 && std::abs(R.col(shortest).dot(*up_Object)) >= kCos45) ++shortest;
+  // The shortest side and the sides as long as it (within the rules' round ratio: a ball's three,
+  // a can's two across its axis) span where closing counts as across the smallest dimension.
   const Eigen::Vector3d across = X_ObjectPalm.linear().col(0);
   double in_span_sq = 0;
   for (int i = 0; i < 3; ++i) {
-    const bool shortest = i == 0 || shape.half_extent[0] >= rules.round_ratio * shape.half_extent[i];
-    if (shortest) in_span_sq += R.col(i).dot(across) * R.col(i).dot(across);
+    const bool tied = std::min(h[i], h[shortest]) >= rules.round_ratio * std::max(h[i], h[shortest]);
+    if (tied) in_span_sq += R.col(i).dot(across) * R.col(i).dot(across);
   }
   return in_span_sq >= 0.5;
 }

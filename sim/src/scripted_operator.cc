@@ -20,6 +20,10 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 // A plan whose open hand reaches further under the table top than this is held off by the
 // resolved pose by as much: too far to close as planned.
 constexpr double kReachableTableDepth = 0.005;
+// Plans in force closure are ranked by their epsilon in steps this wide (GraspIt!'s torque scale:
+// an epsilon of 0.01 is 1 % of a unit normal force), then by the score: the most robust closure
+// first, and among about equally robust ones the closest fit.
+constexpr double kEpsilonStep = 0.01;
 
 // Minimum-jerk time scaling of s in [0, 1].
 double min_jerk(double s) {
@@ -361,7 +365,8 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
 
   // A rig with grasp types closes the way the object's shape says; its operator plans as people
   // do (Feix et al.: 94 % of grasps close across the object's smallest side): the palm's +x
-  // along the shortest side of the object's box, and grasps in force closure first.
+  // along the shortest side of the object's box a hand can close across on the table, and
+  // grasps in force closure first.
   const bool typed = rig->has_grasp_types();
   std::vector<Eigen::Vector3d> horizontal = {ax, ay, -ax, -ay};
   if (typed) {
@@ -378,21 +383,30 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
   std::vector<GraspPlan> candidates;
   // Top grasps: palm down, fingers along either horizontal axis, either way round; the grasp
   // centre over the object's centre or shifted along the fingers; palm at or above the top.
-  for (const Eigen::Vector3d& fingers : horizontal) {
-    for (double shift : {0.0, -0.015, 0.015}) {
-      for (double clearance : {0.0, 0.01, 0.025, 0.05, 0.08}) {
-        GraspPlan plan;
-        plan.X_WorldPalm = palm_frame(fingers, up);
-        plan.approach_World = -up;
-        Eigen::Vector3d target = p_WorldCenter + shift * fingers.normalized();
-        plan.X_WorldPalm.translation() = target - plan.X_WorldPalm.linear() * gc;
-        // Never lower the palm into the object: its skin stays above the top plus the clearance.
-        const double palm_z = std::max(plan.X_WorldPalm.translation().z(), top + palm_half_thickness + clearance);
-        plan.X_WorldPalm.translation().z() = palm_z;
-        candidates.push_back(plan);
-      }
-    }
+  // A long object (a rig with types) is also grasped off its centre along its length: a knife
+  // by its handle, a hammer by its shaft.
+  std::vector<Eigen::Vector3d> along_length = {Eigen::Vector3d::Zero()};
+  if (typed) {
+    Eigen::Vector3d length = X_WorldObject.linear() * model.shape.X_ObjectBox.linear().col(2);
+    length.z() = 0;
+    const double half = model.shape.half_extent.z();
+    if (length.norm() > 0.3 && half > 0.05)
+      for (double f : {-0.6, -0.3, 0.3, 0.6}) along_length.push_back(f * half * length.normalized());
   }
+  for (const Eigen::Vector3d& fingers : horizontal)
+    for (const Eigen::Vector3d& off : along_length)
+      for (double shift : {0.0, -0.015, 0.015})
+        for (double clearance : {0.0, 0.01, 0.025, 0.05, 0.08}) {
+          GraspPlan plan;
+          plan.X_WorldPalm = palm_frame(fingers, up);
+          plan.approach_World = -up;
+          const Eigen::Vector3d target = p_WorldCenter + off + shift * fingers.normalized();
+          plan.X_WorldPalm.translation() = target - plan.X_WorldPalm.linear() * gc;
+          // Never lower the palm into the object: its skin stays above the top plus the clearance.
+          const double palm_z = std::max(plan.X_WorldPalm.translation().z(), top + palm_half_thickness + clearance);
+          plan.X_WorldPalm.translation().z() = palm_z;
+          candidates.push_back(plan);
+        }
   // Side grasps: palm facing the object horizontally, fingers around it either way (the thumb
   // up for one hand, down for the other), at two heights.
   for (const Eigen::Vector3d& toward : horizontal)
@@ -415,7 +429,7 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
     }
 
   GraspPlan best = candidates.front();
-  std::optional<std::tuple<bool, bool, bool, bool, double>> best_key;
+  std::optional<std::tuple<bool, bool, bool, bool, double, double>> best_key;
   for (GraspPlan& plan : candidates) {
     const OfflineClosing t = close_offline(rig, planning, model, X_WorldObject, plan.X_WorldPalm, dt, table_height);
     plan.predicted_grasp = t.grasped && !t.penetrating;
@@ -423,20 +437,26 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
     // A clean grasp first (no capsule in the object), then one the hand can reach (the resolved
     // pose keeps the hand out of the table: a plan whose open hand lies under the table top is
     // held off and misses), then (a rig with types) across the shortest side, then in force
-    // closure, then opposing contacts (a pinch or wrap rather than a press), then clear of the
-    // table at the end of the close, then the most capsules in contact, then the smallest
-    // HandError. The score's weights order its own terms; the key puts the typed ones above it.
+    // closure with the largest epsilon (in kEpsilonStep steps), then opposing contacts (a pinch
+    // or wrap rather than a press), then clear of the table at the end of the close, then the
+    // most capsules in contact, then the smallest HandError. The score's weights order its own terms; the key puts the typed ones above it.
     const bool reachable = t.open_table_depth < kReachableTableDepth;
     const double score = (plan.predicted_grasp ? 1e6 : 0) + (reachable ? 2e5 : 0) + (t.opposed ? 1e5 : 0) +
                          (t.penetrating ? 0 : 5e4) + (t.below_table ? 0 : 1e4) + 100.0 * t.blocked -
                          t.metrics.hand_error_mm;
     bool across = false, closure = false;
+    double epsilon_steps = 0;
     if (typed) {
-      across = closes_across_shortest_side(model.shape, X_WorldObject.inverse() * plan.X_WorldPalm);
+      across = closes_across_shortest_side(model.shape, X_WorldObject.inverse() * plan.X_WorldPalm, {},
+                                           X_WorldObject.linear().transpose() * up);
       const auto job = t.hand.quality_inputs();
-      closure = job && grasp_quality(job->contacts, job->mu, job->torque_scale).force_closure;
+      if (job) {
+        const GraspQuality q = grasp_quality(job->contacts, job->mu, job->torque_scale);
+        closure = q.force_closure;
+        epsilon_steps = std::floor(q.epsilon / kEpsilonStep);
+      }
     }
-    const auto key = std::make_tuple(plan.predicted_grasp, reachable, across, closure, score);
+    const auto key = std::make_tuple(plan.predicted_grasp, reachable, across, closure, epsilon_steps, score);
     if (!best_key || key > *best_key) {
       best_key = key;
       best = plan;

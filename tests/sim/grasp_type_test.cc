@@ -85,6 +85,41 @@ TEST(GraspTypeTest, ClosingAcrossTheShortestSide) {
   EXPECT_TRUE(closes_across_shortest_side(shape(ShapeClass::kBox, {0.02, 0.021, 0.05}), turned(45)));
 }
 
+// On a table, the smallest dimension is the smallest a hand can close across there: a side within
+// 45 degrees of the table's normal does not count unless it is as long as that one.
+TEST(GraspTypeTest, OnATableTheShortestSideIsTheShortestAHandCanReach) {
+  const auto along = [](const Eigen::Vector3d& d) {  // palm +x along d
+    return palm(Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitX(), d).toRotationMatrix());
+  };
+  const Eigen::Vector3d x = Eigen::Vector3d::UnitX(), y = Eigen::Vector3d::UnitY(), z = Eigen::Vector3d::UnitZ();
+  // A knife lying flat: its 2 mm thickness (box x) upright, 2 cm width (y), 20 cm length (z).
+  const ObjectShape knife = shape(ShapeClass::kThin, {0.001, 0.01, 0.1});
+  EXPECT_TRUE(closes_across_shortest_side(knife, along(y), {}, x));
+  EXPECT_FALSE(closes_across_shortest_side(knife, along(y)));  // without the table: not its thickness
+  EXPECT_FALSE(closes_across_shortest_side(knife, along(x), {}, x));  // through the table
+  EXPECT_TRUE(closes_across_shortest_side(knife, along(x)));
+  EXPECT_FALSE(closes_across_shortest_side(knife, along(z), {}, x));
+  // Standing on its end (length upright) nothing changes: the thickness is horizontal.
+  EXPECT_TRUE(closes_across_shortest_side(knife, along(x), {}, z));
+  EXPECT_FALSE(closes_across_shortest_side(knife, along(y), {}, z));
+  // The 45-degree edge: the normal 44 degrees from the thickness takes it out, 46 leaves it.
+  const auto normal_at = [&](double deg) { return Eigen::Vector3d(std::cos(deg * kPi / 180), std::sin(deg * kPi / 180), 0); };
+  EXPECT_FALSE(closes_across_shortest_side(knife, along(x), {}, normal_at(44)));
+  EXPECT_TRUE(closes_across_shortest_side(knife, along(y), {}, normal_at(44)));
+  EXPECT_TRUE(closes_across_shortest_side(knife, along(x), {}, normal_at(46)));
+  EXPECT_FALSE(closes_across_shortest_side(knife, along(y), {}, normal_at(46)));
+  // A ball: the upright side is as long as the reachable ones, so every direction still counts.
+  const ObjectShape ball = shape(ShapeClass::kSphere, {0.04, 0.04, 0.04});
+  for (const Eigen::Vector3d& d : {x, y, z, Eigen::Vector3d(1, 1, 1).normalized()})
+    EXPECT_TRUE(closes_across_shortest_side(ball, along(d), {}, z)) << d.transpose();
+  // A can lying on its side (axis z horizontal, a round side x upright): across the other round
+  // side or upright, never along the axis.
+  const ObjectShape can = shape(ShapeClass::kCylinder, {0.03, 0.03, 0.06}, 2);
+  EXPECT_TRUE(closes_across_shortest_side(can, along(y), {}, x));
+  EXPECT_TRUE(closes_across_shortest_side(can, along(x), {}, x));
+  EXPECT_FALSE(closes_across_shortest_side(can, along(z), {}, x));
+}
+
 // Miller's rules with Feix's widths: balls by their width, cylinders by diameter and whether the
 // palm faces their end, boxes, thin objects, anything else.
 TEST(GraspTypeTest, ChoiceFollowsShapeWidthAndPose) {

@@ -2,6 +2,9 @@
 // trials on stand-ins, including a fast close on the knife that must not tunnel.
 #include "telegrasp/sim/scripted_operator.h"
 
+#include "telegrasp/sim/grasp_quality.h"
+#include "telegrasp/sim/grasp_type.h"
+
 #include "telegrasp/sim/standin_objects.h"
 #include "telegrasp/sim/world.h"
 
@@ -431,6 +434,27 @@ TEST(ScriptedOperatorTest, NdPoseSearchWithNoCleanGraspKeepsNothing) {
   const NdSearchResult r = nd_search(*model, World::resting_pose(*model, 0.45, 0.0, 0.3), 5, 11);
   EXPECT_FALSE(r.best.has_value());
   EXPECT_EQ(r.clean_grasps, 0);
+}
+
+// With grasp types the operator plans as people grasp long things lying on a table: across the
+// smallest side a hand can reach there (the width, the thickness being upright), in force
+// closure, the handle or shaft as well as the middle being candidates.
+TEST(ScriptedOperatorTest, TypedPlansCloseAcrossTheReachableWidthInForceClosure) {
+  const auto hand_rig = rig("human_right_opposable");
+  for (const char* name : {"032_knife", "048_hammer", "030_fork"})
+    for (double yaw_deg : {0.0, 60.0, 135.0}) {
+      SCOPED_TRACE(std::string(name) + " at " + std::to_string(yaw_deg));
+      const auto model = standin(name);
+      const Eigen::Isometry3d X_WorldObject = World::resting_pose(*model, 0.45, 0.0, yaw_deg * std::numbers::pi / 180);
+      const GraspPlan plan = plan_grasp(hand_rig, {}, *model, X_WorldObject, 1.0 / 90);
+      EXPECT_TRUE(plan.predicted_grasp);
+      const Eigen::Vector3d up_Object = X_WorldObject.linear().transpose() * Eigen::Vector3d::UnitZ();
+      EXPECT_TRUE(closes_across_shortest_side(model->shape, X_WorldObject.inverse() * plan.X_WorldPalm, {}, up_Object));
+      const OfflineClosing c = close_offline(hand_rig, {}, *model, X_WorldObject, plan.X_WorldPalm, 1.0 / 90);
+      const auto job = c.hand.quality_inputs();
+      ASSERT_TRUE(job.has_value());
+      EXPECT_TRUE(grasp_quality(job->contacts, job->mu, job->torque_scale).force_closure);
+    }
 }
 
 }  // namespace

@@ -198,8 +198,10 @@ Trial run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRig
       rec.figures = rec.grasp_tick_figures;
       rec.grasp_type = grasp_type_name(e.grasp_type);
       rec.opposition_deg = telegrasp::report::opposition_deg(e.contacts, *rig);
-      rec.across_smallest =
-          closes_across_shortest_side(model->shape, world.hand(hand).state().X_PalmObject.inverse());
+      const Eigen::Isometry3d X_ObjectPalm = world.hand(hand).state().X_PalmObject.inverse();
+      const Eigen::Vector3d up_Object = world.object_pose(object).linear().transpose() * Eigen::Vector3d::UnitZ();
+      rec.across_smallest = closes_across_shortest_side(model->shape, X_ObjectPalm, {}, up_Object);
+      rec.across_smallest_ignoring_table = closes_across_shortest_side(model->shape, X_ObjectPalm);
     }
   }
   if (held) {

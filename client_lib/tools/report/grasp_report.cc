@@ -142,7 +142,7 @@ json summarize(const std::vector<const Record*>& recs) {
   int grasped = 0, held = 0, capsules = 0, below = 0, blocked_count = 0;
   double time_sum = 0, he_sum = 0, he_tick_sum = 0, min_sd = 1e9;
   std::vector<double> nd_abs, nd_abs_tick, opposition;
-  int across_known = 0, across = 0;
+  int across_known = 0, across = 0, free_known = 0, across_free = 0;
   NdContactStats contact, contact_tick;
   for (const Record* r : recs) {
     grasped += r->grasped;
@@ -152,6 +152,10 @@ json summarize(const std::vector<const Record*>& recs) {
     if (r->across_smallest) {
       ++across_known;
       across += *r->across_smallest;
+    }
+    if (r->across_smallest_ignoring_table) {
+      ++free_known;
+      across_free += *r->across_smallest_ignoring_table;
     }
     time_sum += r->time_to_grasp_s;
     he_sum += r->hand_error_mm;
@@ -198,6 +202,7 @@ json summarize(const std::vector<const Record*>& recs) {
   out.update(figures_summary(recs));
   if (!opposition.empty()) out["opposition_median_deg"] = percentile(opposition, 0.5);
   if (across_known > 0) out["across_smallest_share"] = static_cast<double>(across) / across_known;
+  if (free_known > 0) out["across_smallest_share_ignoring_table"] = static_cast<double>(across_free) / free_known;
   return out;
 }
 
@@ -260,6 +265,8 @@ json record_json(const Record& r) {
   if (!r.grasp_type.empty()) out["grasp_tick"]["grasp_type"] = r.grasp_type;
   if (std::isfinite(r.opposition_deg)) out["grasp_tick"]["opposition_deg"] = r.opposition_deg;
   if (r.across_smallest) out["grasp_tick"]["across_smallest_axis"] = *r.across_smallest;
+  if (r.across_smallest_ignoring_table)
+    out["grasp_tick"]["across_smallest_axis_ignoring_table"] = *r.across_smallest_ignoring_table;
   if (!r.group.empty()) {
     auto vec = [](const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); };
     json contacts = json::array();
@@ -310,6 +317,8 @@ Record record_from_json(const json& j) {
     if (tick.contains("grasp_type")) r.grasp_type = tick.at("grasp_type").get<std::string>();
     if (tick.contains("opposition_deg")) r.opposition_deg = tick.at("opposition_deg").get<double>();
     if (tick.contains("across_smallest_axis")) r.across_smallest = tick.at("across_smallest_axis").get<bool>();
+    if (tick.contains("across_smallest_axis_ignoring_table"))
+      r.across_smallest_ignoring_table = tick.at("across_smallest_axis_ignoring_table").get<bool>();
   }
   auto capsules = [](const json& arr) {
     std::vector<CapsuleMetricRecord> out;

@@ -73,8 +73,10 @@ struct Record {
   std::string grasp_type;
   /// Grasp tick: opposition_deg() of its contacts; NaN without (not written).
   double opposition_deg = std::numeric_limits<double>::quiet_NaN();
-  /// Grasp tick: sim::closes_across_shortest_side(); unknown: not written.
+  /// Grasp tick: sim::closes_across_shortest_side() with the table (the smallest side a hand can
+  /// close across on it), and ignoring it (the box's shortest side); unknown: not written.
   std::optional<bool> across_smallest;
+  std::optional<bool> across_smallest_ignoring_table;
 };
 
 /// The angle (degrees) between the mean contact normal of the rig's finger named "thumb" and the

@@ -580,11 +580,13 @@ TEST(GraspRecordJsonTest, RoundTrips) {
   r.grasp_type = "tripod";
   r.opposition_deg = 152.5;
   r.across_smallest = true;
+  r.across_smallest_ignoring_table = false;
   const Record back = record_from_json(record_json(r));
   EXPECT_EQ(record_json(back), record_json(r));
   EXPECT_EQ(back.grasp_type, "tripod");
   EXPECT_EQ(back.opposition_deg, 152.5);
   EXPECT_EQ(back.across_smallest, true);
+  EXPECT_EQ(back.across_smallest_ignoring_table, false);
   EXPECT_EQ(back.capsules.at(0).nd_contact_mm, 0.02);
   EXPECT_EQ(back.figures.epsilon, 0.125);
   EXPECT_EQ(back.grasp_tick_figures.palm_signed_distance_mm, 0.5);
@@ -641,6 +643,27 @@ TEST(GraspRecordJsonTest, NamesTheTwoNdsAndTheGraspFigures) {
   const Record back = record_from_json(old);
   EXPECT_EQ(back.capsules.at(0).nd_midlength_mm, -0.25);
   EXPECT_FALSE(back.capsules.at(0).contact_hit);
+}
+
+// The summary's across shares count the grasps that know them: with the table (3 of 4 here)
+// and ignoring it (1 of 3: one record predates the field); an ungrasped record counts in neither.
+TEST(GraspRecordJsonTest, SummaryCountsClosingAcrossWithAndWithoutTheTable) {
+  std::vector<Record> recs(5);
+  const bool with_table[] = {true, true, true, false};
+  const std::optional<bool> ignoring[] = {true, false, std::nullopt, false};
+  for (int i = 0; i < 4; ++i) {
+    recs[i].object = "032_knife";
+    recs[i].grasped = true;
+    recs[i].across_smallest = with_table[i];
+    recs[i].across_smallest_ignoring_table = ignoring[i];
+  }
+  recs[4].across_smallest = true;  // not grasped
+  recs[4].across_smallest_ignoring_table = true;
+  std::vector<const Record*> ptrs;
+  for (const Record& r : recs) ptrs.push_back(&r);
+  const nlohmann::json s = summarize(ptrs);
+  EXPECT_DOUBLE_EQ(s.at("across_smallest_share").get<double>(), 0.75);
+  EXPECT_DOUBLE_EQ(s.at("across_smallest_share_ignoring_table").get<double>(), 1.0 / 3);
 }
 
 }  // namespace

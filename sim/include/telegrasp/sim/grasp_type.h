@@ -46,8 +46,12 @@ double box_width_along(const ObjectShape& shape, const Eigen::Vector3d& d_Object
 /// thumb to the fingers) within 45 degrees of the span of the shortest side of `shape`'s box and
 /// of every side as short (shorter / longer >= rules.round_ratio, as a round cross-section): a
 /// ball is closed across whatever the direction, a can across any line square to its axis.
+/// With `up_Object` (the table's normal in the object frame, the object lying on it) the smallest
+/// dimension is the smallest a hand can close across there: sides within 45 degrees of the normal
+/// do not count (a knife lying flat is closed across its width, not its upright thickness).
 bool closes_across_shortest_side(const ObjectShape& shape, const Eigen::Isometry3d& X_ObjectPalm,
-                                 const ShapeRules& rules = {});
+                                 const ShapeRules& rules = {},
+                                 const std::optional<Eigen::Vector3d>& up_Object = std::nullopt);
 
 /// The grasp type for a hand at X_ObjectPalm (palm frame: +x to the fingers, -z the palm normal)
 /// about to close on an object of `shape`: sphere -> tripod or power sphere by its width across
