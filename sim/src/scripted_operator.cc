@@ -24,6 +24,27 @@ constexpr double kReachableTableDepth = 0.005;
 // an epsilon of 0.01 is 1 % of a unit normal force), then by the score: the most robust closure
 // first, and among about equally robust ones the closest fit.
 constexpr double kEpsilonStep = 0.01;
+// How many of the best plans in force closure are closed again with the operator's aim off.
+constexpr std::size_t kRobustCandidates = 16;
+
+// Palm offsets (in the palm frame) of an operator's aim: 3 mm along each axis either way and 3
+// degrees about the palm's normal either way (the experienced profile's errors are 4 mm and 3
+// degrees before the corrective submovement).
+const std::array<Eigen::Isometry3d, 8>& aim_errors() {
+  static const std::array<Eigen::Isometry3d, 8> errors = [] {
+    std::array<Eigen::Isometry3d, 8> out;
+    for (int k = 0; k < 6; ++k) {
+      out[k] = Eigen::Isometry3d::Identity();
+      out[k].translation()[k / 2] = k % 2 ? -0.003 : 0.003;
+    }
+    for (int k = 6; k < 8; ++k) {
+      out[k] = Eigen::Isometry3d::Identity();
+      out[k].linear() = Eigen::AngleAxisd((k == 6 ? 3.0 : -3.0) * kDeg, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    }
+    return out;
+  }();
+  return errors;
+}
 
 // Minimum-jerk time scaling of s in [0, 1].
 double min_jerk(double s) {
@@ -428,9 +449,17 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
       }
     }
 
-  GraspPlan best = candidates.front();
-  std::optional<std::tuple<bool, bool, bool, bool, double, double>> best_key;
-  for (GraspPlan& plan : candidates) {
+  using Key = std::tuple<bool, bool, bool, bool, double, double>;
+  std::vector<std::pair<Key, std::size_t>> ranked;
+  // Whether a closing is clean and, with grasp types, in force closure (and its epsilon's steps).
+  const auto closure_of = [&](const OfflineClosing& t) -> std::pair<bool, double> {
+    const auto job = t.hand.quality_inputs();
+    if (!job) return {false, 0.0};
+    const GraspQuality q = grasp_quality(job->contacts, job->mu, job->torque_scale);
+    return {q.force_closure, std::floor(q.epsilon / kEpsilonStep)};
+  };
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    GraspPlan& plan = candidates[i];
     const OfflineClosing t = close_offline(rig, planning, model, X_WorldObject, plan.X_WorldPalm, dt, table_height);
     plan.predicted_grasp = t.grasped && !t.penetrating;
     plan.predicted_blocked = t.blocked;
@@ -439,30 +468,45 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
     // held off and misses), then (a rig with types) across the shortest side, then in force
     // closure with the largest epsilon (in kEpsilonStep steps), then opposing contacts (a pinch
     // or wrap rather than a press), then clear of the table at the end of the close, then the
-    // most capsules in contact, then the smallest HandError. The score's weights order its own terms; the key puts the typed ones above it.
+    // most capsules in contact, then the smallest HandError. The score's weights order its own
+    // terms; the key puts the typed ones above it.
     const bool reachable = t.open_table_depth < kReachableTableDepth;
     const double score = (plan.predicted_grasp ? 1e6 : 0) + (reachable ? 2e5 : 0) + (t.opposed ? 1e5 : 0) +
                          (t.penetrating ? 0 : 5e4) + (t.below_table ? 0 : 1e4) + 100.0 * t.blocked -
                          t.metrics.hand_error_mm;
-    bool across = false, closure = false;
-    double epsilon_steps = 0;
+    bool across = false;
+    std::pair<bool, double> closure{false, 0.0};
     if (typed) {
       across = closes_across_shortest_side(model.shape, X_WorldObject.inverse() * plan.X_WorldPalm, {},
                                            X_WorldObject.linear().transpose() * up);
-      const auto job = t.hand.quality_inputs();
-      if (job) {
-        const GraspQuality q = grasp_quality(job->contacts, job->mu, job->torque_scale);
-        closure = q.force_closure;
-        epsilon_steps = std::floor(q.epsilon / kEpsilonStep);
-      }
+      closure = closure_of(t);
     }
-    const auto key = std::make_tuple(plan.predicted_grasp, reachable, across, closure, epsilon_steps, score);
-    if (!best_key || key > *best_key) {
-      best_key = key;
-      best = plan;
+    ranked.emplace_back(Key{plan.predicted_grasp, reachable, across, closure.first, closure.second, score}, i);
+  }
+  std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  if (!typed || !std::get<3>(ranked.front().first)) return candidates[ranked.front().second];
+  // A closure the operator's aim can lose is worth less than a plainer one it keeps: the best
+  // plans in force closure are closed again with the palm a few millimetres and degrees off
+  // (aim_errors()) and ranked by how many of those closings stay clean and in force closure.
+  std::size_t best = ranked.front().second;
+  int best_kept = -1;
+  // Grasped, reachable, across and in closure as the first (the ranking puts those first).
+  const auto kind = [](const Key& k) { return std::make_tuple(std::get<0>(k), std::get<1>(k), std::get<2>(k), std::get<3>(k)); };
+  for (std::size_t r = 0; r < std::min(ranked.size(), kRobustCandidates); ++r) {
+    if (kind(ranked[r].first) != kind(ranked.front().first)) break;
+    const GraspPlan& plan = candidates[ranked[r].second];
+    int kept = 0;
+    for (const Eigen::Isometry3d& aim : aim_errors()) {
+      const OfflineClosing t =
+          close_offline(rig, planning, model, X_WorldObject, plan.X_WorldPalm * aim, dt, table_height);
+      kept += t.grasped && !t.penetrating && closure_of(t).first;
+    }
+    if (kept > best_kept) {
+      best_kept = kept;
+      best = ranked[r].second;
     }
   }
-  return best;
+  return candidates[best];
 }
 
 ScriptedOperator::ScriptedOperator(std::shared_ptr<const HandRig> rig, OperatorSkill skill, std::uint64_t seed,

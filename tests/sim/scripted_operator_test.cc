@@ -457,5 +457,46 @@ TEST(ScriptedOperatorTest, TypedPlansCloseAcrossTheReachableWidthInForceClosure)
     }
 }
 
+// A typed plan's force closure survives the operator's aim: closed again with the palm 3 mm off
+// along each of its axes or turned 3 degrees about its normal, each chosen plan in force closure
+// stays clean and in force closure in at least 5 of the 8, and in 6.5 on average (ranked by
+// epsilon alone, the mustard bottle's YCB scan and the hammer keep 4, and the mean is 5.8).
+TEST(ScriptedOperatorTest, TypedPlansKeepForceClosureWithTheOperatorsAimOff) {
+  const auto hand_rig = rig("human_right_opposable");
+  std::vector<Eigen::Isometry3d> aims;
+  for (int axis = 0; axis < 3; ++axis)
+    for (double d : {0.003, -0.003}) aims.emplace_back(Eigen::Translation3d(d * Eigen::Vector3d::Unit(axis)));
+  for (double deg : {3.0, -3.0})
+    aims.emplace_back(Eigen::AngleAxisd(deg * std::numbers::pi / 180, Eigen::Vector3d::UnitZ()));
+  const auto in_closure = [&](const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject,
+                              const Eigen::Isometry3d& X_WorldPalm) {
+    const OfflineClosing c = close_offline(hand_rig, {}, model, X_WorldObject, X_WorldPalm, 1.0 / 90);
+    const auto job = c.hand.quality_inputs();
+    return c.grasped && !c.penetrating && job && grasp_quality(job->contacts, job->mu, job->torque_scale).force_closure;
+  };
+  std::vector<ObjectModelPtr> models;
+  const char* ycb = std::getenv("TELEGRASP_YCB_DIR");
+  for (const char* name : {"003_cracker_box", "004_sugar_box", "009_gelatin_box", "010_potted_meat_can",
+                           "006_mustard_bottle", "048_hammer"}) {
+    models.push_back(standin(name));
+    const std::string scan = ycb ? std::string(ycb) + "/" + name + ".ply" : "";
+    if (ycb && std::ifstream(scan).good()) models.push_back(load_protocol_object_model(scan));
+  }
+  int kept_sum = 0, plans = 0;
+  for (const ObjectModelPtr& model : models) {
+    SCOPED_TRACE(model->source);
+    const Eigen::Isometry3d X_WorldObject = World::resting_pose(*model, 0.45, 0.0, 0.5);
+    const GraspPlan plan = plan_grasp(hand_rig, {}, *model, X_WorldObject, 1.0 / 90);
+    if (!in_closure(*model, X_WorldObject, plan.X_WorldPalm)) continue;  // the two stand-in boxes: none is
+    int kept = 0;
+    for (const Eigen::Isometry3d& aim : aims) kept += in_closure(*model, X_WorldObject, plan.X_WorldPalm * aim);
+    EXPECT_GE(kept, 5);
+    kept_sum += kept;
+    ++plans;
+  }
+  ASSERT_GE(plans, 4);
+  EXPECT_GE(static_cast<double>(kept_sum) / plans, 6.5);
+}
+
 }  // namespace
 }  // namespace telegrasp::sim
