@@ -47,8 +47,9 @@ double box_width_along(const ObjectShape& shape, const Eigen::Vector3d& d_Object
 /// of every side as short (shorter / longer >= rules.round_ratio, as a round cross-section): a
 /// ball is closed across whatever the direction, a can across any line square to its axis.
 /// With `up_Object` (the table's normal in the object frame, the object lying on it) the smallest
-/// dimension is the smallest a hand can close across there: sides within 45 degrees of the normal
-/// do not count (a knife lying flat is closed across its width, not its upright thickness).
+/// dimension is the smallest a hand can close across there: a side within 45 degrees of the
+/// normal does not count unless it is as long as that one (a knife lying flat is closed across
+/// its width, not its upright thickness; a ball still from any direction).
 bool closes_across_shortest_side(const ObjectShape& shape, const Eigen::Isometry3d& X_ObjectPalm,
                                  const ShapeRules& rules = {},
                                  const std::optional<Eigen::Vector3d>& up_Object = std::nullopt);
