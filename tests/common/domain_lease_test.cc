@@ -168,7 +168,7 @@ TEST(DomainLeaseTest, SkipsADomainWhoseSharedMemoryDiscoveryPortIsLocked) {
 
 TEST(DomainLeaseTest, SeesAFastDdsParticipantOnTheDomain) {
   const DomainLease lease;
-  for (const char* profile : {"loopback", "udp"}) {
+  for (const char* profile : {"loopback", "shm", "udp"}) {
     EXPECT_FALSE(domain_ports_in_use(lease.domain())) << profile;
     {
       idl::DdsParticipant participant(lease.domain(), profile);

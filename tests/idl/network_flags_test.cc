@@ -36,7 +36,7 @@ TEST(NetworkFlagsTest, ReadsEachFlagAndNamesTheMistake) {
     EXPECT_NE(parse("--domain", bad, o), "") << "'" << bad << "'";
   EXPECT_EQ(o.domain, 232);
   EXPECT_EQ(parse("--profile", "", o),
-            "--profile expects a participant profile name (loopback, udp, lan, wan, secure), got ''");
+            "--profile expects a participant profile name (loopback, shm, udp, lan, wan, secure), got ''");
   EXPECT_EQ(parse("--profile", "udp", o), "");
   EXPECT_EQ(parse("--profiles", "/tmp/p.xml", o), "");
   EXPECT_EQ(parse("--scene", "room-1", o), "");

@@ -56,7 +56,7 @@ Options:
                    SceneState,ServerStatus,ObjectGeometry (default: all; ObjectGeometry prints
                    a summary of each model's mesh, not the mesh)
   --domain N       DDS domain, 0..232 (default 0)
-  --profile NAME   participant profile: loopback, udp, lan, wan, secure (default loopback)
+  --profile NAME   participant profile: loopback, shm, udp, lan, wan, secure (default loopback)
   --profiles FILE  Fast DDS XML profiles (default $TELEGRASP_PROFILES, else the shipped file)
   --scene NAME     the scene (room) to listen to (default $TELEGRASP_SCENE, else default)
   --discovery-server HOST[:PORT]

@@ -53,8 +53,8 @@ participant profile (DDS Security: PKI-DH, access control, AES-GCM) on the topic
 pings on telegrasp/ControllerState as identity "bench", echoed on telegrasp/HandSkeleton (same
 ControllerState samples: access control checks topic names, not types) as identity "server";
 DIR is made by `deploy/security/make-certs.sh DIR bench`. The table then adds its row and the
-difference: the cost of security against --profile (loopback by default). `secure` carries UDP
-beside shared memory and `loopback` shared memory alone, so for like transports pass --profile lan.
+difference: the cost of security against --profile (loopback by default, the same transports as
+`secure`: shared memory and UDP on 127.0.0.1).
 The first --warmup-s seconds of each phase are excluded. A table goes to stdout, progress to stderr.
 
 Options:

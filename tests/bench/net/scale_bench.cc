@@ -77,8 +77,8 @@ and counts per level the samples it takes and their serialized (CDR) bytes: the 
 subscriber receives, per topic and per hand. Every level also records the bytes and packets of
 the loopback interface (/proc/net/dev): inside `unshare -n` with --profile udp that is all of the
 run's DDS traffic sent by UDP (headers included), so two runs with and without --count-outputs
-give the bytes one more subscriber costs on the wire (the loopback profile, shared memory only,
-crosses no socket: `lo` then counts nothing).
+give the bytes one more subscriber costs on the wire (the shm profile, shared memory only,
+crosses no socket: `lo` then counts nothing; loopback sends each sample by both).
 
 Options:
   --sample-hz HZ         controller sample rate per hand (default 90; --hz, its old name, still

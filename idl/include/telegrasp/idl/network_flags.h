@@ -46,7 +46,7 @@ bool parse_network_flag(const std::string& flag, const Value& value, Options& op
   if (flag == "--profile") {
     options.profile = value();
     if (options.profile.empty())
-      fail(flag + " expects a participant profile name (loopback, udp, lan, wan, secure), got ''");
+      fail(flag + " expects a participant profile name (loopback, shm, udp, lan, wan, secure), got ''");
     return true;
   }
   if (flag == "--profiles") {
