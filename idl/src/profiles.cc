@@ -37,7 +37,7 @@ void load_profiles(const std::string& path_in, const std::string& participant_pr
   if (DomainParticipantFactory::get_instance()->get_participant_qos_from_profile(participant_profile, qos) !=
       ReturnCode_t::RETCODE_OK)
     throw std::runtime_error("no participant profile '" + participant_profile + "' in " + path +
-                             " (shipped: loopback, shm, udp, lan, wan, secure)");
+                             " (shipped: " + kShippedProfiles + ")");
 }
 
 }  // namespace telegrasp::idl

@@ -449,6 +449,8 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
       }
     }
 
+  const Eigen::Isometry3d X_ObjectWorld = X_WorldObject.inverse();
+  const Eigen::Vector3d up_Object = X_ObjectWorld.linear() * up;
   using Key = std::tuple<bool, bool, bool, bool, double, double>;
   std::vector<std::pair<Key, std::size_t>> ranked;
   // Whether a closing is clean and, with grasp types, in force closure (and its epsilon's steps).
@@ -477,8 +479,7 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
     bool across = false;
     std::pair<bool, double> closure{false, 0.0};
     if (typed) {
-      across = closes_across_shortest_side(model.shape, X_WorldObject.inverse() * plan.X_WorldPalm, {},
-                                           X_WorldObject.linear().transpose() * up);
+      across = closes_across_shortest_side(model.shape, X_ObjectWorld * plan.X_WorldPalm, {}, up_Object);
       closure = closure_of(t);
     }
     ranked.emplace_back(Key{plan.predicted_grasp, reachable, across, closure.first, closure.second, score}, i);
@@ -491,7 +492,9 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
   std::size_t best = ranked.front().second;
   int best_kept = -1;
   // Grasped, reachable, across and in closure as the first (the ranking puts those first).
-  const auto kind = [](const Key& k) { return std::make_tuple(std::get<0>(k), std::get<1>(k), std::get<2>(k), std::get<3>(k)); };
+  const auto kind = [](const Key& k) {
+    return std::make_tuple(std::get<0>(k), std::get<1>(k), std::get<2>(k), std::get<3>(k));
+  };
   for (std::size_t r = 0; r < std::min(ranked.size(), kRobustCandidates); ++r) {
     if (kind(ranked[r].first) != kind(ranked.front().first)) break;
     const GraspPlan& plan = candidates[ranked[r].second];

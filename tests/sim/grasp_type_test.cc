@@ -103,7 +103,9 @@ TEST(GraspTypeTest, OnATableTheShortestSideIsTheShortestAHandCanReach) {
   EXPECT_TRUE(closes_across_shortest_side(knife, along(x), {}, z));
   EXPECT_FALSE(closes_across_shortest_side(knife, along(y), {}, z));
   // The 45-degree edge: the normal 44 degrees from the thickness takes it out, 46 leaves it.
-  const auto normal_at = [&](double deg) { return Eigen::Vector3d(std::cos(deg * kPi / 180), std::sin(deg * kPi / 180), 0); };
+  const auto normal_at = [&](double deg) {
+    return Eigen::Vector3d(std::cos(deg * kPi / 180), std::sin(deg * kPi / 180), 0);
+  };
   EXPECT_FALSE(closes_across_shortest_side(knife, along(x), {}, normal_at(44)));
   EXPECT_TRUE(closes_across_shortest_side(knife, along(y), {}, normal_at(44)));
   EXPECT_TRUE(closes_across_shortest_side(knife, along(x), {}, normal_at(46)));

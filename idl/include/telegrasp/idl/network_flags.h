@@ -5,6 +5,7 @@
 #pragma once
 
 #include "telegrasp/idl/network.h"
+#include "telegrasp/idl/profiles.h"
 #include "telegrasp/idl/topics.h"
 
 #include <charconv>
@@ -46,7 +47,7 @@ bool parse_network_flag(const std::string& flag, const Value& value, Options& op
   if (flag == "--profile") {
     options.profile = value();
     if (options.profile.empty())
-      fail(flag + " expects a participant profile name (loopback, shm, udp, lan, wan, secure), got ''");
+      fail(flag + " expects a participant profile name (" + kShippedProfiles + "), got ''");
     return true;
   }
   if (flag == "--profiles") {

@@ -5,6 +5,9 @@
 
 namespace telegrasp::idl {
 
+/// The participant profiles deploy/fastdds/telegrasp_profiles.xml defines, for messages and help.
+inline constexpr const char* kShippedProfiles = "loopback, shm, udp, lan, wan, secure";
+
 /// The profiles file to use when none is given: $TELEGRASP_PROFILES if set, else the shipped copy
 /// of deploy/fastdds/telegrasp_profiles.xml in the data folder (sim::data_dir():
 /// <prefix>/share/telegrasp once installed, build/share/telegrasp in a build tree).
