@@ -62,8 +62,11 @@ SceneAssets load_scene_assets(const ServerSettings& settings) {
     }
   }
   // The rig is parsed from the very text that is kept, so a recording holds what was used.
-  a.right_rig_path = settings.right_rig.empty() ? sim::HandRig::builtin_path("human_right") : settings.right_rig;
-  a.left_rig_path = settings.left_rig.empty() ? sim::HandRig::builtin_path("human_left") : settings.left_rig;
+  const auto or_default = [](const std::string& path, sim::HandSide side) {
+    return path.empty() ? sim::HandRig::builtin_path(sim::HandRig::default_human(side)) : path;
+  };
+  a.right_rig_path = or_default(settings.right_rig, sim::HandSide::kRight);
+  a.left_rig_path = or_default(settings.left_rig, sim::HandSide::kLeft);
   auto load_rig = [](const std::string& path, std::string& text) {
     try {
       text = read_text_file(path);

@@ -98,6 +98,10 @@ std::string HandRig::builtin_path(const std::string& name) {
   return (data_dir() / "rigs" / (name + ".textproto")).string();
 }
 
+std::string HandRig::default_human(HandSide side) {
+  return side == HandSide::kLeft ? "human_left_opposable" : "human_right_opposable";
+}
+
 HandRig HandRig::load(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw RigError(path + ": cannot open rig file");

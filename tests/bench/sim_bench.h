@@ -34,9 +34,14 @@ inline std::vector<std::pair<std::string, std::string>> object_mesh_files() {
   return files;
 }
 
-/// The shipped right hand (human_right), loaded once.
+/// The right hand the benches measure, loaded once: the built-in rig named by
+/// $TELEGRASP_BENCH_RIG (e.g. human_right, the flat thumb) or the default, human_right_opposable.
 inline std::shared_ptr<const HandRig> right_rig() {
-  static auto r = std::make_shared<const HandRig>(HandRig::load(HandRig::builtin_path("human_right")));
+  static auto r = [] {
+    const char* name = std::getenv("TELEGRASP_BENCH_RIG");
+    const std::string rig = name && *name ? name : HandRig::default_human(HandSide::kRight);
+    return std::make_shared<const HandRig>(HandRig::load(HandRig::builtin_path(rig)));
+  }();
   return r;
 }
 

@@ -78,7 +78,7 @@ TEST(BotTest, WithoutItsRigTheBotStopsAtOnceNamingTheFile) {
   EXPECT_EQ(bot.wait(30s), 1) << bot.log_tail();
   std::ifstream in(log);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  EXPECT_NE(text.find("human_right.textproto: cannot open rig file"), std::string::npos) << text;
+  EXPECT_NE(text.find("human_right_opposable.textproto: cannot open rig file"), std::string::npos) << text;
 }
 
 // The bot plans on the server's published geometry only (no --objects) and holds the hardest

@@ -10,6 +10,7 @@
 #include "scene_setup.h"
 #include "server_config.pb.h"
 
+#include "telegrasp/sim/hand_rig.h"
 #include "telegrasp/sim/standin_objects.h"
 
 #include <gtest/gtest.h>
@@ -284,6 +285,28 @@ std::string box_obj(double x, double y, double z) {
   }
   o << "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n";
   return o.str();
+}
+
+// With no rig named, the server's hands are the opposable ones with grasp types; a server
+// configured with the flat-thumb rigs (the default before) gets them, and a recording made with
+// them replays with them, whatever the default is now: the header holds the rig's text.
+TEST(SceneAssetsTest, TheDefaultHandsOpposeTheirThumbAndARecordingKeepsItsOwn) {
+  const SceneAssets a = load_scene_assets(ServerSettings{});
+  EXPECT_EQ(a.right_rig->name(), "human_right_opposable");
+  EXPECT_EQ(a.left_rig->name(), "human_left_opposable");
+  EXPECT_TRUE(a.right_rig->has_grasp_types());
+  EXPECT_TRUE(a.left_rig->has_grasp_types());
+
+  ServerSettings flat;
+  flat.right_rig = sim::HandRig::builtin_path("human_right");
+  flat.left_rig = sim::HandRig::builtin_path("human_left");
+  const SceneAssets b = load_scene_assets(flat);
+  EXPECT_EQ(b.right_rig->name(), "human_right");
+  EXPECT_FALSE(b.right_rig->has_grasp_types());
+  const SceneAssets replayed = load_recorded_assets(make_recording_header(flat, b), "old.tgrec");
+  EXPECT_EQ(replayed.right_rig->name(), "human_right");
+  EXPECT_EQ(replayed.left_rig->name(), "human_left");
+  EXPECT_EQ(replayed.right_rig_text, b.right_rig_text);
 }
 
 // A folder with one protocol object's mesh, with fill_standins: that mesh, then the 29 other

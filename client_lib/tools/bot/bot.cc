@@ -207,7 +207,8 @@ std::vector<std::shared_ptr<const sim::HandRig>> load_hand_rigs(const std::vecto
   std::vector<std::shared_ptr<const sim::HandRig>> out;
   for (client::HandSide side : hands)
     out.push_back(std::make_shared<const sim::HandRig>(sim::HandRig::load(
-        sim::HandRig::builtin_path(side == client::HandSide::kRight ? "human_right" : "human_left"))));
+        sim::HandRig::builtin_path(sim::HandRig::default_human(
+            side == client::HandSide::kRight ? sim::HandSide::kRight : sim::HandSide::kLeft)))));
   return out;
 }
 

@@ -18,7 +18,7 @@ struct EvalInputs {
   std::vector<sim::ObjectModelPtr> models;
 };
 
-/// The rig at `rig_path` (empty: the built-in human_right) and every mesh in `objects_dir`
+/// The rig at `rig_path` (empty: the built-in human_right_opposable) and every mesh in `objects_dir`
 /// (empty: the 30 built-in stand-ins). Throws with a message naming the bad file (a mesh
 /// problem as "--objects <folder or file>: <what is wrong>", the way every tool says it).
 EvalInputs load_eval_inputs(const std::string& rig_path, const std::string& objects_dir);

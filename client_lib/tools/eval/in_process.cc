@@ -56,7 +56,7 @@ Options:
   --seed S            random seed (default 1)
   --skill NAME        perfect | experienced | inexperienced (default experienced)
   --selection M       surface | origin: how the palm sphere ranks objects (default surface)
-  --rig FILE          hand rig text file (default: built-in human_right)
+  --rig FILE          hand rig text file (default: built-in human_right_opposable)
   --json FILE         write every grasp record and the summaries as JSON
   --svg DIR           draw each object's first held grasp (three views) as DIR/<object>_<mode>.svg
   --jobs N            worker threads (default 2; --threads, its old name, still works)

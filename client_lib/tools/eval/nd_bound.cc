@@ -51,7 +51,7 @@ operator's grasps are measured by. A random search finds an upper estimate of th
 
 Options:
   --objects DIR    every mesh file in DIR; default: the 30 built-in stand-ins
-  --rig FILE       hand rig text file (default: built-in human_right)
+  --rig FILE       hand rig text file (default: built-in human_right_opposable)
   --poses N        random poses per object (default 400)
   --refine N       local refinement steps from the best pose (default 300)
   --min-hits K     capsules whose sweep must hit (default 5)

@@ -55,7 +55,7 @@ Options:
                     a Fast DDS discovery server; repeat in id order (telegrasp-server --help)
   --group NAME      experienced | inexperienced (default experienced)
   --skills FILE     skill profiles overriding the built-in ones (see telegrasp-eval protocol --help)
-  --rig FILE        the server's right-hand rig, for planning (default: built-in human_right)
+  --rig FILE        the server's right-hand rig, for planning (default: built-in human_right_opposable)
   --participant P   participant number, 1-based (default 1)
   --seed S          the run's seed (default 1)
   --mode M          the server's closing mode, written into the records (default precise)
@@ -128,7 +128,7 @@ class Participant {
         client_(c),
         models_(std::move(models)),
         rig_(std::make_shared<const sim::HandRig>(
-            sim::HandRig::load(opt.rig_path.empty() ? sim::HandRig::builtin_path("human_right") : opt.rig_path))),
+            sim::HandRig::load(opt.rig_path.empty() ? sim::HandRig::builtin_path(sim::HandRig::default_human(sim::HandSide::kRight)) : opt.rig_path))),
         skill_(participant_skill(opt.group, opt.seed, opt.participant, &opt.skills)) {
     const auto& order = paper_object_order();
     objects_.assign(order.begin(),

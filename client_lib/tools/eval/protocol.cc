@@ -276,7 +276,7 @@ std::optional<ReportInputs> load_report_inputs(const Options& opt) {
     }
     in.paper = load_paper_rows();
     in.pictures.rig = std::make_shared<const sim::HandRig>(
-        sim::HandRig::load(opt.rig_path.empty() ? sim::HandRig::builtin_path("human_right") : opt.rig_path));
+        sim::HandRig::load(opt.rig_path.empty() ? sim::HandRig::builtin_path(sim::HandRig::default_human(sim::HandSide::kRight)) : opt.rig_path));
   } catch (const std::exception& e) {
     std::cerr << kTool << ": " << e.what() << "\n";
     return std::nullopt;

@@ -62,10 +62,11 @@ ActiveHands::ActiveHands(const std::string& model, int max_hands, double sample_
     : model_name_(model), sample_hz_(sample_hz), hands_(max_hands), grasped_(new std::atomic<bool>[max_hands]) {
   if (!is_active_model(model)) throw std::runtime_error("no built-in stand-in '" + model + "'");
   model_ = sim::make_standin_model(*sim::find_protocol_object(model));
-  rigs_[idl::kHandLeft] =
-      std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_left")));
-  rigs_[idl::kHandRight] =
-      std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path("human_right")));
+  // The server's default hands.
+  for (const auto& [hand, side] :
+       {std::pair{idl::kHandLeft, sim::HandSide::kLeft}, std::pair{idl::kHandRight, sim::HandSide::kRight}})
+    rigs_[hand] = std::make_shared<const sim::HandRig>(
+        sim::HandRig::load(sim::HandRig::builtin_path(sim::HandRig::default_human(side))));
   X_WorldObject0_ = sim::World::resting_pose(*model_, 0, 0, 0);
   for (int side = 0; side < 2; ++side)
     plans_[side] = sim::plan_grasp(rigs_[side], {}, *model_, X_WorldObject0_, 1.0 / sample_hz_);

@@ -44,8 +44,10 @@ struct SinkOfEvents : server::OutputSink {
   void hand_removed(const server::HandAddress&) override {}
 };
 
-std::shared_ptr<const sim::HandRig> rig(const char* name) {
-  return std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path(name)));
+// The server's default hand on `side`, as the bench's server has.
+std::shared_ptr<const sim::HandRig> rig(sim::HandSide side) {
+  return std::make_shared<const sim::HandRig>(
+      sim::HandRig::load(sim::HandRig::builtin_path(sim::HandRig::default_human(side))));
 }
 
 TEST(ActiveHandsTest, GraspAndHoldTheirObjectsOnAServer) {
@@ -62,7 +64,7 @@ TEST(ActiveHandsTest, GraspAndHoldTheirObjectsOnAServer) {
   for (const auto& o : sim::protocol_objects()) models.push_back(sim::make_standin_model(o));
   server::InputMailbox mailbox{{5, 5}, 16, [](const std::string&) {}};
   SinkOfEvents sink;
-  server::SceneServer scene(settings, models, rig("human_right"), rig("human_left"), mailbox, sink);
+  server::SceneServer scene(settings, models, rig(sim::HandSide::kRight), rig(sim::HandSide::kLeft), mailbox, sink);
   ASSERT_EQ(scene.world().objects().size(), static_cast<std::size_t>(kHands));
 
   ActiveHands hands(kModel, kHands, 90.0);

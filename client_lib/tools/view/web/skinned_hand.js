@@ -69,7 +69,7 @@ export class SkinnedHands {
   update(hands, capsules = false) {
     const live = new Set();
     for (const h of hands) {
-      if (h.rig !== "human_right" && h.rig !== "human_left") continue;
+      if (!/^human_(right|left)(_opposable)?$/.test(h.rig)) continue;
       live.add(h.key);
       let hand = this.hands.get(h.key);
       if (!hand) {

@@ -73,6 +73,9 @@ class HandRig {
   /// Path of a rig shipped with telegrasp ("human_right", "human_left", "human_right_opposable",
   /// "human_left_opposable", "gripper3").
   static std::string builtin_path(const std::string& name);
+  /// Name of the built-in human hand a server, bot or eval uses when no rig is given: the hand
+  /// with the opposable thumb and grasp types ("human_right_opposable", "human_left_opposable").
+  static std::string default_human(HandSide side);
 
   /// This rig reflected through the palm's x-z plane: a right hand becomes a left hand.
   [[nodiscard]] HandRig mirrored() const;

@@ -89,6 +89,7 @@ TEST_F(ReplayExportTest, ContactsCsvHoldsEveryGraspContact) {
   EXPECT_EQ(lines[0], kContactCsvHeader);
 
   // The last contact of the first grasp.
+  ASSERT_FALSE(session().events.empty());
   const msg::GraspEvent& ev = session().events[0];
   const std::size_t c_index = ev.contacts().size() - 1;
   const msg::ContactPoint& c = ev.contacts()[c_index];
@@ -105,7 +106,8 @@ TEST_F(ReplayExportTest, ContactsCsvHoldsEveryGraspContact) {
   EXPECT_EQ(f[5], std::to_string(ev.tick()));
   EXPECT_EQ(num(f[6]), ev.time());
   EXPECT_EQ(f[7], std::to_string(c.phalanx()));
-  const sim::HandRig rig = sim::HandRig::load(sim::HandRig::builtin_path("human_right"));
+  const sim::HandRig rig = sim::HandRig::load(sim::HandRig::builtin_path("human_right_opposable"));  // the server's
+  ASSERT_LT(c.phalanx(), static_cast<int>(rig.phalanges().size()));
   EXPECT_EQ(f[8], c.phalanx() < 0 ? std::string("palm") : rig.phalanges()[c.phalanx()].name);
   const msg::Vec3* vecs[] = {&c.p_world(), &c.n_world(), &c.p_object(), &c.n_object()};
   for (int v = 0; v < 4; ++v) {
