@@ -731,6 +731,7 @@ void HandController::apply_grasp_rule(const ObjectView* object, const Eigen::Iso
   if (rule && !state_.grasped.valid()) {
     state_.grasped = object->id;
     state_.X_PalmObject = state_.X_WorldPalm.inverse() * object->X_WorldObject;
+    X_ObjectPalm_held_ = X_ObjectPalm;
     held_model_ = object->model;
     grasp_view_ = *object;
     // The hold metrics start as the grasp's, for as long as the hand keeps its shape: with
@@ -769,7 +770,7 @@ HandTickEvents HandController::tick(const ControllerInput& raw_input, double dt,
   const ObjectView* object = choose_object(objects, held_view, events);
   const Eigen::Isometry3d X_ObjectPalm = !object ? Eigen::Isometry3d::Identity()
                                          : state_.grasped.valid()
-                                             ? state_.X_PalmObject.inverse()
+                                             ? X_ObjectPalm_held_
                                              : object->X_WorldObject.inverse() * state_.X_WorldPalm;
   carry_gap_bounds(object, X_ObjectPalm);
   choose_type(object, X_ObjectPalm);
@@ -823,6 +824,7 @@ std::optional<Eigen::Isometry3d> HandController::grasped_object_pose() const {
 void HandController::reattach(const Eigen::Isometry3d& X_WorldObject) {
   if (!state_.grasped.valid()) return;
   state_.X_PalmObject = state_.X_WorldPalm.inverse() * X_WorldObject;
+  X_ObjectPalm_held_ = X_WorldObject.inverse() * state_.X_WorldPalm;
   // The cached contacts and hold metrics were taken at the old hand-object pose.
   contacts_key_.clear();
   hold_metrics_key_.clear();
@@ -974,7 +976,7 @@ void HandController::refresh_contacts() const {
   contacts_.clear();
   contacts_.reserve(rig_->capsule_phalanges().size() + 1);
   contacts_key_ = shape_key();
-  const Eigen::Isometry3d X_ObjectPalm = state_.X_PalmObject.inverse();
+  const Eigen::Isometry3d& X_ObjectPalm = X_ObjectPalm_held_;
   // Each contact's ND is its capsule's, as measure() takes it (bit-identical to the grasp
   // metrics' on the grasp tick, to hold_metrics()' later).
   const Eigen::Isometry3d X_WorldObject = grasp_view_ ? grasp_view_->X_WorldObject : *grasped_object_pose();

@@ -164,6 +164,10 @@ class HandController {
   std::optional<GraspMetrics> metrics_;
   bool defer_metrics_ = false;
   std::optional<ObjectView> grasp_view_;  // the object as the last tick grasped it
+  // While grasped: the palm in the object's frame as the fingers use it, X_PalmObject's inverse
+  // with the bits of the frame they closed in (or of the last reattach), so that the grasp
+  // tick's contacts and every later tick find each capsule's last exact query at the same pose.
+  Eigen::Isometry3d X_ObjectPalm_held_ = Eigen::Isometry3d::Identity();
   const ObjectModel* held_model_ = nullptr;
   // Caches keyed on shape_key() (the hand-object pose is fixed while holding).
   mutable std::vector<Contact> contacts_;  // object frame only; world fields filled by contacts()
