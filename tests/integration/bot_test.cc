@@ -26,7 +26,9 @@ namespace {
 
 using namespace std::chrono_literals;
 
-constexpr auto kGuard = 240s;  // against a hang only: the run takes about 50 s
+// Against a hang only: the run takes about 45 s, and 245 s under ASan+UBSan (the opposable
+// hands plan each grasp against the operator's aim errors), which a 240 s guard cut (2026-12-07).
+constexpr auto kGuard = 540s;  // under ctest's 600 s for an integration test
 constexpr double kTarget = 0.95;  // issue 12 section 6: held in at least 95 % of trials
 
 // The thin stand-ins, the sugar box and the strawberry (small and light: the misses of earlier
