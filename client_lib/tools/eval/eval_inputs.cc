@@ -9,10 +9,14 @@
 
 namespace telegrasp::eval {
 
+std::string rig_path_or_default(const std::string& rig_path) {
+  return rig_path.empty() ? sim::HandRig::builtin_path(sim::HandRig::default_human(sim::HandSide::kRight)) : rig_path;
+}
+
 EvalInputs load_eval_inputs(const std::string& rig_path, const std::string& objects_dir) {
   EvalInputs in;
   in.rig = std::make_shared<const sim::HandRig>(
-      sim::HandRig::load(rig_path.empty() ? sim::HandRig::builtin_path(sim::HandRig::default_human(sim::HandSide::kRight)) : rig_path));
+      sim::HandRig::load(rig_path_or_default(rig_path)));
   if (objects_dir.empty()) {
     for (const auto& o : sim::protocol_objects()) in.models.push_back(sim::make_standin_model(o));
   } else {

@@ -18,6 +18,10 @@ struct EvalInputs {
   std::vector<sim::ObjectModelPtr> models;
 };
 
+/// The right hand's rig file: `rig_path`, or the built-in default's (HandRig::default_human) when
+/// empty.
+std::string rig_path_or_default(const std::string& rig_path);
+
 /// The rig at `rig_path` (empty: the built-in human_right_opposable) and every mesh in `objects_dir`
 /// (empty: the 30 built-in stand-ins). Throws with a message naming the bad file (a mesh
 /// problem as "--objects <folder or file>: <what is wrong>", the way every tool says it).

@@ -9,6 +9,7 @@
 #include "client_options.h"
 #include "telegrasp/idl/cli.h"
 #include "commands.h"
+#include "eval_inputs.h"
 #include "grasp_event_record.h"
 #include "grasp_report.h"
 #include "protocol_common.h"
@@ -128,7 +129,7 @@ class Participant {
         client_(c),
         models_(std::move(models)),
         rig_(std::make_shared<const sim::HandRig>(
-            sim::HandRig::load(opt.rig_path.empty() ? sim::HandRig::builtin_path(sim::HandRig::default_human(sim::HandSide::kRight)) : opt.rig_path))),
+            sim::HandRig::load(rig_path_or_default(opt.rig_path)))),
         skill_(participant_skill(opt.group, opt.seed, opt.participant, &opt.skills)) {
     const auto& order = paper_object_order();
     objects_.assign(order.begin(),

@@ -3,6 +3,7 @@
 // participant process (participant.cc) driving it. Jobs run in parallel, as many as --jobs.
 // Records come from the GraspEvent topic, via the participants.
 #include "child_process.h"
+#include "eval_inputs.h"
 #include "telegrasp/idl/cli.h"
 #include "commands.h"
 #include "experiment_report.h"
@@ -276,7 +277,7 @@ std::optional<ReportInputs> load_report_inputs(const Options& opt) {
     }
     in.paper = load_paper_rows();
     in.pictures.rig = std::make_shared<const sim::HandRig>(
-        sim::HandRig::load(opt.rig_path.empty() ? sim::HandRig::builtin_path(sim::HandRig::default_human(sim::HandSide::kRight)) : opt.rig_path));
+        sim::HandRig::load(rig_path_or_default(opt.rig_path)));
   } catch (const std::exception& e) {
     std::cerr << kTool << ": " << e.what() << "\n";
     return std::nullopt;

@@ -106,7 +106,8 @@ TEST_F(ReplayExportTest, ContactsCsvHoldsEveryGraspContact) {
   EXPECT_EQ(f[5], std::to_string(ev.tick()));
   EXPECT_EQ(num(f[6]), ev.time());
   EXPECT_EQ(f[7], std::to_string(c.phalanx()));
-  const sim::HandRig rig = sim::HandRig::load(sim::HandRig::builtin_path("human_right_opposable"));  // the server's
+  const sim::HandRig rig =  // the server's
+      sim::HandRig::load(sim::HandRig::builtin_path(sim::HandRig::default_human(sim::HandSide::kRight)));
   ASSERT_LT(c.phalanx(), static_cast<int>(rig.phalanges().size()));
   EXPECT_EQ(f[8], c.phalanx() < 0 ? std::string("palm") : rig.phalanges()[c.phalanx()].name);
   const msg::Vec3* vecs[] = {&c.p_world(), &c.n_world(), &c.p_object(), &c.n_object()};
