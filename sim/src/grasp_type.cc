@@ -69,7 +69,11 @@ GraspType choose_grasp_type(const ObjectShape& shape, const Eigen::Isometry3d& X
     case ShapeClass::kBox:
       return GraspType::kPrismatic;
     case ShapeClass::kThin:
-      return GraspType::kLateralPinch;
+      // Across its thickness: between the thumb's pad and the index finger's side. Across its
+      // width, as a thin object lying flat on a table must be closed: a flat box between the
+      // thumb and four fingers.
+      return std::abs(shape.X_ObjectBox.linear().col(0).dot(across)) >= rules.pinch_min_cos ? GraspType::kLateralPinch
+                                                                                              : GraspType::kPrismatic;
     case ShapeClass::kOther:
       break;
   }

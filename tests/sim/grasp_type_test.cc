@@ -143,7 +143,14 @@ TEST(GraspTypeTest, ChoiceFollowsShapeWidthAndPose) {
   EXPECT_EQ(choose_grasp_type(shape(ShapeClass::kCylinder, {0.02, 0.05, 0.05}, 0), palm(side)), GraspType::kDisk);
   EXPECT_EQ(choose_grasp_type(shape(ShapeClass::kCylinder, {0.02, 0.05, 0.05}, 0), palm()), GraspType::kLargeWrap);
   EXPECT_EQ(choose_grasp_type(shape(ShapeClass::kBox, {0.02, 0.05, 0.08}), palm()), GraspType::kPrismatic);
-  EXPECT_EQ(choose_grasp_type(shape(ShapeClass::kThin, {0.003, 0.02, 0.1}), palm()), GraspType::kLateralPinch);
+  // A thin object closed across its thickness (box x): a lateral pinch, still 40 degrees off it;
+  // 50 degrees off and across its width, as one lying flat on a table is closed: prismatic.
+  const ObjectShape thin = shape(ShapeClass::kThin, {0.003, 0.02, 0.1});
+  const auto about_z = [](double deg) { return Eigen::AngleAxisd(deg * kPi / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix(); };
+  EXPECT_EQ(choose_grasp_type(thin, palm()), GraspType::kLateralPinch);
+  EXPECT_EQ(choose_grasp_type(thin, palm(about_z(40))), GraspType::kLateralPinch);
+  EXPECT_EQ(choose_grasp_type(thin, palm(about_z(50))), GraspType::kPrismatic);
+  EXPECT_EQ(choose_grasp_type(thin, palm(about_z(90))), GraspType::kPrismatic);
   EXPECT_EQ(choose_grasp_type(shape(ShapeClass::kOther, {0.02, 0.05, 0.08}), palm()), GraspType::kOther);
 }
 
@@ -228,13 +235,15 @@ Closing close_on(const std::shared_ptr<const HandRig>& rig, const ObjectModel& m
   return out;
 }
 
-Eigen::Isometry3d under_palm(const HandRig& rig, const ObjectModel& model, const Eigen::Matrix3d& R) {
+// The object turned by R under the rig's grasp centre, its top `gap` below the palm.
+Eigen::Isometry3d under_palm(const HandRig& rig, const ObjectModel& model, const Eigen::Matrix3d& R,
+                             double gap = 0.003) {
   double top = -1e9;
   for (const Eigen::Vector3d& v : model.mesh.vertices) top = std::max(top, (R * v).z());
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
   X.linear() = R;
   X.translation() = rig.p_PalmGraspCenter();
-  X.translation().z() = -rig.palm_half_extent().z() - 0.003 - top;
+  X.translation().z() = -rig.palm_half_extent().z() - gap - top;
   return X;
 }
 
@@ -252,6 +261,7 @@ TEST(GraspTypeTest, EachTypeClosesOnItsPrimitive) {
     GraspType type;
     // Distance from a point (object frame) to the primitive's surface.
     std::function<double(const Eigen::Vector3d&)> surface;
+    double gap = 0.003;  // from the palm down to the object's top
   };
   const auto sphere = [](double r) { return [r](const Eigen::Vector3d& p) { return std::abs(p.norm() - r); }; };
   const auto cylinder = [](double r, double hz) {
@@ -280,10 +290,25 @@ TEST(GraspTypeTest, EachTypeClosesOnItsPrimitive) {
                    cylinder(0.03, 0.05)});
   cases.push_back({"box", testing::box_mesh({0.03, 0.075, 0.04}), I, GraspType::kPrismatic,
                    box({0.03, 0.075, 0.04})});
+  // A 6 mm diamond plate (diagonals 4 and 12 cm: thin, half its box), lying flat under the palm
+  // with its short diagonal across the hand; then standing on its edge, its thickness across.
+  // 25 mm under the palm, where the fingertips (not the knuckles) reach something this thin.
+  const std::vector<Eigen::Vector2d> diamond = {{0.02, 0}, {0, 0.06}, {-0.02, 0}, {0, -0.06}};
+  const auto diamond_plate = [](const Eigen::Vector3d& p) {
+    const double edge = (std::abs(p.x()) / 0.02 + std::abs(p.y()) / 0.06 - 1) / std::hypot(1 / 0.02, 1 / 0.06);
+    return std::abs(std::max(edge, std::abs(p.z()) - 0.003));
+  };
+  const Eigen::Matrix3d on_edge = Eigen::AngleAxisd(kPi / 2, Eigen::Vector3d::UnitY()).toRotationMatrix();  // z -> palm x
+  ASSERT_EQ(make_object_model("diamond", testing::prism_mesh(diamond, 0.003), 0.2, "test")->shape.shape,
+            ShapeClass::kThin);
+  cases.push_back(
+      {"plate lying flat", testing::prism_mesh(diamond, 0.003), I, GraspType::kPrismatic, diamond_plate, 0.025});
+  cases.push_back({"plate on its edge", testing::prism_mesh(diamond, 0.003), on_edge, GraspType::kLateralPinch,
+                   diamond_plate, 0.025});
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
     const ObjectModelPtr model = make_object_model(c.name, c.mesh, 0.2, "test");
-    const Eigen::Isometry3d X = under_palm(*rig, *model, c.R);
+    const Eigen::Isometry3d X = under_palm(*rig, *model, c.R, c.gap);
     const Closing closing = close_on(rig, *model, X);
     EXPECT_EQ(closing.type_at_rest, c.type) << grasp_type_name(closing.type_at_rest);
     const HandController& hand = closing.hand;

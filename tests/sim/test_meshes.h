@@ -1,10 +1,12 @@
-// Small closed meshes built inline for tests: boxes (exact), UV spheres and cylinders.
+// Small closed meshes built inline for tests: boxes and flat prisms (exact), UV spheres and
+// cylinders.
 #pragma once
 
 #include "telegrasp/sim/triangle_mesh.h"
 
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 namespace telegrasp::sim::testing {
 
@@ -61,6 +63,26 @@ inline TriangleMesh cylinder_mesh(double r, double hz, int segments) {
     m.triangles.push_back({b0, t1, t0});
     m.triangles.push_back({bottom, b1, b0});
     m.triangles.push_back({bottom + 1, t0, t1});
+  }
+  return m;
+}
+
+/// Flat prism: the convex polygon `outline` (x, y, counter-clockwise) from z = -hz to hz.
+inline TriangleMesh prism_mesh(const std::vector<Eigen::Vector2d>& outline, double hz) {
+  TriangleMesh m;
+  for (const Eigen::Vector2d& p : outline) {
+    m.vertices.emplace_back(p.x(), p.y(), -hz);
+    m.vertices.emplace_back(p.x(), p.y(), hz);
+  }
+  const auto n = static_cast<std::uint32_t>(outline.size());
+  for (std::uint32_t j = 0; j < n; ++j) {
+    const std::uint32_t b0 = 2 * j, t0 = b0 + 1, b1 = 2 * ((j + 1) % n), t1 = b1 + 1;
+    m.triangles.push_back({b0, b1, t1});
+    m.triangles.push_back({b0, t1, t0});
+  }
+  for (std::uint32_t j = 1; j + 1 < n; ++j) {  // the caps as fans
+    m.triangles.push_back({0, 2 * (j + 1), 2 * j});
+    m.triangles.push_back({1, 2 * j + 1, 2 * (j + 1) + 1});
   }
   return m;
 }

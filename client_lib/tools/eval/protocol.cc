@@ -104,7 +104,8 @@ Options:
                          DIR/<mode>-p<participant>.tgrec, for telegrasp-replay
   --keep-logs DIR        keep each server's and participant's log and records in DIR
   --rig FILE             the right-hand rig of the servers and the participants' planning
-                         (default: built-in human_right; e.g. sim/rigs/human_right_opposable.textproto)
+                         (default: built-in human_right_opposable; the flat thumb:
+                         sim/rigs/human_right.textproto)
   --skills FILE          skill profiles overriding the built-in ones: "[experienced]" then
                          "key = value" lines (OperatorSkill's fields, orientation_error_deg in
                          degrees; see README, "Calibration")

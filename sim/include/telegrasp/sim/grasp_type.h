@@ -37,6 +37,7 @@ struct GraspTypeRules {
   double small_wrap_max_width = 0.03;  ///< Cylinders up to this across: small wrap ...
   double medium_wrap_max_width = 0.07;  ///< ... up to this: medium (Feix: 96 % of grasps under 7 cm), larger: large.
   double disk_min_cos = 0.7071067811865476;  ///< A cylinder whose axis is within 45 degrees of the palm normal: disk.
+  double pinch_min_cos = 0.7071067811865476;  ///< A thin object closed within 45 degrees of across its thickness: lateral pinch.
 };
 
 /// Width of `shape`'s box along the unit direction `d` (object frame): 2 sum_i h_i |b_i . d|.
@@ -57,7 +58,8 @@ bool closes_across_shortest_side(const ObjectShape& shape, const Eigen::Isometry
 /// The grasp type for a hand at X_ObjectPalm (palm frame: +x to the fingers, -z the palm normal)
 /// about to close on an object of `shape`: sphere -> tripod or power sphere by its width across
 /// the palm (along palm x); cylinder -> disk when its axis is near the palm normal, else a small,
-/// medium or large wrap by its diameter; box -> prismatic; thin -> lateral pinch; other ->
+/// medium or large wrap by its diameter; box -> prismatic; thin -> lateral pinch when the palm's
+/// +x is near its thickness, else prismatic (a knife lying flat, closed across its width); other ->
 /// kOther. Constant time.
 GraspType choose_grasp_type(const ObjectShape& shape, const Eigen::Isometry3d& X_ObjectPalm,
                             const GraspTypeRules& rules = {});
