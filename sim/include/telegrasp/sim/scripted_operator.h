@@ -141,8 +141,9 @@ NdSearchResult nd_pose_search(const std::shared_ptr<const HandRig>& rig, const O
 /// plan: also along the object's box sides and off the centre of a long object, and closing across
 /// the shortest side a hand can reach on the table (closes_across_shortest_side) first, then in
 /// force closure by epsilon (0.01 steps), before opposing normals; of the best 16 in force
-/// closure, the one that stays so in most of 8 closings with the palm 3 mm or 3 degrees off.
-/// Deterministic.
+/// closure, the one that stays so in most of 8 closings with the palm 3 mm or 3 degrees off,
+/// unless some of those closings do not grasp at all: then one of the best 8 out of closure
+/// grasped in at least 2 more of them replaces it (the one grasped in most). Deterministic.
 GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSettings& settings, const ObjectModel& model,
                      const Eigen::Isometry3d& X_WorldObject, double dt, double table_height = 0.0);
 
