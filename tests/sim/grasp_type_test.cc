@@ -299,12 +299,10 @@ TEST(GraspTypeTest, EachTypeClosesOnItsPrimitive) {
     return std::abs(std::max(edge, std::abs(p.z()) - 0.003));
   };
   const Eigen::Matrix3d on_edge = Eigen::AngleAxisd(kPi / 2, Eigen::Vector3d::UnitY()).toRotationMatrix();  // z -> palm x
-  ASSERT_EQ(make_object_model("diamond", testing::prism_mesh(diamond, 0.003), 0.2, "test")->shape.shape,
-            ShapeClass::kThin);
-  cases.push_back(
-      {"plate lying flat", testing::prism_mesh(diamond, 0.003), I, GraspType::kPrismatic, diamond_plate, 0.025});
-  cases.push_back({"plate on its edge", testing::prism_mesh(diamond, 0.003), on_edge, GraspType::kLateralPinch,
-                   diamond_plate, 0.025});
+  const TriangleMesh plate = testing::prism_mesh(diamond, 0.003);
+  ASSERT_EQ(make_object_model("diamond", plate, 0.2, "test")->shape.shape, ShapeClass::kThin);
+  cases.push_back({"plate lying flat", plate, I, GraspType::kPrismatic, diamond_plate, 0.025});
+  cases.push_back({"plate on its edge", plate, on_edge, GraspType::kLateralPinch, diamond_plate, 0.025});
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
     const ObjectModelPtr model = make_object_model(c.name, c.mesh, 0.2, "test");
