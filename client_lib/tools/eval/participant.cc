@@ -192,7 +192,10 @@ class Participant {
           if (s.hand.client_id == client_.client_id() && s.hand.side == client::HandSide::kRight)
             op_->see_hand_raised(s.resolve_offset.z());
         input_ = op_->next(t, holding);
-        if (op_->phase() == sim::OperatorPhase::kHold) z_max_ = std::max(z_max_, o->X_WorldObject.translation().z());
+        if (op_->phase() == sim::OperatorPhase::kHold) {
+          z_max_ = std::max(z_max_, o->X_WorldObject.translation().z());
+          if (holding) take_hold_quality();
+        }
         if (op_->done() || t > kTrialLimit) {
           if (!op_->done()) note_ = "cut short after " + report::fmt(kTrialLimit, 0) + " s";
           input_.trigger = 0;
@@ -231,6 +234,7 @@ class Participant {
     note_.clear();
     z0_ = o.X_WorldObject.translation().z();
     z_max_ = -1e9;
+    hold_quality_.reset();
     start_tick_ = scene.tick;
     op_ = std::make_unique<sim::ScriptedOperator>(
         rig_, skill_, grasp_seed(opt_.seed, opt_.participant, static_cast<int>(index_)), sim::GraspSettings{}, kDt);
@@ -251,6 +255,13 @@ class Participant {
       if (rec_.grasped || Clock::now() > deadline) return;
       std::this_thread::sleep_for(std::chrono::microseconds(100));
     }
+  }
+
+  // The held grasp's quality as the newest GraspState gives it (epsilon -1 until the first arrives).
+  void take_hold_quality() {
+    const auto s = client_.latest_grasp_state({client_.client_id(), client::HandSide::kRight});
+    if (s && s->grasped_object == object_id_ && s->epsilon >= 0)
+      hold_quality_ = sim::GraspQuality{s->epsilon, s->volume, s->force_closure};
   }
 
   // The trial starts when the object appears: the hand waits at home, free to reach.
@@ -291,6 +302,7 @@ class Participant {
     rec_.participant = opt_.participant;
     rec_.attempts = op_ ? op_->attempts() : 0;
     rec_.held_after_lift = op_ && op_->held_after_lift() && z_max_ - z0_ > 0.8 * sim::ScriptedOperator::kLiftHeight;
+    set_hold_quality(rec_, hold_quality_);
     records_.push_back(rec_);
     std::printf("grasp %zu/%zu %s %s%s%s\n", index_ + 1, objects_.size(), rec_.object.c_str(),
                 rec_.held_after_lift ? "held" : "not-held", note_.empty() ? "" : ": ", note_.c_str());
@@ -322,6 +334,7 @@ class Participant {
   int object_id_ = -1;
   std::uint64_t start_tick_ = 0, spawn_tick_ = 0;
   double z0_ = 0, z_max_ = -1e9;
+  std::optional<sim::GraspQuality> hold_quality_;  // the settled hold's (set_hold_quality)
   std::unique_ptr<sim::ScriptedOperator> op_;
   sim::ControllerInput input_;
   report::Record rec_;
@@ -372,7 +385,7 @@ int run_participant(int argc, char** argv) {
   const client::ClientOptions copt =
       tools::client_options(opt, opt.group + "-" + std::to_string(opt.participant),
                             client::kNotices | client::kGraspEvents | client::kSceneStates | client::kServerStatuses |
-                                client::kHandSkeletons);
+                                client::kHandSkeletons | client::kGraspStates);
   try {
     client::Client c(copt);
     if (!c.wait_for_server(std::chrono::milliseconds(static_cast<long>(1000 * opt.timeout_s)))) {

@@ -1,6 +1,7 @@
 #include "protocol_in_process.h"
 
 #include "protocol_common.h"
+#include "telegrasp/sim/grasp_type.h"
 #include "telegrasp/sim/world.h"
 
 #include <algorithm>
@@ -35,6 +36,7 @@ class InProcessTrial {
     input = op.next(0.0, false);
     double z_max = -1e9;
     bool releasing = false;
+    std::optional<sim::GraspQuality> hold_quality;
     while (true) {
       step(input);
       take_grasp_event(spawn_time, rec);
@@ -46,8 +48,12 @@ class InProcessTrial {
       const double t = static_cast<double>(world_.tick() - start_tick) * world_.dt();
       op.see_hand_raised(world_.hand(hand_).state().resolve_offset().z());
       input = op.next(t, holding);
-      if (op.phase() == sim::OperatorPhase::kHold)
+      if (op.phase() == sim::OperatorPhase::kHold) {
         z_max = std::max(z_max, world_.object_pose(object_).translation().z());
+        // The quality the server publishes in GraspState while held (-1 until the first arrives).
+        if (holding)
+          if (auto m = world_.hand(hand_).hold_metrics(); m && m->quality.epsilon >= 0) hold_quality = m->quality;
+      }
       if (op.done() || t > kTrialLimit) {
         input.trigger = 0;
         input.curls.clear();
@@ -59,6 +65,7 @@ class InProcessTrial {
     rec.group = p.group;
     rec.participant = p.participant;
     rec.attempts = op.attempts();
+    set_hold_quality(rec, hold_quality);
     rec.held_after_lift = op.held_after_lift() && z_max - z0 > 0.8 * sim::ScriptedOperator::kLiftHeight;
     world_.remove_object(object_);
     input = {};
@@ -82,6 +89,8 @@ class InProcessTrial {
       rec.hand_error_mm = rec.grasp_tick_hand_error_mm = e.metrics->hand_error_mm;
       rec.capsules = rec.grasp_tick_capsules = report::capsule_records(*e.metrics, *rig_);
       rec.figures = rec.grasp_tick_figures = report::grasp_figures(*e.metrics);
+      rec.grasp_type = sim::grasp_type_name(e.grasp_type);
+      rec.opposition_deg = report::opposition_deg(e.contacts, *rig_);
       for (const sim::Contact& c : e.contacts)
         rec.contacts.push_back({c.phalanx.valid() ? rig_->phalanges()[c.phalanx.value].name : std::string("palm"),
                                 c.p_WorldContact, c.n_World, c.p_ObjectContact, c.n_Object});

@@ -115,13 +115,14 @@ struct NdContactStats {
 
 // The grasps' hand-level figures: palm distances, force closure and epsilon.
 json figures_summary(const std::vector<const Record*>& recs) {
-  int grasped = 0, closure = 0, palm_below = 0;
+  int grasped = 0, closure = 0, closure_tick = 0, palm_below = 0;
   double palm_min = INFINITY;
   std::vector<double> eps, palm;
   for (const Record* r : recs) {
     if (!r->grasped) continue;
     ++grasped;
     closure += r->figures.force_closure;
+    closure_tick += r->grasp_tick_figures.force_closure;
     eps.push_back(r->figures.epsilon);
     palm.push_back(r->figures.palm_signed_distance_mm);
     palm_min = std::min(palm_min, r->figures.palm_signed_distance_mm);
@@ -133,6 +134,7 @@ json figures_summary(const std::vector<const Record*>& recs) {
           {"palm_below_minus_0_1mm", palm_below},
           {"force_closure_grasps", closure},
           {"force_closure_share", num(grasped ? static_cast<double>(closure) / grasped : NAN)},
+          {"grasp_tick_force_closure_share", num(grasped ? static_cast<double>(closure_tick) / grasped : NAN)},
           {"epsilon_median", num(percentile(eps, 0.5))}};
 }
 
