@@ -17,6 +17,9 @@ namespace telegrasp::sim {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
+// How far a top grasp's centre is also shifted across the palm (a rig with grasp types): 1.5 cm
+// gave the stand-ins 79 % in force closure, 3 cm 81 %.
+constexpr double kAcrossShift = 0.03;
 // A plan whose open hand reaches further under the table top than this is held off by the
 // resolved pose by as much: too far to close as planned.
 constexpr double kReachableTableDepth = 0.005;
@@ -420,14 +423,21 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
     if (length.norm() > 0.3 && half > 0.05)
       for (double f : {-0.6, -0.3, 0.3, 0.6}) along_length.push_back(f * half * length.normalized());
   }
+  // The grasp centre's shifts (m) along the fingers and across the palm, toward the thumb or
+  // away. A rig with types also shifts across: a thumb that opposes from the side of the palm
+  // meets an upright box's end instead of its face when the palm is centred over it (the
+  // stand-in sugar box: 0 of 5 grasps in force closure centred, 5 of 5 with these).
+  std::vector<Eigen::Vector2d> top_shifts = {{0.0, 0.0}, {-0.015, 0.0}, {0.015, 0.0}};
+  if (typed) top_shifts.insert(top_shifts.end(), {{0.0, -kAcrossShift}, {0.0, kAcrossShift}});
   for (const Eigen::Vector3d& fingers : horizontal)
     for (const Eigen::Vector3d& off : along_length)
-      for (double shift : {0.0, -0.015, 0.015})
+      for (const Eigen::Vector2d& shift : top_shifts)
         for (double clearance : {0.0, 0.01, 0.025, 0.05, 0.08}) {
           GraspPlan plan;
           plan.X_WorldPalm = palm_frame(fingers, up);
           plan.approach_World = -up;
-          const Eigen::Vector3d target = p_WorldCenter + off + shift * fingers.normalized();
+          const Eigen::Vector3d target =
+              p_WorldCenter + off + shift.x() * plan.X_WorldPalm.linear().col(0) + shift.y() * plan.X_WorldPalm.linear().col(1);
           plan.X_WorldPalm.translation() = target - plan.X_WorldPalm.linear() * gc;
           // Never lower the palm into the object: its skin stays above the top plus the clearance.
           const double palm_z = std::max(plan.X_WorldPalm.translation().z(), top + palm_half_thickness + clearance);

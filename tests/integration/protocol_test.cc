@@ -142,37 +142,34 @@ TEST(ProtocolRun, ARigGivenByRigDrivesTheServersAndReachesTheRecords) {
 }
 
 // A record's force closure is the settled hold's, over DDS (the last GraspState while the object
-// is held up) as in process (the hand's hold metrics), the same for every trial; the grasp tick's
-// stays in "grasp_tick", with the grasp type and the thumb's opposition. GraspState republishes a quality only when it changes by more than 5 %
-// relative or 1e-3, so the epsilons may differ by that much.
+// is held up) as in process (the hand's hold metrics); the grasp tick's stays in "grasp_tick",
+// with the grasp type and the thumb's opposition. The first trial only: later ones start after a
+// different number of ticks over DDS (the removal and spawn commands travel), and a box resting
+// on the table a few ticks longer can be grasped a little differently. GraspState republishes a
+// quality only when it changes by more than 5 % relative or 1e-3: the epsilons may differ by that.
 TEST(ProtocolRun, OverDdsAndInProcessRecordTheSameHoldQuality) {
-  const std::vector<std::string> one = {"--participants", "1,0", "--mode", "precise"};
+  const std::vector<std::string> one = {"--participants", "1,0", "--mode", "precise", "--count", "1"};
   ASSERT_EQ(run_protocol("protocol_dds", one), 0) << "see " << work_path("protocol_dds.log");
   std::vector<std::string> in_process = one;
   in_process.push_back("--in-process");
   ASSERT_EQ(run_protocol("protocol_in_process", in_process), 0) << "see " << work_path("protocol_in_process.log");
   const json dds = read_json(work_path("protocol_dds.json"));
   const json local = read_json(work_path("protocol_in_process.json"));
-  ASSERT_EQ(dds["grasps"].size(), 3u);
-  ASSERT_EQ(local["grasps"].size(), 3u);
-  int compared = 0, closed_after_the_grasp_tick = 0;
-  for (std::size_t i = 0; i < 3; ++i) {
-    const json& a = dds["grasps"][i];
-    const json& b = local["grasps"][i];
-    ASSERT_EQ(a["grasped"], b["grasped"]) << a["object"];
-    if (!a["grasped"].get<bool>()) continue;
-    ++compared;
-    EXPECT_EQ(a["grasp_tick"]["grasp_type"], b["grasp_tick"]["grasp_type"]) << a["object"];
-    EXPECT_EQ(a["grasp_tick"]["force_closure"], b["grasp_tick"]["force_closure"]) << a["object"];
-    EXPECT_NEAR(a["grasp_tick"]["opposition_deg"].get<double>(), b["grasp_tick"]["opposition_deg"].get<double>(), 1e-6)
-        << a["object"];
-    EXPECT_EQ(a["force_closure"], b["force_closure"]) << a["object"];
-    const double eps_dds = a["epsilon"], eps_local = b["epsilon"];
-    EXPECT_NEAR(eps_dds, eps_local, 0.05 * eps_local + 1e-3) << a["object"];
-    closed_after_the_grasp_tick += b["epsilon"] != b["grasp_tick"]["epsilon"];
-  }
-  EXPECT_GT(compared, 0) << "nothing grasped: nothing compared";
-  EXPECT_GT(closed_after_the_grasp_tick, 0) << "every hold's quality was its grasp tick's: the test tells nothing";
+  ASSERT_EQ(dds["grasps"].size(), 1u);
+  ASSERT_EQ(local["grasps"].size(), 1u);
+  const json& a = dds["grasps"][0];
+  const json& b = local["grasps"][0];
+  ASSERT_TRUE(a["grasped"].get<bool>());
+  ASSERT_TRUE(b["grasped"].get<bool>());
+  EXPECT_EQ(a["grasp_tick"]["grasp_type"], b["grasp_tick"]["grasp_type"]);
+  EXPECT_EQ(a["grasp_tick"]["force_closure"], b["grasp_tick"]["force_closure"]);
+  EXPECT_NEAR(a["grasp_tick"]["opposition_deg"].get<double>(), b["grasp_tick"]["opposition_deg"].get<double>(), 1e-6);
+  EXPECT_EQ(a["force_closure"], b["force_closure"]);
+  const double eps_dds = a["epsilon"], eps_local = b["epsilon"];
+  EXPECT_NEAR(eps_dds, eps_local, 0.05 * eps_local + 1e-3);
+  // The lemon (seed 5): the grasp rule fires before the last fingers close, and the hand they
+  // close holds it in force closure, where the grasp tick's contacts were not.
+  EXPECT_NE(b["epsilon"], b["grasp_tick"]["epsilon"]) << "the hold's quality was the grasp tick's: the test tells nothing";
 }
 
 }  // namespace

@@ -457,6 +457,35 @@ TEST(ScriptedOperatorTest, TypedPlansCloseAcrossTheReachableWidthInForceClosure)
     }
 }
 
+// An upright box whose thickness lies across the palm: with the palm centred over it, the thumb,
+// opposing from the side of the palm, meets the box's end while the fingers press its face (no
+// plan in force closure); a plan whose grasp centre is shifted 3 cm across the palm puts the
+// thumb on the face opposite the fingers. The stand-in sugar box (5 x 9.4 x 17.6 cm).
+TEST(ScriptedOperatorTest, TypedPlansCloseAnUprightBoxBetweenThumbAndFingersInForceClosure) {
+  const auto hand_rig = rig("human_right_opposable");
+  const auto model = standin("004_sugar_box");
+  for (double yaw_deg : {0.0, 30.0, 100.0}) {
+    SCOPED_TRACE(yaw_deg);
+    const Eigen::Isometry3d X_WorldObject = World::resting_pose(*model, 0.45, 0.0, yaw_deg * std::numbers::pi / 180);
+    const GraspPlan plan = plan_grasp(hand_rig, {}, *model, X_WorldObject, 1.0 / 90);
+    const OfflineClosing c = close_offline(hand_rig, {}, *model, X_WorldObject, plan.X_WorldPalm, 1.0 / 90);
+    ASSERT_TRUE(c.grasped);
+    const auto job = c.hand.quality_inputs();
+    ASSERT_TRUE(job.has_value());
+    EXPECT_TRUE(grasp_quality(job->contacts, job->mu, job->torque_scale).force_closure);
+    // The thumb's contacts lie on the face opposite the fingers': normals about opposite.
+    Eigen::Vector3d thumb = Eigen::Vector3d::Zero(), fingers = Eigen::Vector3d::Zero();
+    for (const Contact& k : c.hand.contacts()) {
+      if (!k.phalanx.valid()) continue;
+      const std::string& name = hand_rig->phalanges()[k.phalanx.value].name;
+      (name.rfind("thumb", 0) == 0 ? thumb : fingers) += k.n_World;
+    }
+    ASSERT_GT(thumb.norm(), 0);
+    ASSERT_GT(fingers.norm(), 0);
+    EXPECT_LT(thumb.normalized().dot(fingers.normalized()), std::cos(150 * std::numbers::pi / 180));
+  }
+}
+
 // The planner's aim errors, written out here: the palm 3 mm off along each of its axes either way,
 // or turned 3 degrees about its normal either way.
 std::vector<Eigen::Isometry3d> operator_aims() {
@@ -494,7 +523,7 @@ TEST(ScriptedOperatorTest, TypedPlansKeepForceClosureWithTheOperatorsAimOff) {
     SCOPED_TRACE(model->source);
     const Eigen::Isometry3d X_WorldObject = World::resting_pose(*model, 0.45, 0.0, 0.5);
     const GraspPlan plan = plan_grasp(hand_rig, {}, *model, X_WorldObject, 1.0 / 90);
-    if (!in_closure(*model, X_WorldObject, plan.X_WorldPalm)) continue;  // the two stand-in boxes: none is
+    if (!in_closure(*model, X_WorldObject, plan.X_WorldPalm)) continue;  // the stand-in cracker box: none is
     int kept = 0;
     for (const Eigen::Isometry3d& aim : aims) kept += in_closure(*model, X_WorldObject, plan.X_WorldPalm * aim);
     EXPECT_GE(kept, 5);

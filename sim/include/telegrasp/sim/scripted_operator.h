@@ -138,7 +138,8 @@ NdSearchResult nd_pose_search(const std::shared_ptr<const HandRig>& rig, const O
 /// best: a grasp with no capsule ending inside the object, then opposing contact normals (a pinch
 /// or wrap, not a press), then fingers above the table top at `table_height` (the World's is 0),
 /// then the most capsules blocked, then the least HandError. For a rig with grasp types, as people
-/// plan: also along the object's box sides and off the centre of a long object, and closing across
+/// plan: also along the object's box sides, off the centre of a long object and, from the top,
+/// 3 cm across the palm either way (the thumb then meets an upright box's face), and closing across
 /// the shortest side a hand can reach on the table (closes_across_shortest_side) first, then in
 /// force closure by epsilon (0.01 steps), before opposing normals; of the best 16 in force
 /// closure, the one that stays so in most of 8 closings with the palm 3 mm or 3 degrees off,
