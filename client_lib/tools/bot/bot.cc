@@ -623,8 +623,11 @@ void Bot::step(Hand& h, std::int64_t tick, const client::SceneState& scene,
       if (s.hand == h.key) h.op->see_hand_raised(s.resolve_offset.z());
     h.input = h.op->next(t_op, grasped);
     h.input.X_WorldPalm = h.correction * h.input.X_WorldPalm;
-    if (h.op->phase() == sim::OperatorPhase::kHold && o)
+    if (h.op->phase() == sim::OperatorPhase::kHold && o) {
       h.z_max = std::max(h.z_max, o->X_WorldObject.translation().z());
+      if (grasped)
+        if (auto q = tools::hold_quality(client_.latest_grasp_state(h.key), h.target->id)) h.hold_quality = q;
+    }
     // A round of misses (the operator gave up, nothing grasped): plan again for another round.
     if (h.op->done() && !h.seen_grasped && o && !o->held && h.retries + 1 < kRounds &&
         h.attempts_before + h.op->attempts() < kAttemptBudget) {
@@ -682,6 +685,7 @@ void Bot::start_trial(Hand& h, Target& t, std::int64_t tick, const client::Objec
   h.near_time.reset();
   h.others_near_time.clear();
   h.z_max = -1e9;
+  h.hold_quality.reset();
   h.note.clear();
   h.rec = {};
   h.rec.object = t.name;
@@ -737,6 +741,7 @@ void Bot::finish_trial(Hand& h) {
   r.record = std::move(h.rec);
   r.record.attempts = std::min(h.attempts_before + h.op->attempts(), kAttemptBudget);
   r.record.held_after_lift = h.op->held_after_lift() && h.z_max - h.z0 > 0.8 * sim::ScriptedOperator::kLiftHeight;
+  report::set_hold_quality(r.record, h.hold_quality);
   r.object_id = h.target->id;
   r.target = static_cast<int>(h.target - targets_.data());
   r.hand = h.key.side;

@@ -120,6 +120,7 @@ struct Hand {
   std::int64_t stage_tick = 0, op_tick = 0;
   double server_t0 = 0, z0 = 0, z_max = -1e9;
   bool seen_grasped = false, got_grasp_event = false;
+  std::optional<sim::GraspQuality> hold_quality;  // the settled hold's (report::set_hold_quality)
   report::Record rec;
   std::string note;
   // When this hand, and each other client's hand, was first near the target (server time of the

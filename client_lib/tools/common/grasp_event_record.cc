@@ -31,4 +31,9 @@ void record_grasp_event(const client::GraspEvent& e, double trial_start_time, co
   rec.opposition_deg = report::opposition_deg(contacts, rig);
 }
 
+std::optional<sim::GraspQuality> hold_quality(const std::optional<client::GraspState>& s, int object) {
+  if (!s || s->grasped_object != object || s->epsilon < 0) return std::nullopt;
+  return sim::GraspQuality{s->epsilon, s->volume, s->force_closure};
+}
+
 }  // namespace telegrasp::tools

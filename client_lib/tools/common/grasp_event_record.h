@@ -1,10 +1,13 @@
-// The one conversion of a server GraspEvent into a grasp report record, shared by telegrasp-bot
-// and the protocol's participants so that both measure the same thing.
+// The one conversion of a server GraspEvent (and the hold's GraspState) into a grasp report
+// record, shared by telegrasp-bot and the protocol's participants so that both measure the same thing.
 #pragma once
 
 #include "grasp_report.h"
 #include "telegrasp/client/types.h"
+#include "telegrasp/sim/grasp_quality.h"
 #include "telegrasp/sim/hand_rig.h"
+
+#include <optional>
 
 namespace telegrasp::tools {
 
@@ -17,5 +20,9 @@ namespace telegrasp::tools {
 /// began (its hand placed and free to reach).
 void record_grasp_event(const client::GraspEvent& e, double trial_start_time, const sim::HandRig& rig,
                         report::Record& rec);
+
+/// The held grasp's quality as the newest GraspState `s` gives it (report::set_hold_quality), if
+/// `s` holds `object` and its first quality has arrived (epsilon -1 until then).
+std::optional<sim::GraspQuality> hold_quality(const std::optional<client::GraspState>& s, int object);
 
 }  // namespace telegrasp::tools

@@ -194,7 +194,10 @@ class Participant {
         input_ = op_->next(t, holding);
         if (op_->phase() == sim::OperatorPhase::kHold) {
           z_max_ = std::max(z_max_, o->X_WorldObject.translation().z());
-          if (holding) take_hold_quality();
+          if (holding)
+            if (auto q = tools::hold_quality(client_.latest_grasp_state({client_.client_id(), client::HandSide::kRight}),
+                                             object_id_))
+              hold_quality_ = q;
         }
         if (op_->done() || t > kTrialLimit) {
           if (!op_->done()) note_ = "cut short after " + report::fmt(kTrialLimit, 0) + " s";
@@ -257,13 +260,6 @@ class Participant {
     }
   }
 
-  // The held grasp's quality as the newest GraspState gives it (epsilon -1 until the first arrives).
-  void take_hold_quality() {
-    const auto s = client_.latest_grasp_state({client_.client_id(), client::HandSide::kRight});
-    if (s && s->grasped_object == object_id_ && s->epsilon >= 0)
-      hold_quality_ = sim::GraspQuality{s->epsilon, s->volume, s->force_closure};
-  }
-
   // The trial starts when the object appears: the hand waits at home, free to reach.
   void take_grasp_event(const client::GraspEvent& e) {
     tools::record_grasp_event(e, e.object_spawn_time, *rig_, rec_);
@@ -302,7 +298,7 @@ class Participant {
     rec_.participant = opt_.participant;
     rec_.attempts = op_ ? op_->attempts() : 0;
     rec_.held_after_lift = op_ && op_->held_after_lift() && z_max_ - z0_ > 0.8 * sim::ScriptedOperator::kLiftHeight;
-    set_hold_quality(rec_, hold_quality_);
+    report::set_hold_quality(rec_, hold_quality_);
     records_.push_back(rec_);
     std::printf("grasp %zu/%zu %s %s%s%s\n", index_ + 1, objects_.size(), rec_.object.c_str(),
                 rec_.held_after_lift ? "held" : "not-held", note_.empty() ? "" : ": ", note_.c_str());
@@ -334,7 +330,7 @@ class Participant {
   int object_id_ = -1;
   std::uint64_t start_tick_ = 0, spawn_tick_ = 0;
   double z0_ = 0, z_max_ = -1e9;
-  std::optional<sim::GraspQuality> hold_quality_;  // the settled hold's (set_hold_quality)
+  std::optional<sim::GraspQuality> hold_quality_;  // the settled hold's (report::set_hold_quality)
   std::unique_ptr<sim::ScriptedOperator> op_;
   sim::ControllerInput input_;
   report::Record rec_;

@@ -101,11 +101,4 @@ std::uint64_t grasp_seed(std::uint64_t seed, int participant, int index) {
   return generator(seed, 3, participant, index)();
 }
 
-void set_hold_quality(report::Record& rec, const std::optional<sim::GraspQuality>& hold) {
-  if (!rec.grasped || !hold) return;
-  rec.figures.epsilon = hold->epsilon;
-  rec.figures.volume = hold->volume;
-  rec.figures.force_closure = hold->force_closure;
-}
-
 }  // namespace telegrasp::eval

@@ -3,8 +3,6 @@
 // and where each object is spawned.
 #pragma once
 
-#include "grasp_report.h"
-#include "telegrasp/sim/grasp_quality.h"
 #include "telegrasp/sim/object_model.h"
 #include "telegrasp/sim/scripted_operator.h"
 
@@ -12,7 +10,6 @@
 
 #include <cstdint>
 #include <map>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -59,12 +56,5 @@ Eigen::Isometry3d home_palm_pose();
 
 /// Seed of the operator noise for one grasp.
 std::uint64_t grasp_seed(std::uint64_t seed, int participant, int index);
-
-/// A protocol record's force closure, epsilon and volume are those of the settled hold, as
-/// telegrasp-eval run measures them: the last quality the server gave while the operator held
-/// the object up. The grasp rule fires on the first contacts that hold; the other fingers close
-/// after it. The record's grasp_tick figures keep the grasp tick's. Nothing changes for a record
-/// not grasped or a hold that had no quality yet (`hold` empty).
-void set_hold_quality(report::Record& rec, const std::optional<sim::GraspQuality>& hold);
 
 }  // namespace telegrasp::eval

@@ -65,7 +65,7 @@ class InProcessTrial {
     rec.group = p.group;
     rec.participant = p.participant;
     rec.attempts = op.attempts();
-    set_hold_quality(rec, hold_quality);
+    report::set_hold_quality(rec, hold_quality);
     rec.held_after_lift = op.held_after_lift() && z_max - z0 > 0.8 * sim::ScriptedOperator::kLiftHeight;
     world_.remove_object(object_);
     input = {};

@@ -608,7 +608,10 @@ std::string force_closure_section(const ExperimentRun& run, const PageData& d) {
   std::ostringstream body;
   body << "<h2 id=\"force-closure\">Held grasps in force closure</h2>\n<p>Per object: held grasps whose contacts "
           "are in force closure (Ferrari-Canny epsilon &gt; 0 with the rig's friction, sim/README.md section 5) / "
-          "held grasps, and the share.</p>\n<table class=\"numbers\"><tr><th>object</th>";
+          "held grasps, and the share. The contacts are the settled hold's, as the hand holds the object up: the "
+          "grasp rule fires on the first contacts that hold, and the other fingers close after it (the grasp "
+          "tick's quality is each record's <code>grasp_tick</code> in the JSON).</p>\n"
+          "<table class=\"numbers\"><tr><th>object</th>";
   for (const std::string& mode : d.modes)
     for (const std::string& group : d.groups) body << "<th>" << esc(mode_name(mode)) << ", " << esc(group) << "</th>";
   body << "</tr>\n";
@@ -643,9 +646,9 @@ std::string grasp_types_section(const ExperimentRun& run, const PageData& d) {
   if (!typed) return "";
   std::ostringstream body;
   body << "<h2 id=\"grasp-types\">Grasp types</h2>\n<p>The type each grasp closed with (chosen from the object's "
-          "shape class, its width across the hand and the hand's pose; \"other\": the rig's own closing), at the "
-          "grasp tick: opposition is the angle between the thumb's mean contact normal and the other fingers' "
-          "(180&deg;: straight across).</p>\n<table class=\"numbers\"><tr><th>mode</th><th>grasp type</th>"
+          "shape class, its width across the hand and the hand's pose; \"other\": the rig's own closing). Force "
+          "closure is the settled hold's, as in the table above; opposition is the grasp tick's: the angle between "
+          "the thumb's mean contact normal and the other fingers' (180&deg;: straight across).</p>\n<table class=\"numbers\"><tr><th>mode</th><th>grasp type</th>"
           "<th>grasps</th><th>held after lift</th><th>in force closure</th><th>opposition median (&deg;)</th>"
           "<th>mean |ND| at mid-length (mm)</th></tr>\n";
   for (const std::string& mode : d.modes)

@@ -42,6 +42,13 @@ GraspFigures grasp_figures(const sim::GraspMetrics& m) {
   return {1000 * m.palm_signed_distance, m.quality.epsilon, m.quality.volume, m.quality.force_closure};
 }
 
+void set_hold_quality(Record& rec, const std::optional<sim::GraspQuality>& hold) {
+  if (!rec.grasped || !hold) return;
+  rec.figures.epsilon = hold->epsilon;
+  rec.figures.volume = hold->volume;
+  rec.figures.force_closure = hold->force_closure;
+}
+
 namespace {
 
 // The figures' keys into `out` (null when not grasped).

@@ -98,6 +98,13 @@ std::vector<CapsuleMetricRecord> capsule_records(const sim::GraspMetrics& metric
 /// The hand-level figures of a grasp, palm distance in mm.
 GraspFigures grasp_figures(const sim::GraspMetrics& metrics);
 
+/// A record's force closure, epsilon and volume from the settled hold of a run over DDS or its
+/// in-process twin (the last quality while the object was held up), as telegrasp-eval run's
+/// records have them: the grasp rule fires on the first contacts that hold, and the other fingers
+/// close after it. The grasp_tick figures keep the grasp tick's. Nothing changes for a record not
+/// grasped or a hold that had no quality yet (`hold` empty).
+void set_hold_quality(Record& rec, const std::optional<sim::GraspQuality>& hold);
+
 /// The capsules as a JSON array of {"phalanx","hit","blocked","nd_midlength_mm" (null without hit),
 /// "nd_mm" (the same: an alias kept for one release),"contact_hit","nd_contact_mm" (null without
 /// contact_hit),"signed_distance_mm"}.

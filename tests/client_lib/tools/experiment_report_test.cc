@@ -666,5 +666,40 @@ TEST(GraspRecordJsonTest, SummaryCountsClosingAcrossWithAndWithoutTheTable) {
   EXPECT_DOUBLE_EQ(s.at("across_smallest_share_ignoring_table").get<double>(), 1.0 / 3);
 }
 
+// A record's force closure is the settled hold's once set_hold_quality gives it one; the grasp
+// tick's stays, and the summary counts both: 2 of 3 grasps in closure while held, 1 at the grasp
+// tick. A hold with no quality, or a record not grasped, keeps what it had.
+TEST(GraspRecordJsonTest, TheHoldsQualityReplacesTheGraspTicksAndTheSummaryGivesBoth) {
+  std::vector<Record> recs(4);
+  for (Record& r : recs) {
+    r.object = "003_cracker_box";
+    r.grasped = true;
+    r.figures = r.grasp_tick_figures = {12.0, 0.0, 0.5, false};
+  }
+  recs[0].figures = recs[0].grasp_tick_figures = {12.0, 0.02, 0.5, true};
+  set_hold_quality(recs[0], sim::GraspQuality{0.03, 0.7, true});
+  set_hold_quality(recs[1], sim::GraspQuality{0.01, 0.6, true});
+  set_hold_quality(recs[2], std::nullopt);
+  recs[3].grasped = false;
+  set_hold_quality(recs[3], sim::GraspQuality{0.05, 0.9, true});
+  EXPECT_EQ(recs[0].figures.epsilon, 0.03);
+  EXPECT_EQ(recs[0].figures.volume, 0.7);
+  EXPECT_EQ(recs[0].figures.palm_signed_distance_mm, 12.0) << "the palm's distance stays the grasp tick's";
+  EXPECT_EQ(recs[0].grasp_tick_figures.epsilon, 0.02);
+  EXPECT_TRUE(recs[1].figures.force_closure);
+  EXPECT_FALSE(recs[1].grasp_tick_figures.force_closure);
+  EXPECT_FALSE(recs[2].figures.force_closure);
+  EXPECT_FALSE(recs[3].figures.force_closure);
+  std::vector<const Record*> ptrs;
+  for (const Record& r : recs) ptrs.push_back(&r);
+  const nlohmann::json s = summarize(ptrs);
+  EXPECT_DOUBLE_EQ(s.at("force_closure_share").get<double>(), 2.0 / 3);
+  EXPECT_DOUBLE_EQ(s.at("grasp_tick_force_closure_share").get<double>(), 1.0 / 3);
+  // JSON: the record's epsilon is the hold's, "grasp_tick" the grasp tick's; both read back.
+  const Record back = record_from_json(record_json(recs[1]));
+  EXPECT_TRUE(back.figures.force_closure);
+  EXPECT_FALSE(back.grasp_tick_figures.force_closure);
+}
+
 }  // namespace
 }  // namespace telegrasp::report
