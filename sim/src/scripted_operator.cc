@@ -423,10 +423,9 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
     if (length.norm() > 0.3 && half > 0.05)
       for (double f : {-0.6, -0.3, 0.3, 0.6}) along_length.push_back(f * half * length.normalized());
   }
-  // The grasp centre's shifts (m) along the fingers and across the palm, toward the thumb or
-  // away. A rig with types also shifts across: a thumb that opposes from the side of the palm
-  // meets an upright box's end instead of its face when the palm is centred over it (the
-  // stand-in sugar box: 0 of 5 grasps in force closure centred, 5 of 5 with these).
+  // The grasp centre's shifts (m) along the fingers and across the palm. A rig with types also
+  // shifts across: a thumb that opposes from the side of the palm meets an upright box's end
+  // instead of its face when the palm is centred over it (the stand-in sugar box).
   std::vector<Eigen::Vector2d> top_shifts = {{0.0, 0.0}, {-0.015, 0.0}, {0.015, 0.0}};
   if (typed) top_shifts.insert(top_shifts.end(), {{0.0, -kAcrossShift}, {0.0, kAcrossShift}});
   for (const Eigen::Vector3d& fingers : horizontal)
@@ -436,8 +435,8 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
           GraspPlan plan;
           plan.X_WorldPalm = palm_frame(fingers, up);
           plan.approach_World = -up;
-          const Eigen::Vector3d target =
-              p_WorldCenter + off + shift.x() * plan.X_WorldPalm.linear().col(0) + shift.y() * plan.X_WorldPalm.linear().col(1);
+          const Eigen::Vector3d target = p_WorldCenter + off + shift.x() * plan.X_WorldPalm.linear().col(0) +
+                                         shift.y() * plan.X_WorldPalm.linear().col(1);
           plan.X_WorldPalm.translation() = target - plan.X_WorldPalm.linear() * gc;
           // Never lower the palm into the object: its skin stays above the top plus the clearance.
           const double palm_z = std::max(plan.X_WorldPalm.translation().z(), top + palm_half_thickness + clearance);

@@ -169,7 +169,8 @@ TEST(ProtocolRun, OverDdsAndInProcessRecordTheSameHoldQuality) {
   EXPECT_NEAR(eps_dds, eps_local, 0.05 * eps_local + 1e-3);
   // The lemon (seed 5): the grasp rule fires before the last fingers close, and the hand they
   // close holds it in force closure, where the grasp tick's contacts were not.
-  EXPECT_NE(b["epsilon"], b["grasp_tick"]["epsilon"]) << "the hold's quality was the grasp tick's: the test tells nothing";
+  EXPECT_NE(b["epsilon"], b["grasp_tick"]["epsilon"])
+      << "the hold's quality was the grasp tick's: the test tells nothing";
 }
 
 }  // namespace

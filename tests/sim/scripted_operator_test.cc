@@ -188,8 +188,8 @@ struct AfterSqueeze {
 };
 AfterSqueeze run_after_squeeze(ScriptedOperator& op, double raised) {
   const auto model = standin("005_tomato_soup_can");
-  op.begin(*model, World::resting_pose(*model, 0.45, 0.0, 0.0), Eigen::Isometry3d(Eigen::Translation3d(0.15, -0.2, 0.3)),
-           0.0);
+  op.begin(*model, World::resting_pose(*model, 0.45, 0.0, 0.0),
+           Eigen::Isometry3d(Eigen::Translation3d(0.15, -0.2, 0.3)), 0.0);
   AfterSqueeze out;
   double t = 0;
   ControllerInput in;

@@ -206,8 +206,8 @@ std::map<std::string, sim::ObjectModelPtr> resolve_models(const client::Client& 
 std::vector<std::shared_ptr<const sim::HandRig>> load_hand_rigs(const std::vector<client::HandSide>& hands) {
   std::vector<std::shared_ptr<const sim::HandRig>> out;
   for (client::HandSide side : hands)
-    out.push_back(std::make_shared<const sim::HandRig>(sim::HandRig::load(
-        sim::HandRig::builtin_path(sim::HandRig::default_human(
+    out.push_back(
+        std::make_shared<const sim::HandRig>(sim::HandRig::load(sim::HandRig::builtin_path(sim::HandRig::default_human(
             side == client::HandSide::kRight ? sim::HandSide::kRight : sim::HandSide::kLeft)))));
   return out;
 }

@@ -106,7 +106,9 @@ Options parse(int argc, char** argv) {
       o.mode = value();
       if (!sim::parse_closing_mode(o.mode)) usage_error("--mode expects precise or discrete, got '" + o.mode + "'");
     } else if (cli::text_flag(a, value,
-                              {{"--objects", &o.objects_dir}, {"--json", &o.json_path}, {"--skills", &o.skills_path},
+                              {{"--objects", &o.objects_dir},
+                               {"--json", &o.json_path},
+                               {"--skills", &o.skills_path},
                                {"--rig", &o.rig_path}}))
       ;
     else if (a == "--count")
@@ -128,8 +130,7 @@ class Participant {
       : opt_(opt),
         client_(c),
         models_(std::move(models)),
-        rig_(std::make_shared<const sim::HandRig>(
-            sim::HandRig::load(rig_path_or_default(opt.rig_path)))),
+        rig_(std::make_shared<const sim::HandRig>(sim::HandRig::load(rig_path_or_default(opt.rig_path)))),
         skill_(participant_skill(opt.group, opt.seed, opt.participant, &opt.skills)) {
     const auto& order = paper_object_order();
     objects_.assign(order.begin(),
@@ -195,8 +196,8 @@ class Participant {
         if (op_->phase() == sim::OperatorPhase::kHold) {
           z_max_ = std::max(z_max_, o->X_WorldObject.translation().z());
           if (holding)
-            if (auto q = tools::hold_quality(client_.latest_grasp_state({client_.client_id(), client::HandSide::kRight}),
-                                             object_id_))
+            if (auto q = tools::hold_quality(
+                    client_.latest_grasp_state({client_.client_id(), client::HandSide::kRight}), object_id_))
               hold_quality_ = q;
         }
         if (op_->done() || t > kTrialLimit) {

@@ -648,8 +648,9 @@ std::string grasp_types_section(const ExperimentRun& run, const PageData& d) {
   body << "<h2 id=\"grasp-types\">Grasp types</h2>\n<p>The type each grasp closed with (chosen from the object's "
           "shape class, its width across the hand and the hand's pose; \"other\": the rig's own closing). Force "
           "closure is the settled hold's, as in the table above; opposition is the grasp tick's: the angle between "
-          "the thumb's mean contact normal and the other fingers' (180&deg;: straight across).</p>\n<table class=\"numbers\"><tr><th>mode</th><th>grasp type</th>"
-          "<th>grasps</th><th>held after lift</th><th>in force closure</th><th>opposition median (&deg;)</th>"
+          "the thumb's mean contact normal and the other fingers' (180&deg;: straight across).</p>\n"
+          "<table class=\"numbers\"><tr><th>mode</th><th>grasp type</th><th>grasps</th><th>held after lift</th><th>in "
+          "force closure</th><th>opposition median (&deg;)</th>"
           "<th>mean |ND| at mid-length (mm)</th></tr>\n";
   for (const std::string& mode : d.modes)
     for (const auto& [key, records] : by) {

@@ -220,8 +220,7 @@ void print_type_table(const std::vector<const Record*>& records) {
   for (const Record* r : records)
     if (r->grasped && !r->grasp_type.empty()) by_type[r->grasp_type].push_back(r);
   if (by_type.empty() || (by_type.size() == 1 && by_type.begin()->first == "other")) return;  // a rig without types
-  std::printf("%-16s %6s %6s %8s %9s %9s %9s\n", "grasp type", "grasps", "held", "FC", "opp_deg", "|ND|mean",
-              "across");
+  std::printf("%-16s %6s %6s %8s %9s %9s %9s\n", "grasp type", "grasps", "held", "FC", "opp_deg", "|ND|mean", "across");
   for (const auto& [type, recs] : by_type) {
     const json s = summarize(recs);
     auto get = [&](const char* k) { return s.contains(k) && !s[k].is_null() ? s[k].get<double>() : NAN; };

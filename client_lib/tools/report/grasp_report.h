@@ -57,8 +57,8 @@ struct Record {
   double time_to_grasp_s = 0;
   double hand_error_mm = 0;  ///< The settled hand while held (end of the hold), else the grasp tick's.
   std::vector<CapsuleMetricRecord> capsules;
-  /// Of the same hand as hand_error_mm; protocol runs' keep the grasp tick's palm distance and
-  /// take the settled hold's quality only (GraspState's epsilon, volume and force closure).
+  /// Of the same hand as hand_error_mm; protocol runs' and telegrasp-bot's keep the grasp tick's
+  /// palm distance and take the settled hold's quality only (set_hold_quality).
   GraspFigures figures;
   double grasp_tick_hand_error_mm = 0;  ///< The tick the grasp rule turned true.
   std::vector<CapsuleMetricRecord> grasp_tick_capsules;
