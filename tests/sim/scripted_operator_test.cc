@@ -476,9 +476,9 @@ TEST(ScriptedOperatorTest, TypedPlansCloseAnUprightBoxBetweenThumbAndFingersInFo
     // The thumb's contacts lie on the face opposite the fingers': normals about opposite.
     Eigen::Vector3d thumb = Eigen::Vector3d::Zero(), fingers = Eigen::Vector3d::Zero();
     for (const Contact& k : c.hand.contacts()) {
-      if (!k.phalanx.valid()) continue;
-      const std::string& name = hand_rig->phalanges()[k.phalanx.value].name;
-      (name.rfind("thumb", 0) == 0 ? thumb : fingers) += k.n_World;
+      if (!k.phalanx.valid()) continue;  // the palm
+      const int finger = hand_rig->phalanges()[k.phalanx.value].finger;
+      (hand_rig->fingers()[finger].name == "thumb" ? thumb : fingers) += k.n_World;
     }
     ASSERT_GT(thumb.norm(), 0);
     ASSERT_GT(fingers.norm(), 0);

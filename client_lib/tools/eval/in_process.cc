@@ -190,14 +190,7 @@ Trial run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRig
       if (e.kind != GraspEvent::Kind::kGrasp || rec.grasped || !e.metrics) continue;
       rec.grasped = true;
       rec.time_to_grasp_s = e.time - t0;
-      rec.grasp_tick_hand_error_mm = e.metrics->hand_error_mm;
-      rec.grasp_tick_capsules = capsule_records(*e.metrics, *rig);
-      rec.grasp_tick_figures = grasp_figures(*e.metrics);
-      rec.hand_error_mm = rec.grasp_tick_hand_error_mm;
-      rec.capsules = rec.grasp_tick_capsules;
-      rec.figures = rec.grasp_tick_figures;
-      rec.grasp_type = grasp_type_name(e.grasp_type);
-      rec.opposition_deg = telegrasp::report::opposition_deg(e.contacts, *rig);
+      telegrasp::report::record_grasp_tick(e, *rig, rec);
       const Eigen::Isometry3d X_ObjectPalm = world.hand(hand).state().X_PalmObject.inverse();
       const Eigen::Vector3d up_Object = world.object_pose(object).linear().transpose() * Eigen::Vector3d::UnitZ();
       rec.across_smallest = closes_across_shortest_side(model->shape, X_ObjectPalm, {}, up_Object);

@@ -1,7 +1,6 @@
 #include "protocol_in_process.h"
 
 #include "protocol_common.h"
-#include "telegrasp/sim/grasp_type.h"
 #include "telegrasp/sim/world.h"
 
 #include <algorithm>
@@ -86,11 +85,7 @@ class InProcessTrial {
       rec.grasped = true;
       rec.time_to_grasp_s = e.time - spawn_time;
       if (!e.metrics) continue;
-      rec.hand_error_mm = rec.grasp_tick_hand_error_mm = e.metrics->hand_error_mm;
-      rec.capsules = rec.grasp_tick_capsules = report::capsule_records(*e.metrics, *rig_);
-      rec.figures = rec.grasp_tick_figures = report::grasp_figures(*e.metrics);
-      rec.grasp_type = sim::grasp_type_name(e.grasp_type);
-      rec.opposition_deg = report::opposition_deg(e.contacts, *rig_);
+      report::record_grasp_tick(e, *rig_, rec);
       for (const sim::Contact& c : e.contacts)
         rec.contacts.push_back({c.phalanx.valid() ? rig_->phalanges()[c.phalanx.value].name : std::string("palm"),
                                 c.p_WorldContact, c.n_World, c.p_ObjectContact, c.n_Object});

@@ -42,6 +42,14 @@ GraspFigures grasp_figures(const sim::GraspMetrics& m) {
   return {1000 * m.palm_signed_distance, m.quality.epsilon, m.quality.volume, m.quality.force_closure};
 }
 
+void record_grasp_tick(const sim::GraspEvent& e, const sim::HandRig& rig, Record& rec) {
+  rec.hand_error_mm = rec.grasp_tick_hand_error_mm = e.metrics->hand_error_mm;
+  rec.capsules = rec.grasp_tick_capsules = capsule_records(*e.metrics, rig);
+  rec.figures = rec.grasp_tick_figures = grasp_figures(*e.metrics);
+  rec.grasp_type = sim::grasp_type_name(e.grasp_type);
+  rec.opposition_deg = opposition_deg(e.contacts, rig);
+}
+
 void set_hold_quality(Record& rec, const std::optional<sim::GraspQuality>& hold) {
   if (!rec.grasped || !hold) return;
   rec.figures.epsilon = hold->epsilon;

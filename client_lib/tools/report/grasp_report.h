@@ -5,6 +5,7 @@
 
 #include "telegrasp/sim/hand_controller.h"
 #include "telegrasp/sim/hand_rig.h"
+#include "telegrasp/sim/world.h"
 
 #include <nlohmann/json.hpp>
 
@@ -97,6 +98,12 @@ std::vector<CapsuleMetricRecord> capsule_records(const sim::GraspMetrics& metric
 
 /// The hand-level figures of a grasp, palm distance in mm.
 GraspFigures grasp_figures(const sim::GraspMetrics& metrics);
+
+/// Fills `rec`'s grasp-tick figures from an in-process grasp event with metrics: HandError, the
+/// per-capsule metrics and the hand-level figures (also as the record's own until a hold replaces
+/// them), the grasp type and the thumb's opposition. The in-process twin of
+/// tools::record_grasp_event; time to grasp and contacts are the caller's.
+void record_grasp_tick(const sim::GraspEvent& e, const sim::HandRig& rig, Record& rec);
 
 /// A record's force closure, epsilon and volume from the settled hold of a run over DDS or its
 /// in-process twin (the last quality while the object was held up), as telegrasp-eval run's
