@@ -460,7 +460,8 @@ TEST(ScriptedOperatorTest, TypedPlansCloseAcrossTheReachableWidthInForceClosure)
 // An upright box whose thickness lies across the palm: with the palm centred over it, the thumb,
 // opposing from the side of the palm, meets the box's end while the fingers press its face (no
 // plan in force closure); a plan whose grasp centre is shifted 3 cm across the palm puts the
-// thumb on the face opposite the fingers. The stand-in sugar box (5 x 9.4 x 17.6 cm).
+// thumb on the face opposite a finger's (other fingers may wrap over the top edge). The stand-in
+// sugar box (5 x 9.4 x 17.6 cm).
 TEST(ScriptedOperatorTest, TypedPlansCloseAnUprightBoxBetweenThumbAndFingersInForceClosure) {
   const auto hand_rig = rig("human_right_opposable");
   const auto model = standin("004_sugar_box");
@@ -473,17 +474,52 @@ TEST(ScriptedOperatorTest, TypedPlansCloseAnUprightBoxBetweenThumbAndFingersInFo
     const auto job = c.hand.quality_inputs();
     ASSERT_TRUE(job.has_value());
     EXPECT_TRUE(grasp_quality(job->contacts, job->mu, job->torque_scale).force_closure);
-    // The thumb's contacts lie on the face opposite the fingers': normals about opposite.
-    Eigen::Vector3d thumb = Eigen::Vector3d::Zero(), fingers = Eigen::Vector3d::Zero();
+    // A thumb contact and a finger contact on opposite faces: normals within 30 degrees of opposite.
+    std::vector<Eigen::Vector3d> thumb, fingers;
     for (const Contact& k : c.hand.contacts()) {
       if (!k.phalanx.valid()) continue;  // the palm
       const int finger = hand_rig->phalanges()[k.phalanx.value].finger;
-      (hand_rig->fingers()[finger].name == "thumb" ? thumb : fingers) += k.n_World;
+      (hand_rig->fingers()[finger].name == "thumb" ? thumb : fingers).push_back(k.n_World);
     }
-    ASSERT_GT(thumb.norm(), 0);
-    ASSERT_GT(fingers.norm(), 0);
-    EXPECT_LT(thumb.normalized().dot(fingers.normalized()), std::cos(150 * std::numbers::pi / 180));
+    double most_opposed = 1;
+    for (const Eigen::Vector3d& t : thumb)
+      for (const Eigen::Vector3d& f : fingers) most_opposed = std::min(most_opposed, t.dot(f));
+    EXPECT_LT(most_opposed, std::cos(150 * std::numbers::pi / 180));
   }
+}
+
+// A typed plan lays the phalanges on the surface rather than touching with their tips. A phalanx
+// closing about its joint onto a flat face reads about 3 mm of ND at mid-length when it touches
+// with its tip and 0 when it lies flat, so on a box the planned closing's mean |ND| is near 0 (at
+// most 0.3 mm); on a ball (a straight phalanx tangent to a sphere at its mid-length reads 0) under
+// the paper's 1.12 mm. Unfitted (the plan chosen before the fit), they read 0.64 mm on the box and
+// 2.6 and 3.1 mm on the balls. Each stays clean and in force closure. (Not on the cans: there
+// the fitted plans still read 0.7-3.5 mm at these turns.)
+TEST(ScriptedOperatorTest, TypedPlansLayThePhalangesOnTheSurface) {
+  const auto hand_rig = rig("human_right_opposable");
+  for (const auto& [name, bound_mm] :
+       {std::pair{"004_sugar_box", 0.3}, std::pair{"017_orange", 1.12}, std::pair{"055_baseball", 1.12}})
+    for (double yaw : {0.0, 0.4, 1.0}) {
+      SCOPED_TRACE(testing::Message() << name << " yaw " << yaw);
+      const auto model = standin(name);
+      const Eigen::Isometry3d X_WorldObject = World::resting_pose(*model, 0.45, 0.0, yaw);
+      const GraspPlan plan = plan_grasp(hand_rig, {}, *model, X_WorldObject, 1.0 / 90);
+      const OfflineClosing c = close_offline(hand_rig, {}, *model, X_WorldObject, plan.X_WorldPalm, 1.0 / 90);
+      ASSERT_TRUE(c.grasped);
+      EXPECT_FALSE(c.penetrating);
+      double sum = 0;
+      int hits = 0;
+      for (const CapsuleMetric& m : c.metrics.capsules)
+        if (m.hit) {
+          sum += std::abs(m.nd);
+          ++hits;
+        }
+      ASSERT_GE(hits, 3);
+      EXPECT_LT(1000 * sum / hits, bound_mm);
+      const auto job = c.hand.quality_inputs();
+      ASSERT_TRUE(job.has_value());
+      EXPECT_TRUE(grasp_quality(job->contacts, job->mu, job->torque_scale).force_closure);
+    }
 }
 
 // The planner's aim errors, written out here: the palm 3 mm off along each of its axes either way,

@@ -91,7 +91,7 @@ struct GraspPlan {
 };
 
 /// What closing the hand fully at a fixed palm pose on a static object gave (no physics): the
-/// trigger ramps 0 -> 1 over 0.35 s and stays closed for 0.15 s more.
+/// trigger ramps 0 -> 1 over 0.35 s and stays closed for 0.15 s more, or until no joint moves.
 struct OfflineClosing {
   HandController hand;  ///< The hand at the end of the close.
   bool grasped = false;  ///< The grasp rule turned true during the close.
@@ -144,7 +144,12 @@ NdSearchResult nd_pose_search(const std::shared_ptr<const HandRig>& rig, const O
 /// force closure by epsilon (0.01 steps), before opposing normals; of the best 16 in force
 /// closure, the one that stays so in most of 8 closings with the palm 3 mm or 3 degrees off,
 /// unless some of those closings do not grasp at all: then one of the best 8 out of closure
-/// grasped in at least 2 more of them replaces it (the one grasped in most). Deterministic.
+/// grasped in at least 2 more of them replaces it (the one grasped in most). Then, as a person
+/// settles the fingers on the surface, the plan is fitted: random moves of the palm (up to 1 cm
+/// and 10 degrees) from it and from up to 7 others as robust under the aim errors, 40 each and
+/// then 200 from the best, keep a move when the closing stays as good (clean, in closure and
+/// across if it was, as robust under the aim errors) and lowers the mean |ND| of the closing and
+/// its 8 aim errors. Deterministic.
 GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSettings& settings, const ObjectModel& model,
                      const Eigen::Isometry3d& X_WorldObject, double dt, double table_height = 0.0);
 
