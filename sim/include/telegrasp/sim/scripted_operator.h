@@ -98,6 +98,7 @@ struct OfflineClosing {
   int blocked = 0;  ///< Capsules blocked at the end.
   bool penetrating = false;  ///< A blocked capsule ended below -0.1 mm (the hand started in the object).
   bool below_table = false;  ///< A capsule ended under the table top.
+  double closed_table_depth = 0;  ///< How far the closed hand's capsules reach under the table top, m; 0: clear.
   double open_table_depth = 0;  ///< How far the open hand (palm, capsules) reaches under the table top, m; 0: clear.
   bool opposed = false;  ///< Two contact normals oppose (n_i . n_j < -0.5): a pinch or wrap, not a press.
   GraspMetrics metrics{};  ///< ND and exact signed distances at the end.
@@ -145,11 +146,11 @@ NdSearchResult nd_pose_search(const std::shared_ptr<const HandRig>& rig, const O
 /// closure, the one that stays so in most of 8 closings with the palm 3 mm or 3 degrees off,
 /// unless some of those closings do not grasp at all: then one of the best 8 out of closure
 /// grasped in at least 2 more of them replaces it (the one grasped in most). Then, as a person
-/// settles the fingers on the surface, the plan is fitted: random moves of the palm (up to 1 cm
-/// and 10 degrees) from it and from up to 7 others as robust under the aim errors, 40 each and
-/// then 200 from the best, keep a move when the closing stays as good (clean, in closure and
-/// across if it was, as robust under the aim errors) and lowers the mean |ND| of the closing and
-/// its 8 aim errors. Deterministic.
+/// settles the fingers on the surface, the plan is fitted: random moves of the palm (normal, 1 cm
+/// and 10 degrees, or a half or a quarter of that) from it and from up to 7 others as robust under the aim errors, 40
+/// each and then 200 from the best, keep a move when the closing stays as good (clean, no capsule deeper under the
+/// table top, in closure and across if it was, as robust under the aim errors) and lowers the mean |ND| of the closing
+/// and its 8 aim errors. Deterministic.
 GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSettings& settings, const ObjectModel& model,
                      const Eigen::Isometry3d& X_WorldObject, double dt, double table_height = 0.0);
 
