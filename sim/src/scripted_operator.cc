@@ -602,7 +602,7 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
           t.open_table_depth >= kReachableTableDepth)
         continue;
       const auto [nd, hits] = nd_mean_mm(t.metrics);
-      // The closing's own mean is a lower bound of little use above the best's mean with its aim errors.
+      // A closing whose own mean is above the best's mean with its aim errors is not closed under them.
       if (nd >= nd_best || hits < std::min(hits0, 4)) continue;
       if (closed0 && !closure_of(t).first) continue;
       if (across0 && !closes_across_shortest_side(model.shape, X_ObjectWorld * X, {}, up_Object)) continue;
