@@ -7,11 +7,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <numbers>
 #include <optional>
 #include <random>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 #include <tuple>
 
 namespace telegrasp::sim {
@@ -107,6 +109,14 @@ double table_depth(const HandRig& rig, const HandController& hand, const Eigen::
 }
 
 }  // namespace
+
+bool plan_fit_enabled() {
+  static const bool enabled = [] {
+    const char* v = std::getenv("TELEGRASP_PLAN_FIT");
+    return v == nullptr || std::string_view(v) != "off";
+  }();
+  return enabled;
+}
 
 OfflineClosing close_offline(const std::shared_ptr<const HandRig>& rig, const GraspSettings& settings,
                              const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject,
@@ -616,6 +626,7 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
   };
   // The fit from the chosen plan and from the first others kept as well under the aim errors; the
   // lowest is fitted further.
+  if (!plan_fit_enabled()) return candidates[best];
   std::size_t chosen = best;
   auto [X_fit, nd_fit] = fit(candidates[best].X_WorldPalm, kFitMoves, 1);
   int started = 1;

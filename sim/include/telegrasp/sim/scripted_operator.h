@@ -134,6 +134,11 @@ NdSearchResult nd_pose_search(const std::shared_ptr<const HandRig>& rig, const O
                               const Eigen::Isometry3d& X_WorldObject, const NdSearchSettings& search, double dt,
                               double table_height = 0.0);
 
+/// Whether plan_grasp fits typed plans to the surface: yes unless the environment has
+/// TELEGRASP_PLAN_FIT=off (read once). The sanitizer runs set it: under ASan the fit's hundreds of
+/// offline closings per plan take seconds, and bots on a free-running server fall behind.
+bool plan_fit_enabled();
+
 /// Plans a grasp by closing the hand offline (no physics) at candidate poses around the object
 /// (top and side approaches, both axes, offsets, heights) with precise closing, and keeping the
 /// best: a grasp with no capsule ending inside the object, then opposing contact normals (a pinch
@@ -150,7 +155,7 @@ NdSearchResult nd_pose_search(const std::shared_ptr<const HandRig>& rig, const O
 /// and 10 degrees, or a half or a quarter of that) from it and from up to 7 others as robust under the aim errors, 40
 /// each and then 200 from the best, keep a move when the closing stays as good (clean, no capsule deeper under the
 /// table top, in closure and across if it was, as robust under the aim errors) and lowers the mean |ND| of the closing
-/// and its 8 aim errors. Deterministic.
+/// and its 8 aim errors (not with TELEGRASP_PLAN_FIT=off: plan_fit_enabled()). Deterministic.
 GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSettings& settings, const ObjectModel& model,
                      const Eigen::Isometry3d& X_WorldObject, double dt, double table_height = 0.0);
 
