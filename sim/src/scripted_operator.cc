@@ -563,7 +563,8 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
     }
   }
   if (best_kept.first < 0) {
-    best_kept = kept(candidates[best].X_WorldPalm);  // not in closure
+    if (!plan_fit_enabled()) return candidates[best];  // not in closure: only the fit needs its robustness
+    best_kept = kept(candidates[best].X_WorldPalm);
     tried.emplace_back(best, best_kept);
   } else if (best_kept.first < kAimKeptEnough) {
     while (r < ranked.size() && std::get<3>(ranked[r].first)) ++r;  // the rest in closure were tried or worse
