@@ -131,7 +131,10 @@ OfflineClosing close_offline(const std::shared_ptr<const HandRig>& rig, const Gr
   for (int i = 0; i <= ticks; ++i) {
     input.trigger = std::min(1.0, static_cast<double>(i) / (0.7 * ticks));
     hand.tick(input, dt, {&view, 1});
-    if (hand.state().grasped.valid()) out.grasped = true;
+    if (hand.state().grasped.valid() && !out.grasped) {
+      out.grasped = true;
+      out.grasp_tick_metrics = hand.measure(view);
+    }
     if (i == 0) out.open_table_depth = table_depth(*rig, hand, X_WorldPalm, table_height);
     // Closed and still: the ticks left would change nothing.
     if (input.trigger == 1.0 && hand.state().q == q_last) break;
@@ -166,6 +169,27 @@ std::pair<double, int> nd_mean_mm(const GraspMetrics& m) {
       ++hits;
     }
   return {hits > 0 ? sum / hits : 0.0, hits};
+}
+
+// What the fit lowers for one closing (mm): the mean of the settled hand's mean |ND| and the grasp
+// tick's, the tick on which the paper takes it (sim/README.md, section 4.5). At the grasp tick the
+// fingers that close last are still in the air: each capsule whose sweep hits at either moment
+// counts there with its ND then, or with the sweep's full reach beyond the skin if it did not hit
+// yet, so a finger that stays far until late scores worst, not best. A closing that never grasped
+// counts its settled figure twice.
+double fit_nd_mm(const HandRig& rig, const OfflineClosing& t) {
+  const double settled = nd_mean_mm(t.metrics).first;
+  if (!t.grasped) return settled;
+  double sum = 0;
+  int n = 0;
+  for (std::size_t i = 0; i < t.metrics.capsules.size(); ++i) {
+    const CapsuleMetric& end = t.metrics.capsules[i];
+    const CapsuleMetric& tick = t.grasp_tick_metrics.capsules[i];
+    if (!end.hit && !tick.hit) continue;
+    sum += 1000.0 * (tick.hit ? std::abs(tick.nd) : rig.nd_sweep_beyond());
+    ++n;
+  }
+  return 0.5 * (settled + (n > 0 ? sum / n : 0.0));
 }
 
 // The palm box (centre and corners) lies outside the object.
@@ -543,7 +567,7 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
       const bool grasped = t.grasped && !t.penetrating;
       grasped_closed.first += grasped;
       grasped_closed.second += grasped && closure_of(t).first;
-      if (nd_sum) *nd_sum += nd_mean_mm(t.metrics).first;
+      if (nd_sum) *nd_sum += fit_nd_mm(*rig, t);
     }
     return grasped_closed;
   };
@@ -584,16 +608,17 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
   // and quartered every third move) are kept when the closing stays as good (grasped, clean, the
   // palm outside the object, reachable, no capsule deeper under the table top, as many capsules
   // hitting, up to 4; in closure and across if the start was; grasped and in closure under as
-  // many aim errors as the chosen plan) and the mean |ND| over the closing and its 8 aim errors
-  // is lower. Returns the pose and that mean.
+  // many aim errors as the pose it moves from: a fit may not trade robustness for ND) and the
+  // mean over the closing and its 8 aim errors of fit_nd_mm is lower. Returns the pose and that
+  // mean.
   const auto fit = [&](const Eigen::Isometry3d& X_start, int moves, std::uint64_t seed) {
     const OfflineClosing t0 = close_offline(rig, planning, model, X_WorldObject, X_start, dt, table_height);
     const bool closed0 = closure_of(t0).first;
     const bool across0 = closes_across_shortest_side(model.shape, X_ObjectWorld * X_start, {}, up_Object);
     const double closings = 1.0 + aim_errors().size();
-    const auto [nd0, hits0] = nd_mean_mm(t0.metrics);
-    double nd_best = nd0;
-    kept(X_start, &nd_best);
+    const int hits0 = nd_mean_mm(t0.metrics).second;
+    double nd_best = fit_nd_mm(*rig, t0);
+    std::pair<int, int> k_best = kept(X_start, &nd_best);
     nd_best /= closings;
     std::mt19937_64 rng(seed);
     std::normal_distribution<double> n(0.0, 1.0);
@@ -612,14 +637,16 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
       if (!t.grasped || t.penetrating || (t.below_table && t.closed_table_depth > t0.closed_table_depth) ||
           t.open_table_depth >= kReachableTableDepth)
         continue;
-      const auto [nd, hits] = nd_mean_mm(t.metrics);
+      const int hits = nd_mean_mm(t.metrics).second;
+      const double nd = fit_nd_mm(*rig, t);
       // A closing whose own mean is above the best's mean with its aim errors is not closed under them.
       if (nd >= nd_best || hits < std::min(hits0, 4)) continue;
       if (closed0 && !closure_of(t).first) continue;
       if (across0 && !closes_across_shortest_side(model.shape, X_ObjectWorld * X, {}, up_Object)) continue;
       double sum = nd;
       const std::pair<int, int> k = kept(X, &sum);
-      if (k.first < best_kept.first || k.second < best_kept.second || sum / closings >= nd_best) continue;
+      if (k.first < k_best.first || k.second < k_best.second || sum / closings >= nd_best) continue;
+      k_best = k;
       nd_best = sum / closings;
       X_best = X;
     }

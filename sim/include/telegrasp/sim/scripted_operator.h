@@ -102,6 +102,7 @@ struct OfflineClosing {
   double open_table_depth = 0;  ///< How far the open hand (palm, capsules) reaches under the table top, m; 0: clear.
   bool opposed = false;  ///< Two contact normals oppose (n_i . n_j < -0.5): a pinch or wrap, not a press.
   GraspMetrics metrics{};  ///< ND and exact signed distances at the end.
+  GraspMetrics grasp_tick_metrics{};  ///< The same on the tick the grasp rule first turned true.
 };
 OfflineClosing close_offline(const std::shared_ptr<const HandRig>& rig, const GraspSettings& settings,
                              const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject,
