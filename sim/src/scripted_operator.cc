@@ -559,7 +559,7 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
   // caught by the fingertips), the best plans out of closure are tried too, and the one grasped
   // under the most aim errors replaces it if that is at least kAimMargin more.
   // How many of the 8 aim errors keep the plan grasped, and in force closure; with nd_sum, adds
-  // each of those closings' mean |ND| (mm) to it.
+  // each of those closings' fit_nd_mm to it.
   const auto kept = [&](const Eigen::Isometry3d& X_WorldPalm, double* nd_sum = nullptr) {
     std::pair<int, int> grasped_closed{0, 0};
     for (const Eigen::Isometry3d& aim : aim_errors()) {
