@@ -123,7 +123,8 @@ bool plan_fit_enabled() {
 
 OfflineClosing close_offline(const std::shared_ptr<const HandRig>& rig, const GraspSettings& settings,
                              const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject,
-                             const Eigen::Isometry3d& X_WorldPalm, double dt, double table_height) {
+                             const Eigen::Isometry3d& X_WorldPalm, double dt, double table_height,
+                             bool measure_grasp_tick) {
   OfflineClosing out{HandController(rig, settings)};
   HandController& hand = out.hand;
   const ObjectView view{ObjectId(0), X_WorldObject, &model};
@@ -136,7 +137,7 @@ OfflineClosing close_offline(const std::shared_ptr<const HandRig>& rig, const Gr
     hand.tick(input, dt, {&view, 1});
     if (hand.state().grasped.valid() && !out.grasped) {
       out.grasped = true;
-      out.grasp_tick_metrics = hand.measure(view);
+      if (measure_grasp_tick) out.grasp_tick_metrics = hand.measure(view);
     }
     if (i == 0) out.open_table_depth = table_depth(*rig, hand, X_WorldPalm, table_height);
     // Closed and still: the ticks left would change nothing.
@@ -179,7 +180,7 @@ std::pair<double, int> nd_mean_mm(const GraspMetrics& m) {
 // fingers that close last are still in the air: each capsule whose sweep hits at either moment
 // counts there with its ND then, or with the sweep's full reach beyond the skin if it did not hit
 // yet, so a finger that stays far until late scores worst, not best. A closing that never grasped
-// counts its settled figure twice.
+// counts its settled figure twice. `t` was closed with measure_grasp_tick.
 double fit_nd_mm(const HandRig& rig, const OfflineClosing& t) {
   const double settled = nd_mean_mm(t.metrics).first;
   if (!t.grasped) return settled;
@@ -195,13 +196,16 @@ double fit_nd_mm(const HandRig& rig, const OfflineClosing& t) {
   return 0.5 * (settled + (n > 0 ? sum / n : 0.0));
 }
 
+// Corner `c` (0..7) of the palm box of half extents `h`, in the palm frame.
+Eigen::Vector3d palm_corner(const Eigen::Vector3d& h, int c) {
+  return {c & 1 ? h.x() : -h.x(), c & 2 ? h.y() : -h.y(), c & 4 ? h.z() : -h.z()};
+}
+
 // The palm box (centre and corners) lies outside the object.
 bool palm_clear(const HandRig& rig, const ObjectModel& model, const Eigen::Isometry3d& X_ObjectPalm) {
   const Eigen::Vector3d& h = rig.palm_half_extent();
   for (int corner = 0; corner < 9; ++corner) {
-    const Eigen::Vector3d p = corner == 8 ? Eigen::Vector3d::Zero()
-                                          : Eigen::Vector3d(corner & 1 ? h.x() : -h.x(), corner & 2 ? h.y() : -h.y(),
-                                                            corner & 4 ? h.z() : -h.z());
+    const Eigen::Vector3d p = corner == 8 ? Eigen::Vector3d::Zero() : palm_corner(h, corner);
     if (model.distance.signed_distance(X_ObjectPalm * p) < 0) return false;
   }
   return true;
@@ -453,6 +457,7 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
   // grasps in force closure first.
   const bool typed = rig->has_grasp_types();
   std::vector<Eigen::Vector3d> horizontal = {ax, ay, -ax, -ay};
+  const std::size_t first_box_side = horizontal.size();  // where the box's sides begin, both ways round
   if (typed) {
     // The box's shortest and middle sides, laid horizontal (for a top grasp's fingers).
     for (int i : {0, 1}) {
@@ -482,42 +487,41 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
   // instead of its face when the palm is centred over it (the stand-in sugar box).
   std::vector<Eigen::Vector2d> top_shifts = {{0.0, 0.0}, {-0.015, 0.0}, {0.015, 0.0}};
   if (typed) top_shifts.insert(top_shifts.end(), {{0.0, -kAcrossShift}, {0.0, kAcrossShift}});
-  // A box (a rig with types) is also grasped from its top with the wrist flexed, the fingers
-  // across its shortest horizontal side tilted down by kTopPitch: they reach down the far face
-  // instead of curling over its top edge (the cracker box standing).
-  const bool pitched = typed && model.shape.shape == ShapeClass::kBox && horizontal.size() > 4;
-  for (std::size_t f = 0; f < horizontal.size(); ++f)
-    for (double pitch : {0.0, kTopPitch}) {
-      if (pitch != 0 && !(pitched && (f == 4 || f == 5))) continue;
-      for (const Eigen::Vector3d& off : along_length)
-        for (const Eigen::Vector2d& shift : top_shifts)
-          for (double clearance : {0.0, 0.01, 0.025, 0.05, 0.08}) {
-            GraspPlan plan;
-            plan.X_WorldPalm = palm_frame(horizontal[f], up);
-            plan.X_WorldPalm.linear() =
-                Eigen::AngleAxisd(pitch, plan.X_WorldPalm.linear().col(1)) * plan.X_WorldPalm.linear();
-            plan.approach_World = -up;
-            const Eigen::Vector3d target = p_WorldCenter + off + shift.x() * plan.X_WorldPalm.linear().col(0) +
-                                           shift.y() * plan.X_WorldPalm.linear().col(1);
-            plan.X_WorldPalm.translation() = target - plan.X_WorldPalm.linear() * gc;
-            // Never lower the palm into the object: its skin (a pitched palm's lowest corner) stays
-            // above the top plus the clearance.
-            double& z = plan.X_WorldPalm.translation().z();
-            if (pitch == 0) {
-              z = std::max(z, top + palm_half_thickness + clearance);
-            } else {
-              const Eigen::Vector3d& h = rig->palm_half_extent();
-              double lowest = z;
-              for (int c = 0; c < 8; ++c)
-                lowest =
-                    std::min(lowest, (plan.X_WorldPalm * Eigen::Vector3d(c & 1 ? h.x() : -h.x(), c & 2 ? h.y() : -h.y(),
-                                                                         c & 4 ? h.z() : -h.z()))
-                                         .z());
-              z += std::max(0.0, top + clearance - lowest);
-            }
-            candidates.push_back(plan);
+  // The top grasps' finger directions, each flat and, for a box (a rig with types), the first of
+  // its sides laid horizontal (the shortest a hand closes across) also with the wrist flexed: the
+  // fingers tilted down by kTopPitch reach down the far face instead of curling over its top
+  // edge (the cracker box standing).
+  std::vector<std::pair<Eigen::Vector3d, double>> top_fingers;
+  for (std::size_t f = 0; f < horizontal.size(); ++f) {
+    top_fingers.emplace_back(horizontal[f], 0.0);
+    if (typed && model.shape.shape == ShapeClass::kBox && (f == first_box_side || f == first_box_side + 1))
+      top_fingers.emplace_back(horizontal[f], kTopPitch);
+  }
+  for (const auto& [fingers, pitch] : top_fingers)
+    for (const Eigen::Vector3d& off : along_length)
+      for (const Eigen::Vector2d& shift : top_shifts)
+        for (double clearance : {0.0, 0.01, 0.025, 0.05, 0.08}) {
+          GraspPlan plan;
+          plan.X_WorldPalm = palm_frame(fingers, up);
+          plan.X_WorldPalm.linear() =
+              Eigen::AngleAxisd(pitch, plan.X_WorldPalm.linear().col(1)) * plan.X_WorldPalm.linear();
+          plan.approach_World = -up;
+          const Eigen::Vector3d target = p_WorldCenter + off + shift.x() * plan.X_WorldPalm.linear().col(0) +
+                                         shift.y() * plan.X_WorldPalm.linear().col(1);
+          plan.X_WorldPalm.translation() = target - plan.X_WorldPalm.linear() * gc;
+          // Never lower the palm into the object: its skin (a pitched palm's lowest corner) stays
+          // above the top plus the clearance.
+          double& z = plan.X_WorldPalm.translation().z();
+          if (pitch == 0) {
+            z = std::max(z, top + palm_half_thickness + clearance);
+          } else {
+            double lowest = z;
+            for (int c = 0; c < 8; ++c)
+              lowest = std::min(lowest, (plan.X_WorldPalm * palm_corner(rig->palm_half_extent(), c)).z());
+            z += std::max(0.0, top + clearance - lowest);
           }
-    }
+          candidates.push_back(plan);
+        }
   // Side grasps: palm facing the object horizontally, fingers around it either way (the thumb
   // up for one hand, down for the other), at two heights.
   for (const Eigen::Vector3d& toward : horizontal)
@@ -587,7 +591,8 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
   const auto kept = [&](const Eigen::Isometry3d& X_WorldPalm, double* nd_sum = nullptr) {
     std::pair<int, int> grasped_closed{0, 0};
     for (const Eigen::Isometry3d& aim : aim_errors()) {
-      const OfflineClosing t = close_offline(rig, planning, model, X_WorldObject, X_WorldPalm * aim, dt, table_height);
+      const OfflineClosing t =
+          close_offline(rig, planning, model, X_WorldObject, X_WorldPalm * aim, dt, table_height, nd_sum != nullptr);
       const bool grasped = t.grasped && !t.penetrating;
       grasped_closed.first += grasped;
       grasped_closed.second += grasped && closure_of(t).first;
@@ -636,7 +641,7 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
   // mean over the closing and its 8 aim errors of fit_nd_mm is lower. Returns the pose and that
   // mean.
   const auto fit = [&](const Eigen::Isometry3d& X_start, int moves, std::uint64_t seed) {
-    const OfflineClosing t0 = close_offline(rig, planning, model, X_WorldObject, X_start, dt, table_height);
+    const OfflineClosing t0 = close_offline(rig, planning, model, X_WorldObject, X_start, dt, table_height, true);
     const bool closed0 = closure_of(t0).first;
     const bool across0 = closes_across_shortest_side(model.shape, X_ObjectWorld * X_start, {}, up_Object);
     const double closings = 1.0 + aim_errors().size();
@@ -657,7 +662,7 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
       if (axis.norm() > 1e-9)
         X.linear() = Eigen::AngleAxisd(step * kFitDegreesPerMetre * kDeg * d[6], axis.normalized()) * X.linear();
       if (!palm_clear(*rig, model, X_ObjectWorld * X)) continue;
-      const OfflineClosing t = close_offline(rig, planning, model, X_WorldObject, X, dt, table_height);
+      const OfflineClosing t = close_offline(rig, planning, model, X_WorldObject, X, dt, table_height, true);
       if (!t.grasped || t.penetrating || (t.below_table && t.closed_table_depth > t0.closed_table_depth) ||
           t.open_table_depth >= kReachableTableDepth)
         continue;

@@ -102,11 +102,15 @@ struct OfflineClosing {
   double open_table_depth = 0;  ///< How far the open hand (palm, capsules) reaches under the table top, m; 0: clear.
   bool opposed = false;  ///< Two contact normals oppose (n_i . n_j < -0.5): a pinch or wrap, not a press.
   GraspMetrics metrics{};  ///< ND and exact signed distances at the end.
-  GraspMetrics grasp_tick_metrics{};  ///< The same on the tick the grasp rule first turned true.
+  /// The same on the tick the grasp rule first turned true (with `measure_grasp_tick`; else empty).
+  GraspMetrics grasp_tick_metrics{};
 };
+/// `measure_grasp_tick`: also measure the grasp tick (one more HandController::measure; the
+/// planner's fit needs it, its ranking does not).
 OfflineClosing close_offline(const std::shared_ptr<const HandRig>& rig, const GraspSettings& settings,
                              const ObjectModel& model, const Eigen::Isometry3d& X_WorldObject,
-                             const Eigen::Isometry3d& X_WorldPalm, double dt, double table_height = 0.0);
+                             const Eigen::Isometry3d& X_WorldPalm, double dt, double table_height = 0.0,
+                             bool measure_grasp_tick = false);
 
 /// A search for the palm pose whose offline closing gives the lowest ND (see nd_pose_search).
 struct NdSearchSettings {
