@@ -16,7 +16,9 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <string_view>
 #include <unordered_map>
@@ -150,12 +152,13 @@ constexpr std::size_t kMaxPlyHeaderBytes = 64 * 1024;
 /// (each element needs at least one byte per binary scalar, two per ascii value: a digit and a
 /// separator), faces are capped at limits.max_triangles and vertices at three per triangle.
 /// Throws MeshLoadError naming the element and its count. A file that is not a PLY is left alone.
-void check_ply_header(const std::string& path, std::uint64_t file_size, const MeshLoadLimits& limits) {
+/// Returns where a binary PLY's data starts, 0 for an ascii PLY or another file.
+std::size_t check_ply_header(const std::string& path, std::uint64_t file_size, const MeshLoadLimits& limits) {
   const std::string head = read_prefix(path, kMaxPlyHeaderBytes);
   std::string extension = std::filesystem::path(path).extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (extension != ".ply" && head.compare(0, 3, "ply") != 0) return;  // not read as a PLY
+  if (extension != ".ply" && head.compare(0, 3, "ply") != 0) return 0;  // not read as a PLY
   // assimp takes any file starting "ply" as one, and its header parser looped forever on a
   // ".ply" starting "plymat" (found by telegrasp-fuzz-mesh): the first line must be "ply".
   if (head.size() < 4 || head.compare(0, 3, "ply") != 0 || (head[3] != '\n' && head[3] != '\r')) {
@@ -259,6 +262,22 @@ void check_ply_header(const std::string& path, std::uint64_t file_size, const Me
                           " bytes after its header in all");
     }
   }
+  return ascii ? 0 : body_start;
+}
+
+/// assimp skips a line end after a binary PLY's "end_header\n" even when it is the data's first
+/// byte (assimp issue 5341), and then reads the file one byte off: it refused or, worse, misread
+/// the 1 in 256 binary PLYs whose data starts with the byte 0x0a, such as those whose first float's
+/// lowest byte it is. It reads "end_header\r\n" right. Returns such a file with its end_header
+/// line ended so, nothing for any other file.
+std::optional<std::string> ply_for_assimp(const std::string& path, std::size_t binary_data_start) {
+  if (binary_data_start < 2) return std::nullopt;  // not a binary PLY
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (bytes.size() <= binary_data_start || bytes[binary_data_start] != '\n' || bytes[binary_data_start - 2] == '\r')
+    return std::nullopt;
+  bytes.insert(binary_data_start - 1, 1, '\r');
+  return bytes;
 }
 
 /// A binary STL's facet count (at byte 80) against the file's size (50 bytes a facet after an
@@ -411,7 +430,7 @@ TriangleMesh load_mesh_file(const std::string& path, const MeshLoadLimits& limit
   const std::uint64_t file_size = std::filesystem::file_size(path, ec);
   if (ec) throw MeshLoadError(describe(path) + "cannot read its size: " + ec.message());
   // Declared counts first: assimp reserves what a header declares before reading the data.
-  check_ply_header(path, file_size, limits);
+  const std::size_t ply_binary_data = check_ply_header(path, file_size, limits);
   check_stl_header(path, file_size, limits);
   Assimp::Importer importer;
   // No JoinIdenticalVertices: clean_mesh does all welding, so its report counts every
@@ -421,7 +440,10 @@ TriangleMesh load_mesh_file(const std::string& path, const MeshLoadLimits& limit
   // Only ValidateDataStructure: a face index past its mesh's vertices (a hostile PLY) made
   // assimp's Triangulate read out of bounds (SEGV), another PLY made it abort; validation
   // refuses such files and collect_node triangulates.
-  const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+  const std::optional<std::string> ply = ply_for_assimp(path, ply_binary_data);
+  const aiScene* scene =
+      ply ? importer.ReadFileFromMemory(ply->data(), ply->size(), aiProcess_ValidateDataStructure, "ply")
+          : importer.ReadFile(path, aiProcess_ValidateDataStructure);
   if (scene == nullptr) {
     throw MeshLoadError(describe(path) + "assimp could not read it: " + importer.GetErrorString());
   }
