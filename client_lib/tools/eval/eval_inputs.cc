@@ -4,6 +4,7 @@
 #include "telegrasp/sim/standin_objects.h"
 
 #include <filesystem>
+#include <sstream>
 #include <iostream>
 #include <stdexcept>
 
@@ -15,8 +16,7 @@ std::string rig_path_or_default(const std::string& rig_path) {
 
 EvalInputs load_eval_inputs(const std::string& rig_path, const std::string& objects_dir) {
   EvalInputs in;
-  in.rig = std::make_shared<const sim::HandRig>(
-      sim::HandRig::load(rig_path_or_default(rig_path)));
+  in.rig = std::make_shared<const sim::HandRig>(sim::HandRig::load(rig_path_or_default(rig_path)));
   if (objects_dir.empty()) {
     for (const auto& o : sim::protocol_objects()) in.models.push_back(sim::make_standin_model(o));
   } else {
@@ -28,6 +28,20 @@ EvalInputs load_eval_inputs(const std::string& rig_path, const std::string& obje
     }
   }
   return in;
+}
+
+std::vector<sim::ObjectModelPtr> stretched(const std::vector<sim::ObjectModelPtr>& models,
+                                           const Eigen::Vector3d& factors) {
+  std::vector<sim::ObjectModelPtr> out;
+  out.reserve(models.size());
+  for (const sim::ObjectModelPtr& m : models) {
+    sim::TriangleMesh mesh = m->mesh;
+    for (Eigen::Vector3d& v : mesh.vertices) v = v.cwiseProduct(factors);
+    std::ostringstream source;
+    source << m->source << " stretched x" << factors.x() << " y" << factors.y() << " z" << factors.z();
+    out.push_back(sim::make_object_model(m->name, mesh, m->mass_kg * factors.prod(), source.str()));
+  }
+  return out;
 }
 
 std::string prepare_outputs(const std::string& json_path, std::ofstream& json_out, const std::string& svg_dir) {

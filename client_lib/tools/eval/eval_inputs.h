@@ -5,6 +5,7 @@
 #include "telegrasp/sim/hand_rig.h"
 #include "telegrasp/sim/object_model.h"
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <fstream>
 #include <memory>
@@ -27,6 +28,12 @@ std::string rig_path_or_default(const std::string& rig_path);
 /// problem as "--objects <folder or file>: <what is wrong>", the way every tool says it).
 EvalInputs load_eval_inputs(const std::string& rig_path, const std::string& objects_dir);
 
+/// Each model's mesh stretched by `factors` along its frame's x, y and z about its centre of mass,
+/// its mass by their product (the same density): shapes nobody tuned the planner or the rig for.
+/// The name stays; the source says the stretch. Throws MeshLoadError if a stretched mesh encloses no volume.
+std::vector<sim::ObjectModelPtr> stretched(const std::vector<sim::ObjectModelPtr>& models,
+                                           const Eigen::Vector3d& factors);
+
 /// Opens `json_path` (if given) into `json_out` and creates `svg_dir` (if given), so a long run
 /// fails before it starts, not after. Returns "" or what went wrong, naming the option and path.
 std::string prepare_outputs(const std::string& json_path, std::ofstream& json_out, const std::string& svg_dir);
@@ -37,9 +44,9 @@ std::string prepare_outputs(const std::string& json_path, std::ofstream& json_ou
 /// the command's usage error.
 template <class Options, class Value>
 bool parse_offline_flag(const char* tool, const std::string& flag, const Value& value, Options& o, cli::Fail fail) {
-  if (cli::text_flag(flag, value,
-                     {{"--objects", &o.objects_dir}, {"--rig", &o.rig_path}, {"--json", &o.json_path},
-                      {"--svg", &o.svg_dir}}))
+  if (cli::text_flag(
+          flag, value,
+          {{"--objects", &o.objects_dir}, {"--rig", &o.rig_path}, {"--json", &o.json_path}, {"--svg", &o.svg_dir}}))
     return true;
   if (cli::is_flag(tool, flag, "--jobs", "--threads"))
     o.threads = static_cast<int>(cli::parse_whole(flag, value(), 1, 64, fail));

@@ -57,6 +57,8 @@ Options:
   --skill NAME        perfect | experienced | inexperienced (default experienced)
   --selection M       surface | origin: how the palm sphere ranks objects (default surface)
   --rig FILE          hand rig text file (default: built-in human_right_opposable)
+  --stretch X,Y,Z     stretch every object along its x, y and z by these factors (0.25-4) about
+                      its centre of mass, mass by their product: shapes nobody tuned for
   --json FILE         write every grasp record and the summaries as JSON
   --svg DIR           draw each object's first held grasp (three views) as DIR/<object>_<mode>.svg
   --jobs N            worker threads (default 2; --threads, its old name, still works)
@@ -74,6 +76,7 @@ struct Options {
   std::vector<ClosingMode> modes{ClosingMode::kPrecise};
   SelectionMetric selection = SelectionMetric::kSurface;
   std::vector<double> speeds{1.0};
+  Eigen::Vector3d stretch = Eigen::Vector3d::Ones();
   int trials = 5, threads = 2;
   std::uint64_t seed = 1;
 };
@@ -117,6 +120,14 @@ Options parse(int argc, char** argv) {
           usage_error("--speed-scale expects positive numbers, got '" + item + "'");
         o.speeds.push_back(s);
       }
+    } else if (a == "--stretch") {
+      std::stringstream ss(value());
+      int n = 0;
+      for (std::string item; std::getline(ss, item, ',');) {
+        if (n == 3) usage_error("--stretch expects three factors X,Y,Z, got more");
+        o.stretch[n++] = telegrasp::cli::parse_number(a, item, 0.25, 4.0, usage_error);
+      }
+      if (n != 3) usage_error("--stretch expects three factors X,Y,Z, got " + std::to_string(n));
     } else {
       return false;
     }
@@ -220,6 +231,7 @@ std::optional<EvalInputs> load_inputs(const Options& opt, std::ofstream& json_ou
   EvalInputs in;
   try {
     in = telegrasp::eval::load_eval_inputs(opt.rig_path, opt.objects_dir);
+    if (opt.stretch != Eigen::Vector3d::Ones()) in.models = telegrasp::eval::stretched(in.models, opt.stretch);
   } catch (const std::exception& e) {
     std::cerr << kTool << ": " << e.what() << "\n";
     return std::nullopt;
@@ -232,6 +244,9 @@ std::optional<EvalInputs> load_inputs(const Options& opt, std::ofstream& json_ou
   std::size_t max_bytes = 0;
   for (const auto& m : in.models) max_bytes = std::max(max_bytes, m->memory_bytes());
   std::cerr << in.models.size() << " objects (" << (opt.objects_dir.empty() ? "built-in stand-ins" : opt.objects_dir)
+            << (opt.stretch != Eigen::Vector3d::Ones() ? ", stretched x" + fmt(opt.stretch.x(), 3) + " y" +
+                                                             fmt(opt.stretch.y(), 3) + " z" + fmt(opt.stretch.z(), 3)
+                                                       : "")
             << "), largest model " << fmt(static_cast<double>(max_bytes) / 1e6, 2) << " MB; rig " << in.rig->name()
             << "; skill " << opt.skill << "\n";
   return in;
@@ -333,6 +348,7 @@ json print_summaries(const std::vector<Config>& configs, const std::vector<Job>&
     s["mode"] = closing_mode_name(configs[c].mode);
     s["speed_scale"] = configs[c].speed;
     s["skill"] = opt.skill;
+    if (opt.stretch != Eigen::Vector3d::Ones()) s["stretch"] = {opt.stretch.x(), opt.stretch.y(), opt.stretch.z()};
     std::cout << "summary: " << s.dump() << "\n";
     summaries.push_back(s);
   }
