@@ -272,10 +272,11 @@ std::size_t check_ply_header(const std::string& path, std::uint64_t file_size, c
 /// line ended so, nothing for any other file.
 std::optional<std::string> ply_for_assimp(const std::string& path, std::size_t binary_data_start) {
   if (binary_data_start < 2) return std::nullopt;  // not a binary PLY
+  const std::string head = read_prefix(path, binary_data_start + 1);
+  if (head.size() <= binary_data_start || head[binary_data_start] != '\n' || head[binary_data_start - 2] == '\r')
+    return std::nullopt;
   std::ifstream in(path, std::ios::binary);
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (bytes.size() <= binary_data_start || bytes[binary_data_start] != '\n' || bytes[binary_data_start - 2] == '\r')
-    return std::nullopt;
   bytes.insert(binary_data_start - 1, 1, '\r');
   return bytes;
 }

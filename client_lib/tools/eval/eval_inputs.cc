@@ -4,8 +4,8 @@
 #include "telegrasp/sim/standin_objects.h"
 
 #include <filesystem>
-#include <sstream>
 #include <iostream>
+#include <sstream>
 #include <stdexcept>
 
 namespace telegrasp::eval {
@@ -16,7 +16,8 @@ std::string rig_path_or_default(const std::string& rig_path) {
 
 EvalInputs load_eval_inputs(const std::string& rig_path, const std::string& objects_dir) {
   EvalInputs in;
-  in.rig = std::make_shared<const sim::HandRig>(sim::HandRig::load(rig_path_or_default(rig_path)));
+  in.rig = std::make_shared<const sim::HandRig>(
+      sim::HandRig::load(rig_path_or_default(rig_path)));
   if (objects_dir.empty()) {
     for (const auto& o : sim::protocol_objects()) in.models.push_back(sim::make_standin_model(o));
   } else {

@@ -44,9 +44,9 @@ std::string prepare_outputs(const std::string& json_path, std::ofstream& json_ou
 /// the command's usage error.
 template <class Options, class Value>
 bool parse_offline_flag(const char* tool, const std::string& flag, const Value& value, Options& o, cli::Fail fail) {
-  if (cli::text_flag(
-          flag, value,
-          {{"--objects", &o.objects_dir}, {"--rig", &o.rig_path}, {"--json", &o.json_path}, {"--svg", &o.svg_dir}}))
+  if (cli::text_flag(flag, value,
+                     {{"--objects", &o.objects_dir}, {"--rig", &o.rig_path}, {"--json", &o.json_path},
+                      {"--svg", &o.svg_dir}}))
     return true;
   if (cli::is_flag(tool, flag, "--jobs", "--threads"))
     o.threads = static_cast<int>(cli::parse_whole(flag, value(), 1, 64, fail));
