@@ -152,9 +152,10 @@ constexpr std::size_t kMaxPlyHeaderBytes = 64 * 1024;
 /// (each element needs at least one byte per binary scalar, two per ascii value: a digit and a
 /// separator), faces are capped at limits.max_triangles and vertices at three per triangle.
 /// Throws MeshLoadError naming the element and its count. A file that is not a PLY is left alone.
-/// Returns where a binary PLY's data starts, 0 for an ascii PLY or another file.
-std::size_t check_ply_header(const std::string& path, std::uint64_t file_size, const MeshLoadLimits& limits) {
-  const std::string head = read_prefix(path, kMaxPlyHeaderBytes);
+/// `head`: the file's first kMaxPlyHeaderBytes. Returns where a binary PLY's data starts, 0 for an
+/// ascii PLY or another file.
+std::size_t check_ply_header(const std::string& path, const std::string& head, std::uint64_t file_size,
+                             const MeshLoadLimits& limits) {
   std::string extension = std::filesystem::path(path).extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
@@ -269,10 +270,10 @@ std::size_t check_ply_header(const std::string& path, std::uint64_t file_size, c
 /// byte (assimp issue 5341), and then reads the file one byte off: it refused or, worse, misread
 /// the 1 in 256 binary PLYs whose data starts with the byte 0x0a, such as those whose first float's
 /// lowest byte it is. It reads "end_header\r\n" right. Returns such a file with its end_header
-/// line ended so, nothing for any other file.
-std::optional<std::string> ply_for_assimp(const std::string& path, std::size_t binary_data_start) {
+/// line ended so, nothing for any other file. `head` and `binary_data_start` as check_ply_header.
+std::optional<std::string> ply_for_assimp(const std::string& path, const std::string& head,
+                                          std::size_t binary_data_start) {
   if (binary_data_start < 2) return std::nullopt;  // not a binary PLY
-  const std::string head = read_prefix(path, binary_data_start + 1);
   if (head.size() <= binary_data_start || head[binary_data_start] != '\n' || head[binary_data_start - 2] == '\r')
     return std::nullopt;
   std::ifstream in(path, std::ios::binary);
@@ -283,13 +284,13 @@ std::optional<std::string> ply_for_assimp(const std::string& path, std::size_t b
 
 /// A binary STL's facet count (at byte 80) against the file's size (50 bytes a facet after an
 /// 84-byte header) and limits.max_triangles. Ascii STL (starting "solid", of a size that is not
-/// exactly a binary one's) and other files are left alone.
-void check_stl_header(const std::string& path, std::uint64_t file_size, const MeshLoadLimits& limits) {
+/// exactly a binary one's) and other files are left alone. `head`: the file's first bytes (84 or more).
+void check_stl_header(const std::string& path, const std::string& head, std::uint64_t file_size,
+                      const MeshLoadLimits& limits) {
   std::string extension = std::filesystem::path(path).extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (extension != ".stl" || file_size < 84) return;
-  const std::string head = read_prefix(path, 84);
   if (head.size() < 84) return;
   std::uint64_t facets = 0;
   for (int i = 3; i >= 0; --i) facets = (facets << 8) | static_cast<unsigned char>(head[80 + i]);
@@ -431,8 +432,9 @@ TriangleMesh load_mesh_file(const std::string& path, const MeshLoadLimits& limit
   const std::uint64_t file_size = std::filesystem::file_size(path, ec);
   if (ec) throw MeshLoadError(describe(path) + "cannot read its size: " + ec.message());
   // Declared counts first: assimp reserves what a header declares before reading the data.
-  const std::size_t ply_binary_data = check_ply_header(path, file_size, limits);
-  check_stl_header(path, file_size, limits);
+  const std::string head = read_prefix(path, kMaxPlyHeaderBytes);
+  const std::size_t ply_binary_data = check_ply_header(path, head, file_size, limits);
+  check_stl_header(path, head, file_size, limits);
   Assimp::Importer importer;
   // No JoinIdenticalVertices: clean_mesh does all welding, so its report counts every
   // coincident vertex the file contains. Points and lines are skipped in collect_node.
@@ -441,7 +443,7 @@ TriangleMesh load_mesh_file(const std::string& path, const MeshLoadLimits& limit
   // Only ValidateDataStructure: a face index past its mesh's vertices (a hostile PLY) made
   // assimp's Triangulate read out of bounds (SEGV), another PLY made it abort; validation
   // refuses such files and collect_node triangulates.
-  const std::optional<std::string> ply = ply_for_assimp(path, ply_binary_data);
+  const std::optional<std::string> ply = ply_for_assimp(path, head, ply_binary_data);
   const aiScene* scene =
       ply ? importer.ReadFileFromMemory(ply->data(), ply->size(), aiProcess_ValidateDataStructure, "ply")
           : importer.ReadFile(path, aiProcess_ValidateDataStructure);

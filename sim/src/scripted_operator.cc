@@ -163,18 +163,6 @@ OfflineClosing close_offline(const std::shared_ptr<const HandRig>& rig, const Gr
 
 namespace {
 
-// Mean |ND| in mm over the capsules whose sweep hit, and their number.
-std::pair<double, int> nd_mean_mm(const GraspMetrics& m) {
-  double sum = 0;
-  int hits = 0;
-  for (const CapsuleMetric& c : m.capsules)
-    if (c.hit) {
-      sum += 1000.0 * std::abs(c.nd);
-      ++hits;
-    }
-  return {hits > 0 ? sum / hits : 0.0, hits};
-}
-
 // What the fit lowers for one closing (mm): the mean of the settled hand's mean |ND| and the grasp
 // tick's, the tick on which the paper takes it (sim/README.md, section 4.5). At the grasp tick the
 // fingers that close last are still in the air: each capsule whose sweep hits at either moment
@@ -182,7 +170,7 @@ std::pair<double, int> nd_mean_mm(const GraspMetrics& m) {
 // yet, so a finger that stays far until late scores worst, not best. A closing that never grasped
 // counts its settled figure twice. `t` was closed with measure_grasp_tick.
 double fit_nd_mm(const HandRig& rig, const OfflineClosing& t) {
-  const double settled = nd_mean_mm(t.metrics).first;
+  const double settled = mean_abs_nd_mm(t.metrics).first;
   if (!t.grasped) return settled;
   double sum = 0;
   int n = 0;
@@ -233,7 +221,7 @@ NdSearchResult nd_pose_search(const std::shared_ptr<const HandRig>& rig, const O
     if (!palm_clear(*rig, model, X_WorldObject.inverse() * X_WorldPalm)) return false;
     OfflineClosing c = close_offline(rig, precise, model, X_WorldObject, X_WorldPalm, dt, table_height);
     if (c.penetrating) return false;
-    const auto [mean, hits] = nd_mean_mm(c.metrics);
+    const auto [mean, hits] = mean_abs_nd_mm(c.metrics);
     if (c.grasped && !c.below_table && hits >= search.min_hits) {
       ++out.clean_grasps;
       if (!out.best || mean < out.nd_mean_mm) {
@@ -645,7 +633,7 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
     const bool closed0 = closure_of(t0).first;
     const bool across0 = closes_across_shortest_side(model.shape, X_ObjectWorld * X_start, {}, up_Object);
     const double closings = 1.0 + aim_errors().size();
-    const int hits0 = nd_mean_mm(t0.metrics).second;
+    const int hits0 = mean_abs_nd_mm(t0.metrics).second;
     double nd_best = fit_nd_mm(*rig, t0);
     std::pair<int, int> k_best = kept(X_start, &nd_best);
     nd_best /= closings;
@@ -666,7 +654,7 @@ GraspPlan plan_grasp(const std::shared_ptr<const HandRig>& rig, const GraspSetti
       if (!t.grasped || t.penetrating || (t.below_table && t.closed_table_depth > t0.closed_table_depth) ||
           t.open_table_depth >= kReachableTableDepth)
         continue;
-      const int hits = nd_mean_mm(t.metrics).second;
+      const int hits = mean_abs_nd_mm(t.metrics).second;
       const double nd = fit_nd_mm(*rig, t);
       // A closing whose own mean is above the best's mean with its aim errors is not closed under them.
       if (nd >= nd_best || hits < std::min(hits0, 4)) continue;

@@ -63,6 +63,22 @@ void close_until_blocked(HandController& hand, const ObjectView& view) {
   for (int t = 0; t < 90 && !hand.state().blocked[0]; ++t) hand.tick(in, kDt, {&view, 1});
 }
 
+// The mean |ND| the planner and the eval report: over the capsules whose sweep hit only, a gap and
+// a penetration alike by their size, in mm: (1 + 3) / 2.
+TEST(NdMetricTest, MeanAbsNdCountsOnlyTheCapsulesThatHit) {
+  GraspMetrics m;
+  m.capsules.resize(3);
+  m.capsules[0].hit = true;
+  m.capsules[0].nd = 0.001;
+  m.capsules[1].hit = true;
+  m.capsules[1].nd = -0.003;
+  m.capsules[2].nd = 0.005;  // no hit: left out
+  const auto [mean_mm, hits] = mean_abs_nd_mm(m);
+  EXPECT_NEAR(mean_mm, 2.0, 1e-12);
+  EXPECT_EQ(hits, 2);
+  EXPECT_EQ(mean_abs_nd_mm(GraspMetrics{}), (std::pair<double, int>{0.0, 0}));
+}
+
 // The face z = -12 mm lies 7 mm below the bottom of the open capsule, under all of it. Closing,
 // the tip's centre b = 27 mm (cos q, -sin q) reaches the face when 0.027 sin q + 0.005 = 0.012:
 // q = asin(7/27) = 15.03 deg. There the ND sweep runs along n = (-sin q, 0, -cos q) from

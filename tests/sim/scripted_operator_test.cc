@@ -488,18 +488,6 @@ TEST(ScriptedOperatorTest, TypedPlansCloseAnUprightBoxBetweenThumbAndFingersInFo
   }
 }
 
-// The mean |ND| (mm) over the capsules whose sweep hit, and how many hit (as telegrasp-eval counts).
-std::pair<double, int> mean_abs_nd_mm(const GraspMetrics& metrics) {
-  double sum = 0;
-  int hits = 0;
-  for (const CapsuleMetric& m : metrics.capsules)
-    if (m.hit) {
-      sum += std::abs(m.nd);
-      ++hits;
-    }
-  return {hits > 0 ? 1000 * sum / hits : 0.0, hits};
-}
-
 // A typed plan lays the phalanges on the surface rather than touching with their tips. A phalanx
 // closing about its joint onto a flat face reads about 3 mm of ND at mid-length when it touches
 // with its tip and 0 when it lies flat, so on a box the planned closing's mean |ND| is near 0 (at

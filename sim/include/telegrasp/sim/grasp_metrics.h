@@ -5,6 +5,8 @@
 #include "telegrasp/sim/grasp_quality.h"
 #include "telegrasp/sim/ids.h"
 
+#include <cmath>
+#include <utility>
 #include <vector>
 
 namespace telegrasp::sim {
@@ -30,5 +32,18 @@ struct GraspMetrics {
   /// kPendingQuality until the World delivers it (HandController::set_quality()).
   GraspQuality quality = kPendingQuality;
 };
+
+/// The mean |ND| in mm over the capsules whose sweep hit, and how many hit (as telegrasp-eval
+/// counts them); 0 and 0 when none hit.
+inline std::pair<double, int> mean_abs_nd_mm(const GraspMetrics& metrics) {
+  double sum = 0;
+  int hits = 0;
+  for (const CapsuleMetric& c : metrics.capsules)
+    if (c.hit) {
+      sum += 1000.0 * std::abs(c.nd);
+      ++hits;
+    }
+  return {hits > 0 ? sum / hits : 0.0, hits};
+}
 
 }  // namespace telegrasp::sim
