@@ -4,6 +4,7 @@
 // receives and grasps objects it has no other model of. Times are printed, not asserted.
 #include "process.h"
 #include "telegrasp/client/client.h"
+#include "telegrasp/idl/cli.h"
 #include "telegrasp/sim/object_model.h"
 #include "telegrasp/sim/standin_objects.h"
 #include "test_domain.h"
@@ -182,8 +183,8 @@ TEST(ObjectGeometryTest, ABotWithoutMeshFilesPlansOnReceivedGeometry) {
   ChildProcess bot({bin("telegrasp-bot"), "--client-id", "wire-bot", "--trials", std::to_string(trials), "--seed", "3",
                     "--domain", std::to_string(domain), "--profile", "loopback", "--json", json, "--timeout-s", "30"},
                    log);
-  const int status = bot.wait(300s);  // 0 every trial held, 3 some not (asserted below)
-  ASSERT_TRUE(status == 0 || status == 3) << bot.exit_description() << "\n" << bot.log_tail();
+  const int status = bot.wait(300s);  // 0 every trial held, kExitNotHeld some not (asserted below)
+  ASSERT_TRUE(status == 0 || status == cli::kExitNotHeld) << bot.exit_description() << "\n" << bot.log_tail();
 
   const std::string text = read_file(log);
   EXPECT_NE(text.find("planning on the server's published geometry for 3 model(s): wire_baseball, wire_gelatin_box, "

@@ -5,6 +5,7 @@
 // only guard against hangs, and durations are printed, not asserted.
 #include "process.h"
 #include "telegrasp/client/client.h"
+#include "telegrasp/idl/cli.h"
 #include "test_domain.h"
 
 #include <fastrtps/xmlparser/XMLProfileManager.h>
@@ -163,10 +164,10 @@ TEST(LoopbackTest, TwoBotsFourHandsEveryEventOnceContactsConsistent) {
   const std::string json_a = work_path("bot_a.json"), json_b = work_path("bot_b.json");
   auto a = start_bot(domain, "bot-a", "both", 1, json_a);
   auto b = start_bot(domain, "bot-b", "both", 1, json_b);
-  // 0: every trial held; 3: done, some not held (two bots contend for the objects).
+  // 0: every trial held; kExitNotHeld: done, some not held (two bots contend for the objects).
   for (auto* bot : {a.get(), b.get()}) {
     const int status = bot->wait(kBotGuard);
-    ASSERT_TRUE(status == 0 || status == 3) << bot->exit_description() << "; see " << bot->log_path();
+    ASSERT_TRUE(status == 0 || status == cli::kExitNotHeld) << bot->exit_description() << "; see " << bot->log_path();
   }
 
   // Each bot: one record per object of the scene (grasped or not, or given up).
@@ -328,8 +329,8 @@ TEST(LoopbackTest, KilledBotsObjectIsReleasedAndFalls) {
       },
       kEventGuard))
       << "object " << held_object << " is still held or in the air";
-  const int survivor_status = survivor->wait(kBotGuard);  // 0 every trial held, 3 some not
-  EXPECT_TRUE(survivor_status == 0 || survivor_status == 3)
+  const int survivor_status = survivor->wait(kBotGuard);  // 0 every trial held, kExitNotHeld some not
+  EXPECT_TRUE(survivor_status == 0 || survivor_status == cli::kExitNotHeld)
       << survivor->exit_description() << "; see " << work_path("survivor.log");
 }
 

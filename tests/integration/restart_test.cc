@@ -7,6 +7,7 @@
 #include "process.h"
 #include "snapshot.h"
 #include "telegrasp/client/client.h"
+#include "telegrasp/idl/cli.h"
 #include "test_domain.h"
 
 #include <gtest/gtest.h>
@@ -202,7 +203,7 @@ TEST(ServerRestartTest, BotGoesOnTrialRecordedInterruptedObjectsBackFromTheSnaps
   // 5. The bot finishes on its own.
   const int status = bot.wait(kBotGuard);
   ASSERT_NE(status, -1) << "the bot did not finish; see " << bot.log_path();
-  EXPECT_TRUE(status == 0 || status == 3) << bot.exit_description() << "\n" << bot.log_tail();
+  EXPECT_TRUE(status == 0 || status == cli::kExitNotHeld) << bot.exit_description() << "\n" << bot.log_tail();
   const std::string bot_log = bot.log_tail(60);
   EXPECT_NE(bot_log.find("the server restarted"), std::string::npos) << bot_log;
 
