@@ -490,8 +490,10 @@ TEST(ScriptedOperatorTest, TypedPlansCloseAnUprightBoxBetweenThumbAndFingersInFo
 
 // A typed plan lays the phalanges on the surface rather than touching with their tips. A phalanx
 // closing about its joint onto a flat face reads about 3 mm of ND at mid-length when it touches
-// with its tip and 0 when it lies flat, so on a box the planned closing's mean |ND| is near 0 (at
-// most 0.3 mm); on a ball (a straight phalanx tangent to a sphere at its mid-length reads 0) under
+// with its tip and 0 when it lies flat, so on a box the planned closing's mean |ND| is well under
+// that (at most 0.7 mm: 0.45-0.64 with the fingertips closing after the middle phalanges and the
+// thumb after the fingers, 0.2-0.3 with every joint closing from trigger 0); on a ball (a straight
+// phalanx tangent to a sphere at its mid-length reads 0) under
 // the paper's 1.12 mm. Unfitted (the plan chosen before the fit), they read 0.64 mm on the box and
 // 2.6 and 3.1 mm on the balls. The standing cracker box, grasped from its top, under 1.12 mm too:
 // without the wrist-flexed top grasps its fingers curled over the top edge and read 2.2, 0.75 and
@@ -500,7 +502,7 @@ TEST(ScriptedOperatorTest, TypedPlansCloseAnUprightBoxBetweenThumbAndFingersInFo
 TEST(ScriptedOperatorTest, TypedPlansLayThePhalangesOnTheSurface) {
   if (!plan_fit_enabled()) GTEST_SKIP() << "TELEGRASP_PLAN_FIT=off: plans are not fitted";
   const auto hand_rig = rig("human_right_opposable");
-  for (const auto& [name, bound_mm] : {std::pair{"004_sugar_box", 0.3}, std::pair{"017_orange", 1.12},
+  for (const auto& [name, bound_mm] : {std::pair{"004_sugar_box", 0.7}, std::pair{"017_orange", 1.12},
                                        std::pair{"055_baseball", 1.12}, std::pair{"003_cracker_box", 1.12}})
     for (double yaw : {0.0, 0.4, 1.0}) {
       SCOPED_TRACE(testing::Message() << name << " yaw " << yaw);
@@ -522,8 +524,9 @@ TEST(ScriptedOperatorTest, TypedPlansLayThePhalangesOnTheSurface) {
 // The paper takes ND on the grasp tick, when the fingers that close last may still be in the air.
 // The fit weighs that tick as much as the settled hand, so the planned fingers reach the surface
 // together: on the stand-in master chef can (a disk grasp from the can's top) at 3 yaws, at least
-// 5 capsules' sweeps hit on the grasp tick and their mean |ND| is under 2 mm (fitted on the settled
-// hand alone: no sweep hits on that tick at yaws 0 and 0.4, 3.3 mm at 1.0).
+// 4 capsules' sweeps hit on the grasp tick and their mean |ND| is under 1.5 mm (5, 5 and 4 at
+// 1.46, 1.21 and 1.34 mm; with every joint closing from trigger 0, 6, 6 and 5 at 1.65-1.88 mm;
+// fitted on the settled hand alone: no sweep hits on that tick at yaws 0 and 0.4, 3.3 mm at 1.0).
 TEST(ScriptedOperatorTest, TypedPlansBringTheFingersToTheSurfaceTogether) {
   if (!plan_fit_enabled()) GTEST_SKIP() << "TELEGRASP_PLAN_FIT=off: plans are not fitted";
   const auto hand_rig = rig("human_right_opposable");
@@ -537,8 +540,8 @@ TEST(ScriptedOperatorTest, TypedPlansBringTheFingersToTheSurfaceTogether) {
     ASSERT_TRUE(c.grasped);
     EXPECT_FALSE(c.penetrating);
     const auto [mean_mm, hits] = mean_abs_nd_mm(c.grasp_tick_metrics);
-    ASSERT_GE(hits, 5);
-    EXPECT_LT(mean_mm, 2.0);
+    ASSERT_GE(hits, 4);
+    EXPECT_LT(mean_mm, 1.5);
   }
 }
 
