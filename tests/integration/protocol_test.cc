@@ -55,6 +55,13 @@ int run_protocol(const std::string& name, const std::vector<std::string>& extra 
   return eval.wait(300s);  // a guard against hangs
 }
 
+// The rig file the build installs beside the programs.
+std::string installed_rig(const std::string& name) {
+  return (std::filesystem::path(bin("telegrasp-eval")).parent_path().parent_path() / "share/telegrasp/rigs" /
+          (name + ".textproto"))
+      .string();
+}
+
 json read_json(const std::string& path) {
   std::ifstream in(path);
   return json::parse(in);
@@ -123,9 +130,7 @@ TEST(ProtocolRun, OneRecordPerObjectPerParticipantAndMode_Repeatable) {
 // prismatic), where the built-in human_right's grasps are all "other".
 TEST(ProtocolRun, ARigGivenByRigDrivesTheServersAndReachesTheRecords) {
   // The build's copy of the shipped rigs lies beside its bin folder.
-  const std::string rig = (std::filesystem::path(bin("telegrasp-eval")).parent_path().parent_path() /
-                           "share/telegrasp/rigs/human_right_opposable.textproto")
-                              .string();
+  const std::string rig = installed_rig("human_right_opposable");
   ASSERT_EQ(run_protocol("protocol_rig", {"--rig", rig, "--participants", "1,0", "--mode", "precise"}), 0)
       << "see " << work_path("protocol_rig.log");
   const json run = read_json(work_path("protocol_rig.json"));
@@ -152,8 +157,7 @@ TEST(ProtocolRun, OverDdsAndInProcessRecordTheSameHoldQuality) {
   // The shipped opposable rig with every joint closing from trigger 0: its thumb does not wait for
   // the fingers, so on this trial the grasp rule fires before the last fingers close (with the
   // shipped rig the hold's quality is the grasp tick's on this trial and every other seed tried).
-  std::ifstream shipped(std::filesystem::path(bin("telegrasp-eval")).parent_path().parent_path() /
-                        "share/telegrasp/rigs/human_right_opposable.textproto");
+  std::ifstream shipped(installed_rig("human_right_opposable"));
   std::string text{std::istreambuf_iterator<char>(shipped), {}};
   for (const std::string late : {" closes_from: 0.35", " closes_from: 0.3"})
     for (std::size_t at; (at = text.find(late)) != std::string::npos;) text.erase(at, late.size());
