@@ -6,6 +6,7 @@
 #include "eval_inputs.h"
 #include "grasp_report.h"
 #include "grasp_svg.h"
+#include "nd_bound_table.h"
 #include "telegrasp/sim/hand_rig.h"
 #include "telegrasp/sim/object_model.h"
 #include "telegrasp/sim/scripted_operator.h"
@@ -61,6 +62,10 @@ Options:
                       its centre of mass, mass by their product: shapes nobody tuned for
   --json FILE         write every grasp record and the summaries as JSON
   --svg DIR           draw each object's first held grasp (three views) as DIR/<object>_<mode>.svg
+  --bound FILE        an nd-bound --json file of the same objects and rig: adds a table of each
+                      object's grasp tick |ND| beside the oracle's, and the mean over the objects
+                      the oracle takes to the paper's 1.12 mm or below (on the others no clean
+                      grasp with nd-bound's --min-hits capsules hitting gets there)
   --jobs N            worker threads (default 2; --threads, its old name, still works)
   -h, --help          this text
 
@@ -72,7 +77,7 @@ Other subcommands: telegrasp-eval --help.
 )";
 
 struct Options {
-  std::string objects_dir, rig_path, json_path, svg_dir, skill = "experienced";
+  std::string objects_dir, rig_path, json_path, svg_dir, bound_path, skill = "experienced";
   std::vector<ClosingMode> modes{ClosingMode::kPrecise};
   SelectionMetric selection = SelectionMetric::kSurface;
   std::vector<double> speeds{1.0};
@@ -89,6 +94,8 @@ Options parse(int argc, char** argv) {
   Options o;
   telegrasp::cli::for_each_option(argc, argv, kUsage, usage_error, [&](const std::string& a, const auto& value) {
     if (parse_offline_flag(kTool, a, value, o, usage_error))
+      ;
+    else if (telegrasp::cli::text_flag(a, value, {{"--bound", &o.bound_path}}))
       ;
     else if (a == "--skill")
       o.skill = telegrasp::tools::parse_skill(a, value(), usage_error);
@@ -226,14 +233,22 @@ Trial run_trial(const ObjectModelPtr& model, const std::shared_ptr<const HandRig
 }
 
 // Loads the rig and the objects and opens the outputs, so a bad file fails before any trial runs;
-// says what was loaded on stderr. On failure says why on stderr and returns nothing.
-std::optional<EvalInputs> load_inputs(const Options& opt, std::ofstream& json_out) {
+// says what was loaded on stderr. On failure says why on stderr and returns nothing. `bounds`:
+// --bound's file, when given.
+std::optional<EvalInputs> load_inputs(const Options& opt, std::ofstream& json_out,
+                                      std::optional<telegrasp::report::NdBounds>& bounds) {
   EvalInputs in;
   try {
     in = telegrasp::eval::load_eval_inputs(opt.rig_path, opt.objects_dir);
     if (opt.stretch != Eigen::Vector3d::Ones()) in.models = telegrasp::eval::stretched(in.models, opt.stretch);
   } catch (const std::exception& e) {
     std::cerr << kTool << ": " << e.what() << "\n";
+    return std::nullopt;
+  }
+  try {
+    if (!opt.bound_path.empty()) bounds = telegrasp::report::read_nd_bounds(opt.bound_path);
+  } catch (const std::exception& e) {
+    std::cerr << kTool << ": --bound " << e.what() << "\n";
     return std::nullopt;
   }
   if (const std::string error = telegrasp::eval::prepare_outputs(opt.json_path, json_out, opt.svg_dir);
@@ -249,6 +264,9 @@ std::optional<EvalInputs> load_inputs(const Options& opt, std::ofstream& json_ou
                                                        : "")
             << "), largest model " << fmt(static_cast<double>(max_bytes) / 1e6, 2) << " MB; rig " << in.rig->name()
             << "; skill " << opt.skill << "\n";
+  if (bounds && !bounds->rig.empty() && bounds->rig != in.rig->name())
+    std::cerr << kTool << ": warning: --bound " << opt.bound_path << " is rig " << bounds->rig << "'s, this run is rig "
+              << in.rig->name() << "'s\n";
   return in;
 }
 
@@ -329,7 +347,8 @@ std::vector<Trial> run_jobs(const std::vector<Job>& jobs, const std::vector<Conf
 
 // Per config, the per-object table and the summary line on stdout; returns the summaries.
 json print_summaries(const std::vector<Config>& configs, const std::vector<Job>& jobs, const std::vector<Trial>& trials,
-                     const std::vector<ObjectModelPtr>& models, const Options& opt) {
+                     const std::vector<ObjectModelPtr>& models, const Options& opt,
+                     const std::optional<telegrasp::report::NdBounds>& bounds) {
   json summaries = json::array();
   for (std::size_t c = 0; c < configs.size(); ++c) {
     std::cout << "\n== mode " << closing_mode_name(configs[c].mode) << ", closing speed x" << configs[c].speed
@@ -349,6 +368,7 @@ json print_summaries(const std::vector<Config>& configs, const std::vector<Job>&
     s["speed_scale"] = configs[c].speed;
     s["skill"] = opt.skill;
     if (opt.stretch != Eigen::Vector3d::Ones()) s["stretch"] = {opt.stretch.x(), opt.stretch.y(), opt.stretch.z()};
+    if (bounds) s["nd_bound"] = telegrasp::report::print_nd_bound_table(rows, *bounds);
     std::cout << "summary: " << s.dump() << "\n";
     summaries.push_back(s);
   }
@@ -405,12 +425,13 @@ bool write_json(std::ofstream& json_out, const std::string& json_path, const std
 int telegrasp::eval::run_in_process(int argc, char** argv) {
   const Options opt = parse(argc, argv);
   std::ofstream json_out;
-  const std::optional<EvalInputs> in = load_inputs(opt, json_out);
+  std::optional<telegrasp::report::NdBounds> bounds;
+  const std::optional<EvalInputs> in = load_inputs(opt, json_out, bounds);
   if (!in) return telegrasp::cli::kExitFailure;
   const std::vector<Config> configs = make_configs(opt);
   const std::vector<Job> jobs = make_jobs(configs.size(), in->models.size(), opt.trials);
   const std::vector<Trial> trials = run_jobs(jobs, configs, *in, opt);
-  const json summaries = print_summaries(configs, jobs, trials, in->models, opt);
+  const json summaries = print_summaries(configs, jobs, trials, in->models, opt, bounds);
   if (configs.size() > 1) print_side_by_side(summaries);
   if (!opt.svg_dir.empty()) write_pictures(trials, opt.svg_dir);
   if (!opt.json_path.empty() && !write_json(json_out, opt.json_path, trials, summaries))

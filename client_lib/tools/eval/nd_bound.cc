@@ -200,7 +200,9 @@ int telegrasp::eval::run_nd_bound(int argc, char** argv) {
   std::vector<double> pooled;
   for (std::size_t j = 0; j < models.size(); ++j)
     objects.push_back(report_object(opt, *rig, models[j], poses[j], kept[j], pooled));
-  const json summary = {{"objects", models.size()},
+  const json summary = {{"rig", rig->name()},
+                        {"min_hits", opt.min_hits},
+                        {"objects", models.size()},
                         {"capsules_hit", pooled.size()},
                         {"nd_abs_median_mm", percentile(pooled, 0.5)},
                         {"nd_abs_p95_mm", percentile(pooled, 0.95)}};
