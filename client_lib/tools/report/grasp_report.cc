@@ -209,6 +209,7 @@ json summarize(const std::vector<const Record*>& recs) {
               {"grasp_tick_hand_error_mean_mm", num(grasped ? he_tick_sum / grasped : NAN)},
               {"grasp_tick_nd_abs_median_mm", num(percentile(nd_abs_tick, 0.5))},
               {"grasp_tick_nd_abs_mean_mm", num(mean(nd_abs_tick))},
+              {"grasp_tick_capsules_hit", nd_abs_tick.size()},
               {"grasp_tick_nd_abs_p95_mm", num(percentile(nd_abs_tick, 0.95))},
               {"nd_contact_abs_median_mm", num(percentile(contact.abs_mm, 0.5))},
               {"nd_contact_abs_p95_mm", num(percentile(contact.abs_mm, 0.95))},

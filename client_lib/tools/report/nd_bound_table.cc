@@ -1,5 +1,6 @@
 #include "nd_bound_table.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -36,37 +37,35 @@ NdBounds read_nd_bounds(const std::string& path) {
   return out;
 }
 
+namespace {
+
+// A summary's pooled grasp-tick mean |ND| (summarize), NaN when no capsule hit.
+double mean_mm(const json& summary) {
+  const json& v = summary["grasp_tick_nd_abs_mean_mm"];
+  return v.is_null() ? NAN : v.get<double>();
+}
+
+}  // namespace
+
 json print_nd_bound_table(const std::vector<ObjectRows>& objects, const NdBounds& bounds) {
   std::printf(
       "\nthe grasp tick's mean |ND| beside the nd-bound oracle's (its lowest with --min-hits capsules hitting):\n");
   std::printf("%-26s %9s %5s %9s %9s\n", "object", "|ND|mean", "hits", "no_hit", "oracle");
-  struct Pool {
-    double sum = 0;
-    int hits = 0;
-  } all, reachable;
+  std::vector<const Record*> all, reachable;
   json beyond = json::array(), unknown = json::array(), reached = json::array();
   for (const ObjectRows& o : objects) {
-    Pool p;
+    const json s = summarize(o.records);
     int no_hit = 0;
-    for (const Record* r : o.records) {
-      if (!r->grasped) continue;
-      int hits = 0;
-      for (const CapsuleMetricRecord& c : r->grasp_tick_capsules)
-        if (c.hit) {
-          p.sum += std::abs(c.nd_midlength_mm);
-          ++hits;
-        }
-      p.hits += hits;
-      no_hit += hits == 0;
-    }
-    all.sum += p.sum;
-    all.hits += p.hits;
+    for (const Record* r : o.records)
+      no_hit += r->grasped && std::none_of(r->grasp_tick_capsules.begin(), r->grasp_tick_capsules.end(),
+                                           [](const CapsuleMetricRecord& c) { return c.hit; });
+    all.insert(all.end(), o.records.begin(), o.records.end());
     const auto found = bounds.nd_mean_mm.find(o.object);
     const bool known = found != bounds.nd_mean_mm.end();
     const bool clean = known && found->second.has_value();  // the oracle kept a clean grasp
     const double bound = clean ? *found->second : NAN;
-    const double mean = p.hits > 0 ? p.sum / p.hits : NAN;
-    std::printf("%-26s %9s %5d %9d %9s\n", o.object.c_str(), fmt(mean, 3).c_str(), p.hits, no_hit,
+    std::printf("%-26s %9s %5d %9d %9s\n", o.object.c_str(), fmt(mean_mm(s), 3).c_str(),
+                s["grasp_tick_capsules_hit"].get<int>(), no_hit,
                 !known  ? "?"
                 : clean ? fmt(bound, 3).c_str()
                         : "none");
@@ -76,17 +75,16 @@ json print_nd_bound_table(const std::vector<ObjectRows>& objects, const NdBounds
       beyond.push_back(o.object);
     } else {
       reached.push_back(o.object);
-      reachable.sum += p.sum;
-      reachable.hits += p.hits;
+      reachable.insert(reachable.end(), o.records.begin(), o.records.end());
     }
   }
-  auto mean_of = [](const Pool& p) { return p.hits > 0 ? json(p.sum / p.hits) : json(nullptr); };
+  const json s_all = summarize(all), s_reachable = summarize(reachable);
   std::printf(
       "grasp tick mean |ND|: %s mm over all %zu objects (%d capsules hit); %s mm over the %zu the oracle "
       "takes to %.2f mm or below (%d hit)\n",
-      fmt(all.hits > 0 ? all.sum / all.hits : NAN, 3).c_str(), objects.size(), all.hits,
-      fmt(reachable.hits > 0 ? reachable.sum / reachable.hits : NAN, 3).c_str(), reached.size(), kPaperNdExperiencedMm,
-      reachable.hits);
+      fmt(mean_mm(s_all), 3).c_str(), objects.size(), s_all["grasp_tick_capsules_hit"].get<int>(),
+      fmt(mean_mm(s_reachable), 3).c_str(), reached.size(), kPaperNdExperiencedMm,
+      s_reachable["grasp_tick_capsules_hit"].get<int>());
   auto names = [](const json& list) {
     std::string s;
     for (const json& n : list) s += (s.empty() ? "" : " ") + n.get<std::string>();
@@ -96,9 +94,11 @@ json print_nd_bound_table(const std::vector<ObjectRows>& objects, const NdBounds
   if (!unknown.empty()) std::printf("not in the oracle's file: %s\n", names(unknown).c_str());
   return {{"paper_nd_mm", kPaperNdExperiencedMm},
           {"oracle_rig", bounds.rig},
-          {"grasp_tick_nd_abs_mean_mm", mean_of(all)},
+          {"grasp_tick_nd_abs_mean_mm", s_all["grasp_tick_nd_abs_mean_mm"]},
           {"reachable",
-           {{"grasp_tick_nd_abs_mean_mm", mean_of(reachable)}, {"capsules_hit", reachable.hits}, {"objects", reached}}},
+           {{"grasp_tick_nd_abs_mean_mm", s_reachable["grasp_tick_nd_abs_mean_mm"]},
+            {"capsules_hit", s_reachable["grasp_tick_capsules_hit"]},
+            {"objects", reached}}},
           {"beyond", beyond},
           {"unknown", unknown}};
 }
